@@ -1,0 +1,184 @@
+//! Integrators and the render loop they share.
+//!
+//! The loop (pbrt-v4's `ImageTileIntegrator::Render`, Mitsuba's blocks):
+//! 32x32 tiles handed out dynamically by rayon; each pixel's samples are
+//! summed in a fixed order from random numbers keyed by (seed, pixel,
+//! sample), so the image is bit-identical for any thread count or tile order.
+
+pub mod direct;
+
+use crate::error::{Error, Result};
+use crate::film::{Film, Filter};
+use crate::math::{Ray, Vec2, Vec3};
+use crate::sampling::{stratified, Rng};
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+pub const TILE: u32 = 32;
+
+/// Which light transport algorithm renders the image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntegratorKind {
+    /// Direct light only (shadow rays to the lights).
+    #[default]
+    Direct,
+}
+
+/// Settings common to every integrator.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Camera samples per pixel per axis (ssaa^2 samples per pixel).
+    pub ssaa: u32,
+    /// Shadow rays per light per shading point.
+    pub shadow_samples: u32,
+    pub filter: Filter,
+    pub seed: u64,
+    /// Worker threads; `None` uses every core.
+    pub threads: Option<usize>,
+    pub integrator: IntegratorKind,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            ssaa: 4,
+            shadow_samples: 4,
+            filter: Filter::Box,
+            seed: 0,
+            threads: None,
+            integrator: IntegratorKind::Direct,
+        }
+    }
+}
+
+/// Counters kept per tile and summed, never shared between threads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayStats {
+    pub camera_rays: u64,
+    pub shadow_rays: u64,
+    pub other_rays: u64,
+}
+
+impl RayStats {
+    pub fn total(&self) -> u64 {
+        self.camera_rays + self.shadow_rays + self.other_rays
+    }
+
+    fn add(&mut self, o: &RayStats) {
+        self.camera_rays += o.camera_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.other_rays += o.other_rays;
+    }
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    pub film: Film,
+    pub stats: RayStats,
+    pub seconds: f64,
+}
+
+/// The radiance carried along one camera ray.
+pub trait RadianceEstimator: Sync {
+    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3;
+}
+
+/// Runs `f` on a pool of `threads` workers (all cores when `None`).
+pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        b = b.num_threads(n);
+    }
+    let pool = b
+        .build()
+        .map_err(|e| Error::InvalidSetting(format!("--threads: cannot start worker threads: {e}")))?;
+    Ok(pool.install(f))
+}
+
+/// Renders the scene's full frame with the chosen integrator.
+pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sync)) -> Result<RenderOutput> {
+    if settings.ssaa == 0 {
+        return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
+    }
+    let start = std::time::Instant::now();
+    let (film, stats) = with_threads(settings.threads, || match settings.integrator {
+        IntegratorKind::Direct => {
+            let est = direct::DirectLighting {
+                shadow_samples: settings.shadow_samples,
+            };
+            render_tiles(scene, settings, &est, on_tile)
+        }
+    })?;
+    Ok(RenderOutput {
+        film,
+        stats,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Number of tiles the frame is cut into (for progress bars).
+pub fn tile_count(width: u32, height: u32) -> u64 {
+    (width.div_ceil(TILE) as u64) * (height.div_ceil(TILE) as u64)
+}
+
+/// The tile loop shared by every integrator.
+pub fn render_tiles(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    on_tile: &(dyn Fn() + Sync),
+) -> (Film, RayStats) {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let tiles_x = w.div_ceil(TILE);
+    let ntiles = tile_count(w, h) as u32;
+    let n = settings.ssaa;
+    let spp = n * n;
+    let tiles: Vec<(u32, Vec<Vec3>, RayStats)> = (0..ntiles)
+        .into_par_iter()
+        .map(|t| {
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let mut stats = RayStats::default();
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let pixel = y as u64 * w as u64 + x as u64;
+                    let mut sum = Vec3::ZERO;
+                    for s in 0..spp {
+                        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
+                        let u = stratified(s, n, rng.next_2d());
+                        let off = settings.filter.sample(u);
+                        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+                        stats.camera_rays += 1;
+                        let l = est.li(scene, &ray, &mut rng, &mut stats);
+                        // A NaN or infinite sample would poison the pixel; drop it.
+                        if l.is_finite() {
+                            sum += l;
+                        }
+                    }
+                    out.push(sum / spp as f32);
+                }
+            }
+            on_tile();
+            (t, out, stats)
+        })
+        .collect();
+    let mut film = Film::new(w, h);
+    let mut stats = RayStats::default();
+    for (t, px, s) in tiles {
+        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+        let tw = (x0 + TILE).min(w) - x0;
+        for (i, p) in px.into_iter().enumerate() {
+            film.set(x0 + i as u32 % tw, y0 + i as u32 / tw, p);
+        }
+        stats.add(&s);
+    }
+    (film, stats)
+}
+
+/// A 2D sample for light sampling that is shifted per shading point.
+pub fn shading_shift(rng: &mut Rng) -> Vec2 {
+    rng.next_2d()
+}

@@ -1,0 +1,22 @@
+//! raytracer: a physically based CPU ray tracer built around photon mapping.
+//!
+//! Data flows one way: a scene description (built in or from a file) becomes
+//! a [`scene::Scene`] (with its BVH), an integrator renders it into a
+//! [`film::Film`], and [`image_io`] writes the film to disk.
+
+pub mod camera;
+pub mod error;
+pub mod film;
+pub mod geometry;
+pub mod image_io;
+pub mod integrator;
+pub mod light;
+pub mod material;
+pub mod math;
+pub mod sampling;
+pub mod scene;
+
+pub use error::{Error, Result};
+pub use film::Film;
+pub use integrator::{render, RenderOutput, RenderSettings};
+pub use scene::{Scene, SceneDesc};

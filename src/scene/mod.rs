@@ -1,0 +1,353 @@
+//! The scene: what the integrators see. A `SceneDesc` (built in, or read from
+//! a file) is turned into a `Scene` by building the BVH; data flows one way,
+//! from description to renderable scene.
+
+pub mod builtin;
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::geometry::{Bvh, Sphere, Triangle};
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::{Ray, Vec3};
+
+/// The camera as a scene states it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDesc {
+    pub position: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    pub fov_y_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A triangle with its material (an index into `SceneDesc::materials`) and
+/// optional per-vertex normals for smooth shading.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleDesc {
+    pub vertices: [Vec3; 3],
+    pub normals: Option<[Vec3; 3]>,
+    pub material: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SphereDesc {
+    pub sphere: Sphere,
+    pub material: u32,
+}
+
+/// Settings a scene recommends (a preset); command-line options override them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneSettings {
+    pub ssaa: Option<u32>,
+    pub shadow_samples: Option<u32>,
+}
+
+/// Everything needed to build a scene, before any acceleration structure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneDesc {
+    pub name: String,
+    pub camera: CameraDesc,
+    pub materials: Vec<(String, Material)>,
+    pub triangles: Vec<TriangleDesc>,
+    pub spheres: Vec<SphereDesc>,
+    pub lights: Vec<Light>,
+    pub settings: SceneSettings,
+}
+
+impl SceneDesc {
+    /// Index of the named material, adding it if new.
+    pub fn material(&mut self, name: &str, m: Material) -> u32 {
+        if let Some(i) = self.materials.iter().position(|(n, _)| n == name) {
+            self.materials[i].1 = m;
+            return i as u32;
+        }
+        self.materials.push((name.to_string(), m));
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Sets the radius of every sphere light; 0 turns them into point lights.
+    pub fn set_light_radius(&mut self, radius: f32) {
+        for l in &mut self.lights {
+            let (position, power) = (l.position(), l.power());
+            *l = if radius > 0.0 {
+                Light::Sphere {
+                    sphere: Sphere {
+                        centre: position,
+                        radius,
+                    },
+                    power,
+                }
+            } else {
+                Light::Point { position, power }
+            };
+        }
+    }
+}
+
+/// What a primitive is, for the hit record and photon storage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrimKind {
+    Triangle,
+    Sphere,
+    Light,
+}
+
+/// A ray's closest hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub t: f32,
+    pub p: Vec3,
+    /// Unit geometric normal, as stored (not flipped towards the ray).
+    pub ng: Vec3,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub material: u32,
+    /// Object id: the triangle's index in the description, or
+    /// triangle count + sphere index for spheres.
+    pub object: u32,
+    pub kind: PrimKind,
+    /// Index into `Scene::lights` when the hit is on an emitter.
+    pub light: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TriInfo {
+    material: u32,
+    object: u32,
+    normal: Vec3,
+}
+
+#[derive(Clone, Debug)]
+struct SphereObject {
+    sphere: Sphere,
+    material: u32,
+    light: Option<u32>,
+}
+
+/// A scene ready to render.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub camera: Camera,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub lights: Vec<Light>,
+    pub bvh: Bvh,
+    /// Triangles in BVH order.
+    triangles: Vec<Triangle>,
+    info: Vec<TriInfo>,
+    vertex_normals: Vec<Option<[Vec3; 3]>>,
+    spheres: Vec<SphereObject>,
+    /// Triangles dropped for zero area or non-finite coordinates.
+    pub dropped_triangles: usize,
+    pub desc: SceneDesc,
+    pub bvh_build_seconds: f64,
+}
+
+impl Scene {
+    pub fn build(desc: SceneDesc) -> Result<Scene> {
+        let c = &desc.camera;
+        let camera = Camera::new(c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height).ok_or_else(|| {
+            Error::Scene(format!(
+                "degenerate camera (position {:?}, look_at {:?}, up {:?}, fov {} degrees, {}x{})",
+                c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height
+            ))
+        })?;
+        let nmat = desc.materials.len() as u32;
+        let mut tris = Vec::with_capacity(desc.triangles.len());
+        let mut info = Vec::with_capacity(desc.triangles.len());
+        let mut normals = Vec::with_capacity(desc.triangles.len());
+        let mut dropped = 0;
+        for (i, t) in desc.triangles.iter().enumerate() {
+            if t.material >= nmat {
+                return Err(Error::Scene(format!(
+                    "triangle {i} names material {} of {nmat}",
+                    t.material
+                )));
+            }
+            let tri = Triangle::new(t.vertices[0], t.vertices[1], t.vertices[2]);
+            let n = tri.normal_raw();
+            let finite = t.vertices.iter().all(|v| v.is_finite());
+            // Zero-area and non-finite triangles cannot be hit or shaded.
+            if !finite || !n.is_finite() || n.length_squared() == 0.0 {
+                dropped += 1;
+                continue;
+            }
+            tris.push(tri);
+            info.push(TriInfo {
+                material: t.material,
+                object: i as u32,
+                normal: n.normalize(),
+            });
+            normals.push(
+                t.normals
+                    .filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0)),
+            );
+        }
+        let mut lights = desc.lights.clone();
+        let mut spheres: Vec<SphereObject> = desc
+            .spheres
+            .iter()
+            .map(|s| SphereObject {
+                sphere: s.sphere,
+                material: s.material,
+                light: None,
+            })
+            .collect();
+        for s in &spheres {
+            if s.material >= nmat
+                || s.sphere.radius <= 0.0
+                || !s.sphere.centre.is_finite()
+                || !s.sphere.radius.is_finite()
+            {
+                return Err(Error::Scene(format!("invalid sphere {:?}", s.sphere)));
+            }
+        }
+        let black = nmat;
+        let mut materials: Vec<Material> = desc.materials.iter().map(|(_, m)| *m).collect();
+        let mut names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
+        materials.push(Material::diffuse(0.0, 0.0, 0.0));
+        names.push("<light>".into());
+        for (i, l) in lights.iter_mut().enumerate() {
+            let p = l.power();
+            if !l.position().is_finite() || !p.is_finite() || p.min_element() < 0.0 {
+                return Err(Error::Scene(format!("invalid light {l:?}")));
+            }
+            // Emitters reflect nothing and block light like any surface.
+            if let Light::Sphere { sphere, .. } = l {
+                if !sphere.radius.is_finite() || sphere.radius <= 0.0 {
+                    return Err(Error::Scene(format!("invalid light radius {}", sphere.radius)));
+                }
+                spheres.push(SphereObject {
+                    sphere: *sphere,
+                    material: black,
+                    light: Some(i as u32),
+                });
+            }
+        }
+
+        let start = std::time::Instant::now();
+        let bounds: Vec<_> = tris.iter().map(|t| t.bounds()).collect();
+        let bvh = Bvh::build(&bounds);
+        let bvh_build_seconds = start.elapsed().as_secs_f64();
+        let triangles = bvh.order.iter().map(|&i| tris[i as usize]).collect();
+        let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
+        let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
+        Ok(Scene {
+            name: desc.name.clone(),
+            camera,
+            materials,
+            material_names: names,
+            lights,
+            bvh,
+            triangles,
+            info,
+            vertex_normals,
+            spheres,
+            dropped_triangles: dropped,
+            desc,
+            bvh_build_seconds,
+        })
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Triangles in BVH order (for benchmarks and statistics).
+    pub fn triangles(&self) -> &[Triangle] {
+        &self.triangles
+    }
+
+    /// Closest hit along the ray in (t_min, t_max).
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let mut best_t = t_max;
+        let mut best = None;
+        if let Some((slot, h)) = self.bvh.intersect(&self.triangles, ray, t_min, t_max) {
+            best_t = h.t;
+            best = Some((true, slot as usize, h.u, h.v));
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            if let Some(t) = s.sphere.intersect(ray, t_min, best_t) {
+                best_t = t;
+                best = Some((false, i, 0.0, 0.0));
+            }
+        }
+        let (is_tri, idx, u, v) = best?;
+        let p = ray.at(best_t);
+        if is_tri {
+            let inf = &self.info[idx];
+            let ns = match &self.vertex_normals[idx] {
+                Some(n) => {
+                    let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
+                    // Keep the interpolated normal on the geometric side.
+                    if s == Vec3::ZERO {
+                        inf.normal
+                    } else if s.dot(inf.normal) < 0.0 {
+                        -s
+                    } else {
+                        s
+                    }
+                }
+                None => inf.normal,
+            };
+            Some(Hit {
+                t: best_t,
+                p,
+                ng: inf.normal,
+                ns,
+                material: inf.material,
+                object: inf.object,
+                kind: PrimKind::Triangle,
+                light: None,
+            })
+        } else {
+            let s = &self.spheres[idx];
+            let n = (p - s.sphere.centre) / s.sphere.radius;
+            Some(Hit {
+                t: best_t,
+                p,
+                ng: n,
+                ns: n,
+                material: s.material,
+                object: (self.desc.triangles.len() + idx) as u32,
+                kind: if s.light.is_some() {
+                    PrimKind::Light
+                } else {
+                    PrimKind::Sphere
+                },
+                light: s.light,
+            })
+        }
+    }
+
+    /// Whether anything blocks the segment (t_min, t_max) of the ray.
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.spheres
+            .iter()
+            .any(|s| s.sphere.intersect(ray, t_min, t_max).is_some())
+            || self.bvh.occluded(&self.triangles, ray, t_min, t_max)
+    }
+
+    pub fn material(&self, id: u32) -> &Material {
+        &self.materials[id as usize]
+    }
+
+    /// Bounding box of all geometry (triangles, spheres and lights).
+    pub fn bounds(&self) -> crate::math::Aabb {
+        let mut b = if self.triangles.is_empty() {
+            crate::math::Aabb::EMPTY
+        } else {
+            self.bvh.bounds()
+        };
+        for s in &self.spheres {
+            b = b.union(&s.sphere.bounds());
+        }
+        for l in &self.lights {
+            b.grow(l.position());
+        }
+        b
+    }
+}
