@@ -1,0 +1,110 @@
+//! Radiometry against closed-form answers: a Lambertian plane under a point
+//! light, and a small sphere light against the point light of equal power.
+
+use raytracer::geometry::Sphere;
+use raytracer::integrator::{render, IntegratorKind, RenderSettings};
+use raytracer::light::Light;
+use raytracer::material::Material;
+use raytracer::math::Vec3;
+use raytracer::scene::{CameraDesc, SceneDesc, SceneSettings, TriangleDesc};
+use raytracer::Scene;
+use std::f32::consts::PI;
+
+const ALBEDO: f32 = 0.6;
+const POWER: f32 = 10.0;
+const HEIGHT: f32 = 2.0;
+
+/// A 20x20 plane at y = 0 seen from above by a narrow camera aimed at the
+/// point straight below the light at (0, HEIGHT, 0).
+fn plane_scene(light: Light) -> SceneDesc {
+    let mut d = SceneDesc {
+        name: "plane".into(),
+        camera: CameraDesc {
+            position: Vec3::new(0.0, 1.0, 0.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Z,
+            fov_y_deg: 0.5,
+            width: 5,
+            height: 5,
+        },
+        materials: vec![],
+        triangles: vec![],
+        spheres: vec![],
+        lights: vec![light],
+        settings: SceneSettings::default(),
+    };
+    let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));
+    let s = 10.0;
+    let (a, b, c, e) = (
+        Vec3::new(-s, 0.0, -s),
+        Vec3::new(s, 0.0, -s),
+        Vec3::new(s, 0.0, s),
+        Vec3::new(-s, 0.0, s),
+    );
+    for v in [[a, b, c], [a, c, e]] {
+        d.triangles.push(TriangleDesc {
+            vertices: v,
+            normals: None,
+            material: m,
+        });
+    }
+    d
+}
+
+fn centre_radiance(desc: SceneDesc, shadow_samples: u32) -> f32 {
+    let scene = Scene::build(desc).unwrap();
+    let settings = RenderSettings {
+        ssaa: 2,
+        shadow_samples,
+        integrator: IntegratorKind::Direct,
+        ..RenderSettings::default()
+    };
+    let out = render(&scene, &settings, &|| {}).unwrap();
+    out.film.get(2, 2).x
+}
+
+#[test]
+fn plane_under_point_light_matches_closed_form() {
+    let light = Light::Point {
+        position: Vec3::new(0.0, HEIGHT, 0.0),
+        power: Vec3::splat(POWER),
+    };
+    let got = centre_radiance(plane_scene(light), 1);
+    let want = ALBEDO / PI * POWER / (4.0 * PI * HEIGHT * HEIGHT);
+    assert!((got - want).abs() / want < 0.005, "radiance {got}, expected {want}");
+}
+
+#[test]
+fn small_sphere_light_matches_point_light() {
+    let point = Light::Point {
+        position: Vec3::new(0.0, HEIGHT, 0.0),
+        power: Vec3::splat(POWER),
+    };
+    let sphere = Light::Sphere {
+        sphere: Sphere {
+            centre: Vec3::new(0.0, HEIGHT, 0.0),
+            radius: 0.05,
+        },
+        power: Vec3::splat(POWER),
+    };
+    let lp = centre_radiance(plane_scene(point), 1);
+    let ls = centre_radiance(plane_scene(sphere), 64);
+    assert!((ls - lp).abs() / lp < 0.01, "sphere {ls} vs point {lp}");
+}
+
+#[test]
+fn radiance_falls_with_the_square_of_height() {
+    let near = Light::Point {
+        position: Vec3::new(0.0, 1.5, 0.0),
+        power: Vec3::splat(POWER),
+    };
+    let far = Light::Point {
+        position: Vec3::new(0.0, 3.0, 0.0),
+        power: Vec3::splat(POWER),
+    };
+    let (a, b) = (
+        centre_radiance(plane_scene(near), 1),
+        centre_radiance(plane_scene(far), 1),
+    );
+    assert!((a / b - 4.0).abs() < 0.02, "ratio {}", a / b);
+}
