@@ -32,6 +32,22 @@ pub struct Cli {
 pub enum Command {
     /// Print statistics of a scene: triangles, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
     Info(SceneArgs),
+    /// Compare two linear images (EXR or PFM): RMSE, relative MSE, mean luminance ratio.
+    Compare(CompareArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// The image to judge (.exr or .pfm).
+    pub image: PathBuf,
+    /// The reference image (.exr or .pfm).
+    pub reference: PathBuf,
+    /// Write a false-colour picture of the relative error to this PNG.
+    #[arg(long, value_name = "PNG")]
+    pub diff: Option<PathBuf>,
+    /// Relative error shown as full red in the --diff picture.
+    #[arg(long, default_value_t = 0.5)]
+    pub diff_scale: f32,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -13,6 +13,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod metrics;
 pub mod sampling;
 pub mod scene;
 

@@ -42,6 +42,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Info(args)) => info(&args),
+        Some(Command::Compare(args)) => compare(&args),
         None => render(&cli.render),
     }
 }
@@ -101,5 +102,52 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     println!("sah cost: {:.2}", s.sah_cost);
     println!("build time: {:.2} ms", scene.bvh_build_seconds * 1e3);
     println!("memory: {:.2} MiB (nodes and index)", s.bytes as f64 / (1 << 20) as f64);
+    Ok(())
+}
+
+fn compare(args: &cli::CompareArgs) -> Result<()> {
+    use anyhow::{bail, Context};
+    use raytracer::image_io::{read_image, write_atomic, Format};
+    let img = read_image(&args.image)?;
+    let reference = read_image(&args.reference)?;
+    let Some(e) = raytracer::metrics::compare(&img, &reference) else {
+        bail!(
+            "{} is {}x{} but {} is {}x{}",
+            args.image.display(),
+            img.width,
+            img.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        );
+    };
+    if let Some(diff) = &args.diff {
+        if Format::from_path(diff).ok() != Some(Format::Png) {
+            bail!("--diff {}: must be a .png file", diff.display());
+        }
+        if !(args.diff_scale.is_finite() && args.diff_scale > 0.0) {
+            bail!("--diff-scale {}: must be a positive number", args.diff_scale);
+        }
+        let px = raytracer::metrics::error_image(&img, &reference, args.diff_scale);
+        write_atomic(diff, |tmp| {
+            image::save_buffer_with_format(
+                tmp,
+                &px,
+                img.width,
+                img.height,
+                image::ExtendedColorType::Rgb8,
+                image::ImageFormat::Png,
+            )
+            .map_err(|e| raytracer::Error::ImageWrite {
+                path: diff.clone(),
+                message: e.to_string(),
+            })
+        })
+        .with_context(|| format!("--diff {}", diff.display()))?;
+    }
+    println!(
+        "rmse {:.6}  rel_mse {:.6}  luminance_ratio {:.4}",
+        e.rmse, e.rel_mse, e.luminance_ratio
+    );
     Ok(())
 }

@@ -269,3 +269,37 @@ fn summary_line_reports_size_samples_time_and_ray_rate() {
     );
     assert!(dir.path().join("render.png").exists());
 }
+
+#[test]
+fn compare_reports_errors_and_writes_a_diff() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = ["--width", "32", "--height", "32", "--ssaa", "1"];
+    render_pfm(dir.path(), "a.pfm", &small);
+    let mut b = small.to_vec();
+    b.extend_from_slice(&["--seed", "3"]);
+    render_pfm(dir.path(), "b.exr", &b);
+    render_pfm(dir.path(), "c.pfm", &["--width", "16", "--height", "16", "--ssaa", "1"]);
+
+    let same = raytracer(&["compare", "a.pfm", "a.pfm"], dir.path());
+    let text = String::from_utf8_lossy(&same.stdout);
+    assert!(
+        text.contains("rmse 0.000000") && text.contains("luminance_ratio 1.0000"),
+        "{text}"
+    );
+
+    let diff = raytracer(&["compare", "b.exr", "a.pfm", "--diff", "d.png"], dir.path());
+    assert!(diff.status.success());
+    let text = String::from_utf8_lossy(&diff.stdout);
+    let rmse: f64 = text.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(rmse > 0.0, "{text}");
+    assert_eq!(
+        image::open(dir.path().join("d.png")).unwrap().to_rgb8().dimensions(),
+        (32, 32)
+    );
+
+    let mismatch = raytracer(&["compare", "c.pfm", "a.pfm"], dir.path());
+    assert_eq!(mismatch.status.code(), Some(2));
+    let missing = raytracer(&["compare", "nope.pfm", "a.pfm"], dir.path());
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.pfm"));
+}

@@ -1,0 +1,115 @@
+//! Image error metrics for comparing a render against a reference, and a
+//! false-colour picture of where they differ.
+
+use crate::film::Film;
+use crate::math::{luminance, Vec3};
+
+/// Errors of an image against a reference of the same size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageError {
+    /// Root mean squared error over all channels.
+    pub rmse: f64,
+    /// Mean over channels of (x - ref)^2 / (ref^2 + 0.01): the relative MSE
+    /// used in rendering papers; the epsilon keeps black pixels finite.
+    pub rel_mse: f64,
+    /// Mean luminance of the image divided by that of the reference.
+    pub luminance_ratio: f64,
+}
+
+const REL_EPS: f64 = 0.01;
+
+/// Compares `img` with `reference`; `None` when the sizes differ.
+pub fn compare(img: &Film, reference: &Film) -> Option<ImageError> {
+    if img.width != reference.width || img.height != reference.height {
+        return None;
+    }
+    let (mut se, mut rel, mut li, mut lr) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (a, b) in img.pixels.iter().zip(&reference.pixels) {
+        for k in 0..3 {
+            let (x, r) = (a[k] as f64, b[k] as f64);
+            se += (x - r) * (x - r);
+            rel += (x - r) * (x - r) / (r * r + REL_EPS);
+        }
+        li += luminance(*a) as f64;
+        lr += luminance(*b) as f64;
+    }
+    let n = (img.pixels.len() * 3).max(1) as f64;
+    Some(ImageError {
+        rmse: (se / n).sqrt(),
+        rel_mse: rel / n,
+        luminance_ratio: if lr > 0.0 { li / lr } else { f64::NAN },
+    })
+}
+
+/// A false-colour picture of the per-pixel relative error: black where the
+/// images agree, through blue and green to red at `max_rel` relative error
+/// and beyond. Returns 8-bit RGB.
+pub fn error_image(img: &Film, reference: &Film, max_rel: f32) -> Vec<u8> {
+    img.pixels
+        .iter()
+        .zip(&reference.pixels)
+        .flat_map(|(a, b)| {
+            let la = luminance(*a);
+            let lb = luminance(*b);
+            let e = ((la - lb).abs() / (lb.abs() + 0.1)) / max_rel;
+            let c = heat(e.clamp(0.0, 1.0));
+            [c.x, c.y, c.z].map(|v| (v * 255.0 + 0.5) as u8)
+        })
+        .collect()
+}
+
+/// Black -> blue -> green -> yellow -> red.
+fn heat(t: f32) -> Vec3 {
+    let stops = [
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ];
+    let x = t * (stops.len() - 1) as f32;
+    let i = (x as usize).min(stops.len() - 2);
+    stops[i].lerp(stops[i + 1], x - i as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn film(v: &[f32]) -> Film {
+        Film {
+            width: v.len() as u32,
+            height: 1,
+            pixels: v.iter().map(|&x| Vec3::splat(x)).collect(),
+        }
+    }
+
+    #[test]
+    fn identical_images_have_zero_error() {
+        let a = film(&[0.1, 0.5, 2.0]);
+        let e = compare(&a, &a).unwrap();
+        assert_eq!(e.rmse, 0.0);
+        assert_eq!(e.rel_mse, 0.0);
+        assert!((e.luminance_ratio - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn errors_measure_the_difference() {
+        let a = film(&[1.0, 1.0]);
+        let b = film(&[2.0, 2.0]);
+        let e = compare(&b, &a).unwrap();
+        assert!((e.rmse - 1.0).abs() < 1e-9);
+        assert!((e.rel_mse - 1.0 / 1.01).abs() < 1e-6);
+        assert!((e.luminance_ratio - 2.0).abs() < 1e-6);
+        assert!(compare(&film(&[1.0]), &a).is_none());
+    }
+
+    #[test]
+    fn error_image_is_black_where_equal_and_red_where_far() {
+        let r = film(&[1.0, 1.0]);
+        let i = film(&[1.0, 3.0]);
+        let px = error_image(&i, &r, 0.5);
+        assert_eq!(&px[0..3], &[0, 0, 0]);
+        assert_eq!(&px[3..6], &[255, 0, 0]);
+    }
+}
