@@ -2,6 +2,7 @@
 //! and decorrelated between shading points. Indirect light is not estimated.
 
 use super::{RadianceEstimator, RayStats};
+use crate::material::Transport;
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::{hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
@@ -10,17 +11,47 @@ pub struct DirectLighting {
     pub shadow_samples: u32,
 }
 
+/// Specular bounces a camera ray may take before it gives up.
+pub const MAX_SPECULAR_DEPTH: u32 = 16;
+
 impl RadianceEstimator for DirectLighting {
     fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let Some(hit) = scene.intersect(ray, 0.0, f32::INFINITY) else {
+        let Some((hit, wo, beta)) = first_diffuse_hit(scene, *ray, rng, stats) else {
             return Vec3::ZERO;
         };
         if let Some(l) = hit.light {
-            return scene.lights[l as usize].radiance();
+            return beta * scene.lights[l as usize].radiance();
         }
         let f = scene.material(hit.material).f();
-        f * irradiance(scene, &hit, -ray.d, self.shadow_samples, rng, stats)
+        beta * f * irradiance(scene, &hit, wo, self.shadow_samples, rng, stats)
     }
+}
+
+/// Follows a camera ray through mirrors and glass to its first diffuse (or
+/// emitting) surface: the hit, the direction back along the ray, and the
+/// throughput of the specular chain.
+pub fn first_diffuse_hit(
+    scene: &Scene,
+    mut ray: Ray,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Option<(Hit, Vec3, Vec3)> {
+    let mut beta = Vec3::ONE;
+    for depth in 0..=MAX_SPECULAR_DEPTH {
+        if depth > 0 {
+            stats.other_rays += 1;
+        }
+        let hit = scene.intersect(&ray, 0.0, f32::INFINITY)?;
+        let wo = -ray.d;
+        let m = scene.material(hit.material);
+        if hit.light.is_some() || !m.is_specular() {
+            return Some((hit, wo, beta));
+        }
+        let s = m.sample_specular(wo, hit.ng, rng.next_f32(), Transport::Radiance)?;
+        beta *= s.weight;
+        ray = Ray::new(offset_origin(hit.p, hit.ng, s.wi), s.wi);
+    }
+    None
 }
 
 /// Direct irradiance at a hit from all lights, seen from the side `wo` faces:
