@@ -3,7 +3,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
-use raytracer::film::Filter;
+use raytracer::film::{Filter, PixelRect};
 use raytracer::integrator::{IntegratorKind, RenderSettings};
 use raytracer::scene::builtin;
 use raytracer::SceneDesc;
@@ -34,6 +34,17 @@ pub enum Command {
     Info(SceneArgs),
     /// Compare two linear images (EXR or PFM): RMSE, relative MSE, mean luminance ratio.
     Compare(CompareArgs),
+    /// Assemble EXR parts rendered with --crop or --tile into the whole frame.
+    Merge(MergeArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// The merged image (.exr, .pfm or .png).
+    pub output: PathBuf,
+    /// The parts (.exr files written with --crop or --tile).
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -94,6 +105,13 @@ pub struct RenderArgs {
     /// Exposure in stops applied to PNG output (linear outputs hold radiance).
     #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
+    /// Render only the pixel rectangle [X0, X1) x [Y0, Y1) of the frame; EXR output records its place.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with = "tile")]
+    pub crop: Option<String>,
+    /// Render the I-th (from 0) of N horizontal bands of the frame; `auto/N` (or `auto` with
+    /// SLURM_ARRAY_TASK_COUNT set) takes I from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "I/N")]
+    pub tile: Option<String>,
     /// Print nothing (no progress bar, no summary).
     #[arg(short, long)]
     pub quiet: bool,
@@ -153,6 +171,11 @@ pub fn prepare(args: &RenderArgs) -> Result<(SceneDesc, RenderSettings)> {
     if !args.exposure.is_finite() {
         bail!("--exposure {}: must be a finite number", args.exposure);
     }
+    let crop = match (&args.crop, &args.tile) {
+        (Some(c), _) => Some(parse_crop(c, w, h)?),
+        (None, Some(t)) => Some(parse_tile(t, w, h, |k| std::env::var(k).ok())?),
+        (None, None) => None,
+    };
     raytracer::image_io::check_writable(&args.output).context("cannot write the output")?;
     let settings = RenderSettings {
         ssaa,
@@ -161,6 +184,96 @@ pub fn prepare(args: &RenderArgs) -> Result<(SceneDesc, RenderSettings)> {
         seed: args.seed,
         threads: args.threads,
         integrator: args.integrator,
+        crop,
     };
     Ok((desc, settings))
+}
+
+fn parse_crop(text: &str, w: u32, h: u32) -> Result<PixelRect> {
+    let v: Vec<u32> = text
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("--crop {text}: expected four whole numbers X0,Y0,X1,Y1"))?;
+    let [x0, y0, x1, y1] = v[..] else {
+        bail!("--crop {text}: expected four whole numbers X0,Y0,X1,Y1");
+    };
+    if x0 >= x1 || y0 >= y1 || x1 > w || y1 > h {
+        bail!("--crop {text}: must be a non-empty rectangle inside the {w}x{h} frame");
+    }
+    Ok(PixelRect { x0, y0, x1, y1 })
+}
+
+/// `I/N`, `auto/N` or `auto`; `env` looks up environment variables.
+pub fn parse_tile(text: &str, w: u32, h: u32, env: impl Fn(&str) -> Option<String>) -> Result<PixelRect> {
+    let (i, n) = text.split_once('/').unwrap_or((text, ""));
+    let count: u32 = if n.is_empty() {
+        let Some(c) = env("SLURM_ARRAY_TASK_COUNT") else {
+            bail!("--tile {text}: give the band count as I/N or auto/N");
+        };
+        c.trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--tile {text}: SLURM_ARRAY_TASK_COUNT={c} is not a whole number"))?
+    } else {
+        n.parse()
+            .map_err(|_| anyhow::anyhow!("--tile {text}: N must be a whole number"))?
+    };
+    let index: u32 = if i == "auto" {
+        let (var, val) = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+            .iter()
+            .find_map(|k| env(k).map(|v| (*k, v)))
+            .ok_or_else(|| {
+                anyhow::anyhow!("--tile {text}: neither SLURM_ARRAY_TASK_ID nor JOB_COMPLETION_INDEX is set")
+            })?;
+        val.trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--tile {text}: {var}={val} is not a whole number"))?
+    } else {
+        i.parse()
+            .map_err(|_| anyhow::anyhow!("--tile {text}: I must be a whole number"))?
+    };
+    if count == 0 || count > h || index >= count {
+        bail!("--tile {text}: need 0 <= I < N <= {h} (the image height)");
+    }
+    Ok(PixelRect::band(index, count, w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_parse_from_text_and_scheduler_variables() {
+        let none = |_: &str| None;
+        assert_eq!(
+            parse_tile("1/4", 10, 8, none).unwrap(),
+            PixelRect {
+                x0: 0,
+                y0: 2,
+                x1: 10,
+                y1: 4
+            }
+        );
+        assert!(parse_tile("4/4", 10, 8, none).is_err());
+        assert!(parse_tile("auto/4", 10, 8, none).is_err());
+        let slurm = |k: &str| match k {
+            "SLURM_ARRAY_TASK_ID" => Some("3".to_string()),
+            "SLURM_ARRAY_TASK_COUNT" => Some("4".to_string()),
+            _ => None,
+        };
+        assert_eq!(parse_tile("auto", 10, 8, slurm).unwrap().y0, 6);
+        let k8s = |k: &str| (k == "JOB_COMPLETION_INDEX").then(|| "0".to_string());
+        assert_eq!(parse_tile("auto/2", 10, 8, k8s).unwrap().y1, 4);
+        assert!(parse_crop("1,2,3", 10, 8).is_err());
+        assert!(parse_crop("5,2,3,4", 10, 8).is_err());
+        assert_eq!(
+            parse_crop("1,2,3,4", 10, 8).unwrap(),
+            PixelRect {
+                x0: 1,
+                y0: 2,
+                x1: 3,
+                y1: 4
+            }
+        );
+    }
 }

@@ -105,6 +105,68 @@ fn inverse_normal_cdf(p: f64) -> f64 {
     }
 }
 
+/// A rectangle of pixels [x0, x1) x [y0, y1) within a full frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl PixelRect {
+    pub fn full(width: u32, height: u32) -> Self {
+        PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x1 <= self.x0 || self.y1 <= self.y0
+    }
+
+    /// The I-th of N horizontal bands of a frame (rows split as evenly as possible).
+    pub fn band(index: u32, count: u32, width: u32, height: u32) -> Self {
+        let row = |i: u32| (i as u64 * height as u64 / count as u64) as u32;
+        PixelRect {
+            x0: 0,
+            y0: row(index),
+            x1: width,
+            y1: row(index + 1),
+        }
+    }
+}
+
+/// Where a film sits in the full frame: the frame's size and the film's
+/// rectangle in it (the OpenEXR display and data windows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameWindow {
+    pub full_width: u32,
+    pub full_height: u32,
+    pub rect: PixelRect,
+}
+
+impl FrameWindow {
+    pub fn full(width: u32, height: u32) -> Self {
+        FrameWindow {
+            full_width: width,
+            full_height: height,
+            rect: PixelRect::full(width, height),
+        }
+    }
+}
+
 /// Linear RGB radiance per pixel, rows from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
@@ -154,6 +216,48 @@ impl Film {
     }
 }
 
+/// Assembles films that each cover a rectangle of the same frame into the
+/// whole frame, refusing parts from different frames, overlaps and gaps.
+/// `names` label the parts in error messages.
+pub fn assemble(parts: &[(Film, FrameWindow)], names: &[String]) -> std::result::Result<Film, String> {
+    let Some((_, first)) = parts.first() else {
+        return Err("no parts to merge".into());
+    };
+    let (fw, fh) = (first.full_width, first.full_height);
+    let mut owner: Vec<u32> = vec![u32::MAX; fw as usize * fh as usize];
+    let mut out = Film::new(fw, fh);
+    for (i, (film, w)) in parts.iter().enumerate() {
+        if (w.full_width, w.full_height) != (fw, fh) {
+            return Err(format!(
+                "{} belongs to a {}x{} frame, {} to a {fw}x{fh} frame",
+                names[i], w.full_width, w.full_height, names[0]
+            ));
+        }
+        let r = w.rect;
+        for y in r.y0..r.y1 {
+            for x in r.x0..r.x1 {
+                let k = (y * fw + x) as usize;
+                if owner[k] != u32::MAX {
+                    return Err(format!(
+                        "{} and {} overlap at pixel ({x}, {y})",
+                        names[owner[k] as usize], names[i]
+                    ));
+                }
+                owner[k] = i as u32;
+                out.set(x, y, film.get(x - r.x0, y - r.y0));
+            }
+        }
+    }
+    if let Some(k) = owner.iter().position(|&o| o == u32::MAX) {
+        return Err(format!(
+            "gap: no part covers pixel ({}, {})",
+            k as u32 % fw,
+            k as u32 / fw
+        ));
+    }
+    Ok(out)
+}
+
 /// The sRGB transfer function (IEC 61966-2-1).
 pub fn srgb_oetf(v: f32) -> f32 {
     if v.is_nan() {
@@ -191,6 +295,45 @@ mod tests {
             }
             assert!((mean / (n * n) as f32).length() < 1e-3);
         }
+    }
+
+    fn part(x0: u32, y0: u32, x1: u32, y1: u32) -> (Film, FrameWindow) {
+        let mut f = Film::new(x1 - x0, y1 - y0);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                f.set(x - x0, y - y0, Vec3::new(x as f32, y as f32, 1.0));
+            }
+        }
+        let w = FrameWindow {
+            full_width: 6,
+            full_height: 4,
+            rect: PixelRect { x0, y0, x1, y1 },
+        };
+        (f, w)
+    }
+
+    #[test]
+    fn assemble_stitches_parts_and_refuses_overlaps_and_gaps() {
+        let names: Vec<String> = (0..3).map(|i| format!("p{i}")).collect();
+        let whole = assemble(&[part(0, 0, 6, 2), part(0, 2, 3, 4), part(3, 2, 6, 4)], &names).unwrap();
+        assert_eq!(whole.get(4, 3), Vec3::new(4.0, 3.0, 1.0));
+        assert_eq!(whole.get(0, 0), Vec3::new(0.0, 0.0, 1.0));
+        let overlap = assemble(&[part(0, 0, 6, 3), part(0, 2, 6, 4)], &names).unwrap_err();
+        assert!(overlap.contains("overlap"), "{overlap}");
+        let gap = assemble(&[part(0, 0, 6, 2), part(0, 3, 6, 4)], &names).unwrap_err();
+        assert!(gap.contains("gap"), "{gap}");
+        let mut other = part(0, 2, 6, 4);
+        other.1.full_width = 7;
+        assert!(assemble(&[part(0, 0, 6, 2), other], &names).is_err());
+        assert_eq!(
+            PixelRect::band(2, 3, 6, 10),
+            PixelRect {
+                x0: 0,
+                y0: 6,
+                x1: 6,
+                y1: 10
+            }
+        );
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! place, so a reader never sees half an image and a failure leaves nothing.
 
 use crate::error::{Error, Result};
-use crate::film::Film;
+use crate::film::{Film, FrameWindow, PixelRect};
 use crate::math::Vec3;
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
@@ -92,6 +92,19 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
 /// Writes the film in the format its extension names. `exposure` (in stops)
 /// applies to PNG only; the float formats hold radiance.
 pub fn write_image(film: &Film, path: &Path, exposure: f32) -> Result<()> {
+    write_image_in_frame(film, &FrameWindow::full(film.width, film.height), &[], path, exposure)
+}
+
+/// Like [`write_image`], for a film that covers `window.rect` of a larger
+/// frame. EXR records the rectangle as its data window within the display
+/// window, plus string `attributes`; PNG and PFM hold just the film's pixels.
+pub fn write_image_in_frame(
+    film: &Film,
+    window: &FrameWindow,
+    attributes: &[(&str, &str)],
+    path: &Path,
+    exposure: f32,
+) -> Result<()> {
     let fmt = Format::from_path(path)?;
     let werr = |m: String| Error::ImageWrite {
         path: path.to_path_buf(),
@@ -110,11 +123,24 @@ pub fn write_image(film: &Film, path: &Path, exposure: f32) -> Result<()> {
         Format::Exr => {
             use exr::prelude::*;
             let w = film.width as usize;
-            write_rgb_file(tmp, w, film.height as usize, |x, y| {
-                let p = film.pixels[y * w + x];
-                (p.x, p.y, p.z)
-            })
-            .map_err(|e| werr(e.to_string()))
+            let mut attrs =
+                LayerAttributes::named("rgb").with_position(Vec2(window.rect.x0 as i32, window.rect.y0 as i32));
+            for (k, v) in attributes {
+                attrs.other.insert(Text::from(*k), AttributeValue::Text(Text::from(*v)));
+            }
+            let layer = Layer::new(
+                (w, film.height as usize),
+                attrs,
+                Encoding::SMALL_LOSSLESS,
+                SpecificChannels::rgb(|pos: Vec2<usize>| {
+                    let p = film.pixels[pos.y() * w + pos.x()];
+                    (p.x, p.y, p.z)
+                }),
+            );
+            let mut image = Image::from_layer(layer);
+            image.attributes.display_window =
+                IntegerBounds::from_dimensions((window.full_width as usize, window.full_height as usize));
+            image.write().to_file(tmp).map_err(|e| werr(e.to_string()))
         }
         Format::Pfm => {
             let f = std::fs::File::create(tmp).map_err(|e| Error::Io {
@@ -143,6 +169,59 @@ fn write_pfm(film: &Film, w: &mut impl Write) -> std::io::Result<()> {
     Ok(())
 }
 
+/// String attributes stored in an EXR header.
+pub type Attributes = Vec<(String, String)>;
+
+/// Reads an EXR with the rectangle of the frame it covers and its string attributes.
+pub fn read_exr_in_frame(path: &Path) -> crate::error::Result<(Film, FrameWindow, Attributes)> {
+    use exr::prelude::*;
+    let perr = |m: String| crate::error::Error::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), Film::new(res.width() as u32, res.height() as u32)),
+        |(w, film): &mut (usize, Film), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            film.pixels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+        },
+    )
+    .map_err(|e| perr(e.to_string()))?;
+    let display = img.attributes.display_window;
+    let layer = &img.layer_data;
+    let pos = layer.attributes.layer_position;
+    let film = layer.channel_data.pixels.1.clone();
+    if display.position.x() != 0 || display.position.y() != 0 || pos.x() < 0 || pos.y() < 0 {
+        return Err(perr(
+            "display window must start at (0, 0) and contain the data window".into(),
+        ));
+    }
+    let rect = PixelRect {
+        x0: pos.x() as u32,
+        y0: pos.y() as u32,
+        x1: pos.x() as u32 + film.width,
+        y1: pos.y() as u32 + film.height,
+    };
+    let window = FrameWindow {
+        full_width: display.size.x() as u32,
+        full_height: display.size.y() as u32,
+        rect,
+    };
+    if rect.x1 > window.full_width || rect.y1 > window.full_height {
+        return Err(perr("data window lies outside the display window".into()));
+    }
+    let attrs = layer
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            exr::meta::attribute::AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok((film, window, attrs))
+}
+
 /// Reads a linear image (PFM or EXR).
 pub fn read_image(path: &Path) -> Result<Film> {
     let perr = |m: String| Error::Parse {
@@ -160,18 +239,7 @@ pub fn read_image(path: &Path) -> Result<Film> {
                 })?;
             read_pfm(&bytes).map_err(perr)
         }
-        Format::Exr => {
-            use exr::prelude::*;
-            let img = read_first_rgba_layer_from_file(
-                path,
-                |res, _| (res.width(), Film::new(res.width() as u32, res.height() as u32)),
-                |(w, film): &mut (usize, Film), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                    film.pixels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
-                },
-            )
-            .map_err(|e| perr(e.to_string()))?;
-            Ok(img.layer_data.channel_data.pixels.1)
-        }
+        Format::Exr => Ok(read_exr_in_frame(path)?.0),
         Format::Png => Err(perr("PNG is not a linear format".into())),
     }
 }
@@ -248,6 +316,27 @@ mod tests {
         write_image(&sample_film(), &dir.path().join("a.png"), 0.0).unwrap();
         // Nothing but the three images is left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+
+    #[test]
+    fn exr_keeps_its_place_in_the_frame_and_attributes() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("part.exr");
+        let window = FrameWindow {
+            full_width: 10,
+            full_height: 8,
+            rect: PixelRect {
+                x0: 4,
+                y0: 5,
+                x1: 7,
+                y1: 7,
+            },
+        };
+        write_image_in_frame(&sample_film(), &window, &[("raytracer.partial", "true")], &p, 0.0).unwrap();
+        let (film, w, attrs) = read_exr_in_frame(&p).unwrap();
+        assert_eq!(film, sample_film());
+        assert_eq!(w, window);
+        assert!(attrs.contains(&("raytracer.partial".to_string(), "true".to_string())));
     }
 
     #[test]

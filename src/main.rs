@@ -43,6 +43,7 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Info(args)) => info(&args),
         Some(Command::Compare(args)) => compare(&args),
+        Some(Command::Merge(args)) => merge(&args),
         None => render(&cli.render),
     }
 }
@@ -51,8 +52,9 @@ fn render(args: &cli::RenderArgs) -> Result<()> {
     let (desc, settings) = cli::prepare(args)?;
     let scene = Scene::build(desc)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
+    let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let b = ProgressBar::new(tile_count(w, h));
+        let b = ProgressBar::new(tile_count(rect.width(), rect.height()));
         if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} tiles, {elapsed} elapsed, {eta} left") {
             b.set_style(style);
         }
@@ -62,13 +64,17 @@ fn render(args: &cli::RenderArgs) -> Result<()> {
     };
     let out = integrator::render(&scene, &settings, &|| bar.inc(1))?;
     bar.finish_and_clear();
-    raytracer::image_io::write_image(&out.film, &args.output, args.exposure)?;
+    raytracer::image_io::write_image_in_frame(&out.film, &out.window, &[], &args.output, args.exposure)?;
     if !args.quiet {
         println!(
-            "{} {}x{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
+            "{} {}x{}{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
             scene.name,
             w,
             h,
+            match settings.crop {
+                Some(r) => format!(" (crop {},{},{},{})", r.x0, r.y0, r.x1, r.y1),
+                None => String::new(),
+            },
             settings.ssaa * settings.ssaa,
             settings.shadow_samples,
             settings.integrator,
@@ -149,5 +155,19 @@ fn compare(args: &cli::CompareArgs) -> Result<()> {
         "rmse {:.6}  rel_mse {:.6}  luminance_ratio {:.4}",
         e.rmse, e.rel_mse, e.luminance_ratio
     );
+    Ok(())
+}
+
+fn merge(args: &cli::MergeArgs) -> Result<()> {
+    use raytracer::image_io::{check_writable, read_exr_in_frame};
+    check_writable(&args.output)?;
+    let mut parts = vec![];
+    let mut names = vec![];
+    for p in &args.parts {
+        parts.push(read_exr_in_frame(p).map(|(f, w, _)| (f, w))?);
+        names.push(p.display().to_string());
+    }
+    let film = raytracer::film::assemble(&parts, &names).map_err(|m| anyhow::anyhow!("merge: {m}"))?;
+    raytracer::image_io::write_image(&film, &args.output, 0.0)?;
     Ok(())
 }

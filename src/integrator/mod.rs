@@ -8,7 +8,7 @@
 pub mod direct;
 
 use crate::error::{Error, Result};
-use crate::film::{Film, Filter};
+use crate::film::{Film, Filter, FrameWindow, PixelRect};
 use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::{stratified, Rng};
 use crate::scene::Scene;
@@ -36,6 +36,8 @@ pub struct RenderSettings {
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
     pub integrator: IntegratorKind,
+    /// Render only this rectangle of the frame (`None`: the whole frame).
+    pub crop: Option<PixelRect>,
 }
 
 impl Default for RenderSettings {
@@ -47,6 +49,7 @@ impl Default for RenderSettings {
             seed: 0,
             threads: None,
             integrator: IntegratorKind::Direct,
+            crop: None,
         }
     }
 }
@@ -74,7 +77,9 @@ impl RayStats {
 /// What a render produced.
 #[derive(Clone, Debug)]
 pub struct RenderOutput {
+    /// The rendered pixels: the crop rectangle, or the whole frame.
     pub film: Film,
+    pub window: FrameWindow,
     pub stats: RayStats,
     pub seconds: f64,
 }
@@ -101,6 +106,7 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     if settings.ssaa == 0 {
         return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
     }
+    let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
     let (film, stats) = with_threads(settings.threads, || match settings.integrator {
         IntegratorKind::Direct => {
@@ -112,14 +118,32 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     })?;
     Ok(RenderOutput {
         film,
+        window,
         stats,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
 
-/// Number of tiles the frame is cut into (for progress bars).
+/// Number of tiles a rectangle is cut into (for progress bars).
 pub fn tile_count(width: u32, height: u32) -> u64 {
     (width.div_ceil(TILE) as u64) * (height.div_ceil(TILE) as u64)
+}
+
+/// The part of the frame a render covers; refuses crops outside the frame.
+pub fn frame_window(scene: &Scene, settings: &RenderSettings) -> Result<FrameWindow> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let rect = settings.crop.unwrap_or(PixelRect::full(w, h));
+    if rect.is_empty() || rect.x1 > w || rect.y1 > h {
+        return Err(Error::InvalidSetting(format!(
+            "--crop {},{},{},{}: must be a non-empty rectangle inside the {w}x{h} frame",
+            rect.x0, rect.y0, rect.x1, rect.y1
+        )));
+    }
+    Ok(FrameWindow {
+        full_width: w,
+        full_height: h,
+        rect,
+    })
 }
 
 /// The tile loop shared by every integrator.
@@ -130,16 +154,18 @@ pub fn render_tiles(
     on_tile: &(dyn Fn() + Sync),
 ) -> (Film, RayStats) {
     let cam = &scene.camera;
-    let (w, h) = (cam.width, cam.height);
-    let tiles_x = w.div_ceil(TILE);
-    let ntiles = tile_count(w, h) as u32;
+    let w = cam.width;
+    let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
+    let (rw, rh) = (rect.width(), rect.height());
+    let tiles_x = rw.div_ceil(TILE);
+    let ntiles = tile_count(rw, rh) as u32;
     let n = settings.ssaa;
     let spp = n * n;
     let tiles: Vec<(u32, Vec<Vec3>, RayStats)> = (0..ntiles)
         .into_par_iter()
         .map(|t| {
-            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let (x0, y0) = (rect.x0 + (t % tiles_x) * TILE, rect.y0 + (t / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(rect.x1), (y0 + TILE).min(rect.y1));
             let mut stats = RayStats::default();
             let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
@@ -165,11 +191,12 @@ pub fn render_tiles(
             (t, out, stats)
         })
         .collect();
-    let mut film = Film::new(w, h);
+    let mut film = Film::new(rw, rh);
     let mut stats = RayStats::default();
     for (t, px, s) in tiles {
+        // Tile origin relative to the film.
         let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-        let tw = (x0 + TILE).min(w) - x0;
+        let tw = (x0 + TILE).min(rw) - x0;
         for (i, p) in px.into_iter().enumerate() {
             film.set(x0 + i as u32 % tw, y0 + i as u32 / tw, p);
         }

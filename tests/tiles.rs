@@ -1,0 +1,130 @@
+//! Rendering a frame in parts (crops and bands, as separate processes) and
+//! merging them gives the single render, byte for byte.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SIZE: [&str; 6] = ["--width", "72", "--height", "56", "--ssaa", "2"];
+
+fn run(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("SLURM_ARRAY_TASK_COUNT")
+        .env_remove("JOB_COMPLETION_INDEX")
+        .output()
+        .unwrap()
+}
+
+fn render(dir: &Path, out: &str, extra: &[&str]) {
+    let mut a = vec!["--quiet", "-o", out];
+    a.extend_from_slice(&SIZE);
+    a.extend_from_slice(extra);
+    let o = run(&a, dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn bands_rendered_by_separate_processes_merge_to_the_full_render() {
+    let dir = tempfile::tempdir().unwrap();
+    render(dir.path(), "full.pfm", &[]);
+    // One process per band, all running at once, as a scheduler would start them.
+    let children: Vec<_> = (0..3)
+        .map(|i| {
+            let tile = format!("{i}/3");
+            let out = format!("band{i}.exr");
+            let mut a = vec![
+                "--quiet".to_string(),
+                "-o".into(),
+                out,
+                "--tile".into(),
+                tile,
+                "--threads".into(),
+                "1".into(),
+            ];
+            a.extend(SIZE.iter().map(|s| s.to_string()));
+            Command::new(env!("CARGO_BIN_EXE_raytracer"))
+                .args(&a)
+                .current_dir(dir.path())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    let o = run(
+        &["merge", "merged.pfm", "band2.exr", "band0.exr", "band1.exr"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let full = std::fs::read(dir.path().join("full.pfm")).unwrap();
+    assert!(
+        full == std::fs::read(dir.path().join("merged.pfm")).unwrap(),
+        "merged bands differ"
+    );
+}
+
+#[test]
+fn crops_merge_to_the_full_render_and_bad_sets_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    render(dir.path(), "full.pfm", &[]);
+    for (name, crop) in [
+        ("a.exr", "0,0,40,30"),
+        ("b.exr", "40,0,72,30"),
+        ("c.exr", "0,30,40,56"),
+        ("d.exr", "40,30,72,56"),
+    ] {
+        render(dir.path(), name, &["--crop", crop]);
+    }
+    let o = run(&["merge", "merged.pfm", "a.exr", "b.exr", "c.exr", "d.exr"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let full = std::fs::read(dir.path().join("full.pfm")).unwrap();
+    assert!(
+        full == std::fs::read(dir.path().join("merged.pfm")).unwrap(),
+        "merged crops differ"
+    );
+
+    render(dir.path(), "overlap.exr", &["--crop", "30,0,72,30"]);
+    let gap = run(&["merge", "x.exr", "a.exr", "c.exr", "d.exr"], dir.path());
+    assert_eq!(gap.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&gap.stderr).contains("gap"));
+    let overlap = run(
+        &["merge", "x.exr", "a.exr", "overlap.exr", "c.exr", "d.exr"],
+        dir.path(),
+    );
+    assert_eq!(overlap.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&overlap.stderr).contains("overlap"));
+    assert!(!dir.path().join("x.exr").exists());
+
+    let mut other = vec![
+        "--quiet",
+        "-o",
+        "other.exr",
+        "--width",
+        "80",
+        "--height",
+        "56",
+        "--crop",
+        "40,0,80,30",
+    ];
+    other.extend_from_slice(&["--ssaa", "1"]);
+    assert!(run(&other, dir.path()).status.success());
+    let mismatch = run(&["merge", "x.exr", "a.exr", "other.exr", "c.exr", "d.exr"], dir.path());
+    assert_eq!(mismatch.status.code(), Some(2));
+
+    for bad in [
+        ["--crop", "0,0,100,10"],
+        ["--crop", "1,2"],
+        ["--tile", "3/3"],
+        ["--tile", "auto"],
+    ] {
+        let mut a = vec!["-o", "bad.exr"];
+        a.extend_from_slice(&SIZE);
+        a.extend_from_slice(&bad);
+        let o = run(&a, dir.path());
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+        assert!(!dir.path().join("bad.exr").exists());
+    }
+}
