@@ -31,7 +31,7 @@ fn main() -> ExitCode {
         }
     };
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
             ExitCode::from(2)
@@ -39,16 +39,32 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
-        Some(Command::Info(args)) => info(&args),
-        Some(Command::Compare(args)) => compare(&args),
-        Some(Command::Merge(args)) => merge(&args),
+        Some(Command::Info(args)) => info(&args).map(|_| ExitCode::SUCCESS),
+        Some(Command::Compare(args)) => compare(&args).map(|_| ExitCode::SUCCESS),
+        Some(Command::Merge(args)) => merge(&args).map(|_| ExitCode::SUCCESS),
         None => render(&cli.render),
     }
 }
 
-fn render(args: &cli::RenderArgs) -> Result<()> {
+/// Exit status after SIGINT/SIGTERM, as shells report a death by SIGINT.
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// Where an interrupted render's pixels go: `name.partial.ext` beside the output.
+fn partial_path(output: &std::path::Path) -> std::path::PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = output
+        .extension()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    output.with_file_name(format!("{stem}.partial.{ext}"))
+}
+
+fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let (desc, settings) = cli::prepare(args)?;
     let scene = Scene::build(desc)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
@@ -62,8 +78,18 @@ fn render(args: &cli::RenderArgs) -> Result<()> {
     } else {
         ProgressBar::hidden()
     };
+    // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
+    let _ = ctrlc::set_handler(|| integrator::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
     let out = integrator::render(&scene, &settings, &|| bar.inc(1))?;
     bar.finish_and_clear();
+    if out.tiles_done < out.tiles_total {
+        let path = partial_path(&args.output);
+        let tiles = format!("{}/{}", out.tiles_done, out.tiles_total);
+        let attrs = [("raytracer.partial", "true"), ("raytracer.tiles", tiles.as_str())];
+        raytracer::image_io::write_image_in_frame(&out.film, &out.window, &attrs, &path, args.exposure)?;
+        eprintln!("interrupted: {tiles} tiles rendered, saved to {}", path.display());
+        return Ok(ExitCode::from(EXIT_INTERRUPTED));
+    }
     raytracer::image_io::write_image_in_frame(&out.film, &out.window, &[], &args.output, args.exposure)?;
     if !args.quiet {
         println!(
@@ -83,7 +109,7 @@ fn render(args: &cli::RenderArgs) -> Result<()> {
             args.output.display()
         );
     }
-    Ok(())
+    Ok(ExitCode::SUCCESS)
 }
 
 fn info(args: &cli::SceneArgs) -> Result<()> {

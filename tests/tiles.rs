@@ -128,3 +128,47 @@ fn crops_merge_to_the_full_render_and_bad_sets_are_refused() {
         assert!(!dir.path().join("bad.exr").exists());
     }
 }
+
+#[test]
+fn sigint_leaves_a_valid_partial_exr_and_no_temporary_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args([
+            "--quiet",
+            "-o",
+            "big.exr",
+            "--width",
+            "1024",
+            "--height",
+            "1024",
+            "--ssaa",
+            "8",
+            "--threads",
+            "1",
+        ])
+        .current_dir(dir.path())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let files: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(files, vec!["big.partial.exr".to_string()]);
+    let (film, window, attrs) = raytracer::image_io::read_exr_in_frame(&dir.path().join("big.partial.exr")).unwrap();
+    assert_eq!((film.width, window.full_width), (1024, 1024));
+    assert!(
+        attrs.iter().any(|(k, v)| k == "raytracer.partial" && v == "true"),
+        "{attrs:?}"
+    );
+    // Some tiles were finished (non-black) and some were not.
+    let lit = film.pixels.iter().filter(|p| p.max_element() > 0.0).count();
+    assert!(lit > 0 && lit < film.pixels.len(), "{lit} lit pixels");
+}

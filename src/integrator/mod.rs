@@ -13,6 +13,12 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::{stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set when the process is asked to stop (SIGINT/SIGTERM): tiles not yet
+/// started are skipped, and the render returns what it finished. Signals are
+/// process-wide, so the flag is too.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 pub const TILE: u32 = 32;
 
@@ -79,6 +85,10 @@ impl RayStats {
 pub struct RenderOutput {
     /// The rendered pixels: the crop rectangle, or the whole frame.
     pub film: Film,
+    /// Tiles rendered and tiles in the frame; fewer done means interrupted
+    /// (the missing tiles are black).
+    pub tiles_done: u64,
+    pub tiles_total: u64,
     pub window: FrameWindow,
     pub stats: RayStats,
     pub seconds: f64,
@@ -108,7 +118,7 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     }
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
-    let (film, stats) = with_threads(settings.threads, || match settings.integrator {
+    let (film, stats, tiles_done) = with_threads(settings.threads, || match settings.integrator {
         IntegratorKind::Direct => {
             let est = direct::DirectLighting {
                 shadow_samples: settings.shadow_samples,
@@ -118,6 +128,8 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     })?;
     Ok(RenderOutput {
         film,
+        tiles_done,
+        tiles_total: tile_count(window.rect.width(), window.rect.height()),
         window,
         stats,
         seconds: start.elapsed().as_secs_f64(),
@@ -146,13 +158,14 @@ pub fn frame_window(scene: &Scene, settings: &RenderSettings) -> Result<FrameWin
     })
 }
 
-/// The tile loop shared by every integrator.
+/// The tile loop shared by every integrator. Returns the film, the ray
+/// counts and the number of tiles rendered.
 pub fn render_tiles(
     scene: &Scene,
     settings: &RenderSettings,
     est: &dyn RadianceEstimator,
     on_tile: &(dyn Fn() + Sync),
-) -> (Film, RayStats) {
+) -> (Film, RayStats, u64) {
     let cam = &scene.camera;
     let w = cam.width;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
@@ -163,6 +176,7 @@ pub fn render_tiles(
     let spp = n * n;
     let tiles: Vec<(u32, Vec<Vec3>, RayStats)> = (0..ntiles)
         .into_par_iter()
+        .filter(|_| !INTERRUPTED.load(Ordering::Relaxed))
         .map(|t| {
             let (x0, y0) = (rect.x0 + (t % tiles_x) * TILE, rect.y0 + (t / tiles_x) * TILE);
             let (x1, y1) = ((x0 + TILE).min(rect.x1), (y0 + TILE).min(rect.y1));
@@ -193,6 +207,7 @@ pub fn render_tiles(
         .collect();
     let mut film = Film::new(rw, rh);
     let mut stats = RayStats::default();
+    let done = tiles.len() as u64;
     for (t, px, s) in tiles {
         // Tile origin relative to the film.
         let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
@@ -202,7 +217,7 @@ pub fn render_tiles(
         }
         stats.add(&s);
     }
-    (film, stats)
+    (film, stats, done)
 }
 
 /// A 2D sample for light sampling that is shifted per shading point.
