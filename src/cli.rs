@@ -149,6 +149,12 @@ pub fn prepare(args: &RenderArgs) -> Result<(SceneDesc, RenderSettings)> {
             w as u64 * h as u64
         );
     }
+    let pixels = w as u64 * h as u64;
+    raytracer::limits::check_memory(
+        &format!("a {w}x{h} image"),
+        raytracer::limits::film_bytes(pixels),
+        8 << 30,
+    )?;
     let ssaa = args.ssaa.or(desc.settings.ssaa).unwrap_or(4);
     if ssaa == 0 || ssaa > 64 {
         bail!("--ssaa {ssaa}: must be between 1 and 64");
