@@ -3,6 +3,8 @@
 //! from description to renderable scene.
 
 pub mod builtin;
+pub mod mesh;
+pub mod transform;
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
