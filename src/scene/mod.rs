@@ -12,6 +12,35 @@ use crate::geometry::{Bvh, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
+use mesh::MeshReport;
+use std::path::PathBuf;
+
+/// How to load a scene: the mesh path that replaces the scene's own (or
+/// supplies one a built-in scene needs), and whether meshes are smooth-shaded.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    pub mesh: Option<PathBuf>,
+    /// Interpolate vertex normals where a mesh file has them.
+    pub smooth: bool,
+}
+
+/// A scene description and what loading its meshes took.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    pub desc: SceneDesc,
+    pub meshes: Vec<MeshReport>,
+}
+
+/// Loads a built-in scene by name.
+pub fn load(spec: &str, opts: &LoadOptions) -> Result<LoadedScene> {
+    if let Some(scene) = builtin::by_name(spec, opts)? {
+        return Ok(scene);
+    }
+    Err(Error::UnknownScene {
+        name: spec.to_string(),
+        known: builtin::NAMES.join(", "),
+    })
+}
 
 /// The camera as a scene states it.
 #[derive(Clone, Debug, PartialEq)]
