@@ -3,6 +3,7 @@
 //! from description to renderable scene.
 
 pub mod builtin;
+pub mod file;
 pub mod mesh;
 pub mod transform;
 
@@ -13,7 +14,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
 use mesh::MeshReport;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// How to load a scene: the mesh path that replaces the scene's own (or
 /// supplies one a built-in scene needs), and whether meshes are smooth-shaded.
@@ -31,10 +32,20 @@ pub struct LoadedScene {
     pub meshes: Vec<MeshReport>,
 }
 
-/// Loads a built-in scene by name.
+/// Loads a scene given as a built-in name or a TOML file. A path ending in
+/// `.toml` is always a file; otherwise a built-in name wins over a file of
+/// the same name (write `./NAME` for the file).
 pub fn load(spec: &str, opts: &LoadOptions) -> Result<LoadedScene> {
+    let path = Path::new(spec);
+    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        return file::load(path, opts);
+    }
     if let Some(scene) = builtin::by_name(spec, opts)? {
         return Ok(scene);
+    }
+    if path.is_file() {
+        return file::load(path, opts);
     }
     Err(Error::UnknownScene {
         name: spec.to_string(),
