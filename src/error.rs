@@ -7,10 +7,30 @@ use std::path::PathBuf;
 pub enum Error {
     #[error("{0}")]
     InvalidSetting(String),
-    #[error("unknown scene '{name}' (known scenes: {known})")]
+    #[error("unknown scene '{name}' (built-in scenes: {known}; or give a .toml scene file)")]
     UnknownScene { name: String, known: String },
     #[error("{path}: {message}")]
     Parse { path: PathBuf, message: String },
+    /// A malformed text file, at the line where the problem is.
+    #[error("{path}:{line}: {message}")]
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// A malformed binary file, at the byte offset where the problem is.
+    #[error("{path}: at byte offset {offset}: {message}")]
+    Binary {
+        path: PathBuf,
+        offset: u64,
+        message: String,
+    },
+    /// A built-in scene that draws a mesh the project does not ship.
+    #[error(
+        "scene '{scene}' needs the Stanford bunny: get bun_zipper.ply (or an OBJ of it) from the \
+         Stanford 3D Scanning Repository (https://graphics.stanford.edu/data/3Dscanrep/) and pass it with --mesh PATH"
+    )]
+    MeshRequired { scene: String },
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,

@@ -8,6 +8,7 @@ use clap::Parser;
 use cli::{Cli, Command};
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::integrator::{self, tile_count};
+use raytracer::scene::LoadedScene;
 use raytracer::Scene;
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -64,9 +65,39 @@ fn partial_path(output: &std::path::Path) -> std::path::PathBuf {
     output.with_file_name(format!("{stem}.partial.{ext}"))
 }
 
+/// Tells the user anything odd in the meshes.
+fn report_meshes(loaded: &LoadedScene, args: &cli::SceneArgs, quiet: bool) {
+    if quiet {
+        return;
+    }
+    for m in &loaded.meshes {
+        for w in &m.warnings {
+            eprintln!("warning: {w}");
+        }
+        if args.smooth && !m.has_normals {
+            eprintln!(
+                "warning: --smooth: {} has no vertex normals; it is flat-shaded",
+                m.path.display()
+            );
+        }
+    }
+}
+
+/// Degenerate triangles are dropped, not refused; say how many.
+fn report_dropped(scene: &Scene, quiet: bool) {
+    if !quiet && scene.dropped_triangles > 0 {
+        eprintln!(
+            "warning: {} degenerate triangles (zero area or non-finite) dropped",
+            scene.dropped_triangles
+        );
+    }
+}
+
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
-    let (desc, settings) = cli::prepare(args)?;
-    let scene = Scene::build(desc)?;
+    let (loaded, settings) = cli::prepare(args)?;
+    report_meshes(&loaded, &args.scene, args.quiet);
+    let scene = Scene::build(loaded.desc)?;
+    report_dropped(&scene, args.quiet);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {
@@ -113,10 +144,23 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
 }
 
 fn info(args: &cli::SceneArgs) -> Result<()> {
-    let desc = cli::load_scene(args)?;
-    let scene = Scene::build(desc)?;
+    let loaded = cli::load_scene(args)?;
+    report_meshes(&loaded, args, false);
+    let meshes = loaded.meshes.clone();
+    let scene = Scene::build(loaded.desc)?;
+    report_dropped(&scene, false);
     let s = scene.bvh.stats();
     println!("scene: {}", scene.name);
+    for m in &meshes {
+        println!(
+            "mesh: {} ({} vertices, {} triangles, {}), loaded in {:.1} ms",
+            m.path.display(),
+            m.vertices,
+            m.triangles,
+            if m.has_normals { "with normals" } else { "no normals" },
+            m.seconds * 1e3
+        );
+    }
     println!(
         "triangles: {} ({} dropped as degenerate)",
         scene.triangle_count(),

@@ -1,7 +1,12 @@
 //! The canonical scenes, with the numbers of the project's scene definitions
-//! built in so that the default render needs no file.
+//! (`../shared/SCENES.md`) built in so that the default render needs no file.
+//! The bunny scenes draw the Stanford bunny, which the project does not ship:
+//! its path comes from `--mesh`.
 
-use super::{CameraDesc, SceneDesc, SceneSettings, TriangleDesc};
+use super::mesh::{load_mesh_timed, Mesh};
+use super::transform::{Fit, Transform};
+use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SceneSettings, TriangleDesc};
+use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
@@ -9,7 +14,7 @@ use crate::math::Vec3;
 use std::f32::consts::PI;
 
 /// Names accepted by `--scene`.
-pub const NAMES: &[&str] = &["cornell"];
+pub const NAMES: &[&str] = &["cornell", "cornell-bunny", "cornell-final"];
 
 /// Cornell box data (side 555) to the coursework's [-1, 1]^3 with x and y negated.
 pub fn cornell_point(x: f32, y: f32, z: f32) -> Vec3 {
@@ -160,11 +165,120 @@ pub fn cornell() -> SceneDesc {
     d
 }
 
-/// Looks a built-in scene up by name.
-pub fn by_name(name: &str) -> Option<SceneDesc> {
+/// Where the bunny of `cornell-bunny` goes: turned 180 degrees about z,
+/// 0.617336 high, standing on the floor where the short block stood.
+pub fn bunny_transform() -> Transform {
+    Transform {
+        rotate_deg: Vec3::new(0.0, 0.0, 180.0),
+        fit: Some(Fit {
+            height: 0.617336,
+            bottom_centre: Vec3::new(0.33, 1.0, -0.39),
+        }),
+        ..Default::default()
+    }
+}
+
+/// Where the bunny of `cornell-final` goes: turned 180 degrees about x,
+/// 0.41686 high, standing on the short block.
+pub fn final_bunny_transform() -> Transform {
+    Transform {
+        rotate_deg: Vec3::new(180.0, 0.0, 0.0),
+        fit: Some(Fit {
+            height: 0.41686,
+            bottom_centre: Vec3::new(0.27183, 0.40672, -0.48132),
+        }),
+        ..Default::default()
+    }
+}
+
+/// Scene `cornell-bunny`: the room, the tall block and the light of
+/// `cornell`, with the bunny (white, two-sided Lambertian) in place of the
+/// short block. Flat-shaded unless `smooth` and the mesh has normals.
+pub fn cornell_bunny(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
+    let mut d = empty("cornell-bunny", cornell_camera(512, 512));
+    add_room(&mut d, &cornell_colours());
+    let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
+    add_block(&mut d, &TALL_BLOCK, tall);
+    let m = d.material("bunny", Material::diffuse(0.75, 0.75, 0.75));
+    bunny.add_to_scene(&mut d, &bunny_transform(), Some(m), smooth)?;
+    d.lights.push(cornell_light());
+    Ok(d)
+}
+
+/// Scene `cornell-final`: the report's final render made physically based
+/// (SCENES.md): both blocks, the bunny on the short block, a small bright
+/// light, a wide camera and the report's sample counts.
+pub fn cornell_final(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
+    let mut d = empty(
+        "cornell-final",
+        CameraDesc {
+            position: Vec3::new(0.0, 0.0, -2.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::new(0.0, -1.0, 0.0),
+            fov_y_deg: 90.0,
+            width: 600,
+            height: 600,
+        },
+    );
+    let off_white = Vec3::new(0.86, 0.86, 0.76);
+    let colours = RoomColours {
+        floor: off_white,
+        left: Vec3::new(0.239, 0.008, 0.031),
+        right: Vec3::new(0.031, 0.239, 0.008),
+        ceiling: off_white,
+        back: off_white,
+    };
+    add_room(&mut d, &colours);
+    let short = d.material("short_block", Material::Diffuse { albedo: off_white });
+    add_block(&mut d, &SHORT_BLOCK, short);
+    let tall = d.material("tall_block", Material::Diffuse { albedo: off_white });
+    add_block(&mut d, &TALL_BLOCK, tall);
+    let m = d.material("bunny", Material::diffuse(0.286, 0.18, 0.039));
+    bunny.add_to_scene(&mut d, &final_bunny_transform(), Some(m), smooth)?;
+    d.lights.push(Light::Sphere {
+        sphere: Sphere {
+            centre: Vec3::new(0.0, -0.5, -0.7),
+            radius: 0.02,
+        },
+        power: Vec3::splat(16.0 * PI),
+    });
+    d.settings = SceneSettings {
+        ssaa: Some(8),
+        shadow_samples: Some(400),
+    };
+    Ok(d)
+}
+
+/// Looks a built-in scene up by name, loading its mesh when it has one.
+/// `Ok(None)` for an unknown name.
+pub fn by_name(name: &str, opts: &LoadOptions) -> Result<Option<LoadedScene>> {
+    let with_bunny = |build: fn(&Mesh, bool) -> Result<SceneDesc>| -> Result<LoadedScene> {
+        let path = opts
+            .mesh
+            .as_deref()
+            .ok_or_else(|| Error::MeshRequired { scene: name.into() })?;
+        let (mesh, report) = load_mesh_timed(path)?;
+        Ok(LoadedScene {
+            desc: build(&mesh, opts.smooth)?,
+            meshes: vec![report],
+        })
+    };
     match name {
-        "cornell" => Some(cornell()),
-        _ => None,
+        "cornell" => {
+            if let Some(p) = &opts.mesh {
+                return Err(Error::InvalidSetting(format!(
+                    "--mesh {}: scene 'cornell' has no mesh",
+                    p.display()
+                )));
+            }
+            Ok(Some(LoadedScene {
+                desc: cornell(),
+                meshes: vec![],
+            }))
+        }
+        "cornell-bunny" => with_bunny(cornell_bunny).map(Some),
+        "cornell-final" => with_bunny(cornell_final).map(Some),
+        _ => Ok(None),
     }
 }
 
@@ -194,5 +308,169 @@ mod tests {
             .map(|v| v.y)
             .fold(f32::MIN, f32::max);
         assert!((max_y - 1.0).abs() < 1e-6);
+    }
+
+    /// Whether the segment from `p` to `q` meets the box.
+    fn segment_meets(p: Vec3, q: Vec3, b: &crate::math::Aabb) -> bool {
+        let d = q - p;
+        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        for k in 0..3 {
+            if d[k] == 0.0 {
+                if p[k] < b.min[k] || p[k] > b.max[k] {
+                    return false;
+                }
+                continue;
+            }
+            let (a, c) = ((b.min[k] - p[k]) / d[k], (b.max[k] - p[k]) / d[k]);
+            t0 = t0.max(a.min(c));
+            t1 = t1.min(a.max(c));
+        }
+        t0 <= t1
+    }
+
+    #[test]
+    fn bunny_shows_where_its_bounding_box_projects_and_nowhere_else() {
+        use crate::integrator::{render, RenderSettings};
+        use crate::scene::Scene;
+        let Some(path) = crate::scene::mesh::tests::bunny_path() else {
+            return;
+        };
+        let opts = LoadOptions {
+            mesh: Some(path),
+            smooth: false,
+        };
+        let mut desc = by_name("cornell-bunny", &opts).unwrap().unwrap().desc;
+        let n = 64;
+        desc.camera.width = n;
+        desc.camera.height = n;
+        let bunny = desc.materials.iter().position(|(name, _)| name == "bunny").unwrap() as u32;
+        let mut room = desc.clone();
+        room.triangles.retain(|t| t.material != bunny);
+        assert_eq!(desc.triangles.len() - room.triangles.len(), 69_451);
+        let mut bounds = crate::math::Aabb::EMPTY;
+        for t in desc.triangles.iter().filter(|t| t.material == bunny) {
+            t.vertices.iter().for_each(|&v| bounds.grow(v));
+        }
+        // It stands on the floor where the short block stood, about 0.62 high.
+        assert!((bounds.max.y - 1.0).abs() < 1e-5 && (bounds.extent().y - 0.617336).abs() < 1e-5);
+
+        let settings = RenderSettings {
+            ssaa: 2,
+            shadow_samples: 2,
+            ..Default::default()
+        };
+        let with = Scene::build(desc).unwrap();
+        let without = Scene::build(room).unwrap();
+        let a = render(&with, &settings, &|| {}).unwrap().film;
+        let b = render(&without, &settings, &|| {}).unwrap().film;
+
+        // The bunny's box on the image.
+        let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+        for i in 0..8 {
+            let c = Vec3::select(
+                glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0),
+                bounds.max,
+                bounds.min,
+            );
+            let (x, y) = with.camera.project(c).unwrap();
+            (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+        }
+        // Shadows fall outside that box; a pixel is safe from them when no
+        // segment from what it sees to the light can cross the bunny's box
+        // (grown by the light's radius, plus a margin).
+        let light = with.lights[0].position();
+        let mut grown = bounds;
+        grown.min -= Vec3::splat(0.15);
+        grown.max += Vec3::splat(0.15);
+        let (mut inside, mut inside_changed, mut outside) = (0, 0, 0);
+        for py in 0..n {
+            for px in 0..n {
+                let changed = a.get(px, py) != b.get(px, py);
+                let (fx, fy) = (px as f32, py as f32);
+                if fx >= x0 && fx + 1.0 <= x1 && fy >= y0 && fy + 1.0 <= y1 {
+                    inside += 1;
+                    inside_changed += changed as u32;
+                    continue;
+                }
+                if fx + 2.0 < x0 || fx - 1.0 > x1 || fy + 2.0 < y0 || fy - 1.0 > y1 {
+                    let shadowed = (0..9).any(|k| {
+                        let ray = without
+                            .camera
+                            .generate_ray(fx + 0.5 * (k % 3) as f32, fy + 0.5 * (k / 3) as f32);
+                        without
+                            .intersect(&ray, 0.0, f32::INFINITY)
+                            .is_some_and(|h| segment_meets(h.p, light, &grown))
+                    });
+                    if !shadowed {
+                        outside += 1;
+                        assert!(
+                            !changed,
+                            "pixel ({px}, {py}) changed, far from the bunny and its shadow"
+                        );
+                    }
+                }
+            }
+        }
+        println!("{inside_changed} of {inside} pixels inside the bunny's box changed; {outside} far pixels did not");
+        assert!(inside > 50, "the bunny's box covers only {inside} pixels");
+        assert!(
+            inside_changed * 2 > inside,
+            "only {inside_changed} of {inside} pixels show the bunny"
+        );
+        assert!(outside > n * n / 2, "only {outside} pixels were far enough to check");
+    }
+
+    /// SCENES.md's explicit formulas for the two bunny scenes, in f64.
+    fn explicit_bunny(p: Vec3) -> Vec3 {
+        let c = glam::DVec3::new(-0.0168405, 0.032987, -0.001537);
+        let q = (p.as_dvec3() - c) * 4.0;
+        glam::DVec3::new(-q.x + 0.33, -q.y + 1.0, q.z - 0.39).as_vec3()
+    }
+
+    fn explicit_final(p: Vec3) -> Vec3 {
+        let c = glam::DVec3::new(-0.0168405, 0.032987, -0.001537);
+        let q = (p.as_dvec3() - c) * 2.70102;
+        glam::DVec3::new(q.x + 0.27183, -q.y + 0.40672, -q.z - 0.48132).as_vec3()
+    }
+
+    /// Largest distance between the fit transform's and the explicit formula's result.
+    fn fit_error(m: &Mesh, t: &Transform, explicit: fn(Vec3) -> Vec3) -> f32 {
+        let placed = t.apply(m).unwrap();
+        m.positions
+            .iter()
+            .zip(&placed.positions)
+            .map(|(p, q)| (explicit(*p) - *q).abs().max_element())
+            .fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn fit_agrees_with_the_explicit_bunny_formulas() {
+        // A stand-in with the bunny's bounding box (its corners and centre).
+        let (lo, hi) = (
+            Vec3::new(-0.094690, 0.032987, -0.061874),
+            Vec3::new(0.061009, 0.187321, 0.058800),
+        );
+        let mut pts: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::select(glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0), hi, lo))
+            .collect();
+        pts.push((lo + hi) * 0.5);
+        let stand_in = Mesh {
+            path: "box.obj".into(),
+            triangles: vec![[0, 3, 5], [6, 7, 8], [1, 2, 4]],
+            positions: pts,
+            normals: None,
+            parts: vec![],
+            warnings: vec![],
+        };
+        let mut meshes = vec![stand_in];
+        if let Some(p) = crate::scene::mesh::tests::bunny_path() {
+            meshes.push(crate::scene::mesh::load_mesh(&p).unwrap());
+        }
+        for m in &meshes {
+            let e = fit_error(m, &bunny_transform(), explicit_bunny);
+            assert!(e < 1e-5, "cornell-bunny: {e}");
+            let e = fit_error(m, &final_bunny_transform(), explicit_final);
+            assert!(e < 1e-5, "cornell-final: {e}");
+        }
     }
 }

@@ -3,6 +3,9 @@
 //! from description to renderable scene.
 
 pub mod builtin;
+pub mod file;
+pub mod mesh;
+pub mod transform;
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -10,6 +13,45 @@ use crate::geometry::{Bvh, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
+use mesh::MeshReport;
+use std::path::{Path, PathBuf};
+
+/// How to load a scene: the mesh path that replaces the scene's own (or
+/// supplies one a built-in scene needs), and whether meshes are smooth-shaded.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    pub mesh: Option<PathBuf>,
+    /// Interpolate vertex normals where a mesh file has them.
+    pub smooth: bool,
+}
+
+/// A scene description and what loading its meshes took.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    pub desc: SceneDesc,
+    pub meshes: Vec<MeshReport>,
+}
+
+/// Loads a scene given as a built-in name or a TOML file. A path ending in
+/// `.toml` is always a file; otherwise a built-in name wins over a file of
+/// the same name (write `./NAME` for the file).
+pub fn load(spec: &str, opts: &LoadOptions) -> Result<LoadedScene> {
+    let path = Path::new(spec);
+    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        return file::load(path, opts);
+    }
+    if let Some(scene) = builtin::by_name(spec, opts)? {
+        return Ok(scene);
+    }
+    if path.is_file() {
+        return file::load(path, opts);
+    }
+    Err(Error::UnknownScene {
+        name: spec.to_string(),
+        known: builtin::NAMES.join(", "),
+    })
+}
 
 /// The camera as a scene states it.
 #[derive(Clone, Debug, PartialEq)]

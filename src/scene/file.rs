@@ -1,0 +1,550 @@
+//! Scene files in TOML: camera, settings, named materials, lights and shapes
+//! (quads, boxes, triangles, spheres, meshes). The format, with every key and
+//! its default, is described in `docs/scene-format.md`.
+//!
+//! Unknown keys are errors, and every error names the file and the line: the
+//! `toml` crate's spans give it for syntax and type errors, and each table
+//! keeps its span so that later checks (a missing key, a key that does not
+//! apply to the shape's type, an unknown material) can point at it too.
+//! Each shape is one flat table with a `type` key rather than a serde tagged
+//! enum, because a tagged enum is buffered before it is read and its errors
+//! lose their line.
+
+use super::mesh::load_mesh_timed;
+use super::transform::{Fit, Transform};
+use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SceneSettings, SphereDesc, TriangleDesc};
+use crate::error::{Error, Result};
+use crate::geometry::Sphere;
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Vec3;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use toml::Spanned;
+
+/// A finite number (TOML reads f64; we keep the nearest f32).
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "f64")]
+struct Num(f32);
+
+impl TryFrom<f64> for Num {
+    type Error = String;
+    fn try_from(v: f64) -> std::result::Result<Self, String> {
+        let f = v as f32;
+        if f.is_finite() {
+            Ok(Num(f))
+        } else {
+            Err(format!("{v} is not a finite single-precision number"))
+        }
+    }
+}
+
+/// Three finite numbers: a point, a direction or an RGB colour.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "[f64; 3]")]
+struct Vec3Spec(Vec3);
+
+impl TryFrom<[f64; 3]> for Vec3Spec {
+    type Error = String;
+    fn try_from(v: [f64; 3]) -> std::result::Result<Self, String> {
+        let p = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
+        if p.is_finite() {
+            Ok(Vec3Spec(p))
+        } else {
+            Err(format!(
+                "{v:?} has a number that is not a finite single-precision number"
+            ))
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    camera: Spanned<CameraSpec>,
+    settings: Option<Spanned<SettingsSpec>>,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialSpec>>,
+    #[serde(default)]
+    lights: Vec<Spanned<LightSpec>>,
+    #[serde(default)]
+    shapes: Vec<Spanned<ShapeSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    position: Vec3Spec,
+    look_at: Vec3Spec,
+    up: Option<Vec3Spec>,
+    fov_y: Num,
+    width: Option<u32>,
+    height: Option<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SettingsSpec {
+    ssaa: Option<u32>,
+    shadow_samples: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum MaterialKind {
+    #[default]
+    Diffuse,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialSpec {
+    #[serde(rename = "type", default)]
+    kind: MaterialKind,
+    albedo: Option<Vec3Spec>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum LightKind {
+    Sphere,
+    Point,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightSpec {
+    #[serde(rename = "type")]
+    kind: LightKind,
+    centre: Option<Vec3Spec>,
+    radius: Option<Num>,
+    position: Option<Vec3Spec>,
+    power: Num,
+    colour: Option<Vec3Spec>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum ShapeKind {
+    Triangle,
+    Quad,
+    Box,
+    Sphere,
+    Mesh,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(untagged, expecting = "a number or an array of three numbers")]
+enum ScaleSpec {
+    Uniform(Num),
+    PerAxis(Vec3Spec),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitSpec {
+    height: Num,
+    bottom_centre: Vec3Spec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShapeSpec {
+    #[serde(rename = "type")]
+    kind: ShapeKind,
+    material: Option<Spanned<String>>,
+    vertices: Option<Vec<Vec3Spec>>,
+    normals: Option<Vec<Vec3Spec>>,
+    min: Option<Vec3Spec>,
+    max: Option<Vec3Spec>,
+    centre: Option<Vec3Spec>,
+    radius: Option<Num>,
+    path: Option<String>,
+    scale: Option<ScaleSpec>,
+    rotate: Option<Vec3Spec>,
+    translate: Option<Vec3Spec>,
+    fit: Option<FitSpec>,
+    smooth: Option<bool>,
+}
+
+impl ShapeSpec {
+    /// The optional keys that are present, by name.
+    fn given(&self) -> [(&'static str, bool); 13] {
+        [
+            ("material", self.material.is_some()),
+            ("vertices", self.vertices.is_some()),
+            ("normals", self.normals.is_some()),
+            ("min", self.min.is_some()),
+            ("max", self.max.is_some()),
+            ("centre", self.centre.is_some()),
+            ("radius", self.radius.is_some()),
+            ("path", self.path.is_some()),
+            ("scale", self.scale.is_some()),
+            ("rotate", self.rotate.is_some()),
+            ("translate", self.translate.is_some()),
+            ("fit", self.fit.is_some()),
+            ("smooth", self.smooth.is_some()),
+        ]
+    }
+}
+
+impl ShapeKind {
+    fn name(self) -> &'static str {
+        match self {
+            ShapeKind::Triangle => "triangle",
+            ShapeKind::Quad => "quad",
+            ShapeKind::Box => "box",
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Mesh => "mesh",
+        }
+    }
+
+    /// Keys each shape type reads besides `type`.
+    fn keys(self) -> &'static [&'static str] {
+        match self {
+            ShapeKind::Triangle => &["material", "vertices", "normals"],
+            ShapeKind::Quad => &["material", "vertices"],
+            ShapeKind::Box => &["material", "min", "max"],
+            ShapeKind::Sphere => &["material", "centre", "radius"],
+            ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],
+        }
+    }
+}
+
+/// 1-based line of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Builds errors that point into one scene file.
+struct Source<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl Source<'_> {
+    fn error(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Error {
+        Error::Syntax {
+            path: self.path.to_path_buf(),
+            line: line_of(self.text, span.start),
+            message: message.into(),
+        }
+    }
+}
+
+/// Reads a scene file. `opts.mesh` replaces the path of the file's mesh
+/// shape (there must be exactly one); `opts.smooth` smooth-shades every mesh.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    parse(path, &text, opts)
+}
+
+/// Parses the text of a scene file; `path` names it in errors and anchors
+/// the relative paths of meshes.
+pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene> {
+    let src = Source { path, text };
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let message = e.message().trim().replace('\n', "; ");
+        match e.span() {
+            Some(span) => src.error(span, message),
+            None => Error::Parse {
+                path: path.to_path_buf(),
+                message,
+            },
+        }
+    })?;
+
+    let cam_span = file.camera.span();
+    let cam = file.camera.into_inner();
+    let camera = CameraDesc {
+        position: cam.position.0,
+        look_at: cam.look_at.0,
+        up: cam.up.map_or(Vec3::new(0.0, -1.0, 0.0), |u| u.0),
+        fov_y_deg: cam.fov_y.0,
+        width: cam.width.unwrap_or(512),
+        height: cam.height.unwrap_or(512),
+    };
+    if !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0) {
+        return Err(src.error(
+            cam_span,
+            format!("camera fov_y {} must be in (0, 180) degrees", camera.fov_y_deg),
+        ));
+    }
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    let mut desc = SceneDesc {
+        name,
+        camera,
+        materials: vec![],
+        triangles: vec![],
+        spheres: vec![],
+        lights: vec![],
+        settings: SceneSettings::default(),
+    };
+    if let Some(settings) = &file.settings {
+        let s = settings.get_ref();
+        // The same bounds the command line enforces for --ssaa and --shadow-samples.
+        if s.ssaa.is_some_and(|n| n == 0 || n > 64) {
+            return Err(src.error(settings.span(), "settings: ssaa must be between 1 and 64"));
+        }
+        if s.shadow_samples.is_some_and(|n| n > 65_536) {
+            return Err(src.error(settings.span(), "settings: shadow_samples must be at most 65536"));
+        }
+        desc.settings = SceneSettings {
+            ssaa: s.ssaa,
+            shadow_samples: s.shadow_samples,
+        };
+    }
+
+    // Materials, checked here and numbered in order of first use.
+    let mut materials = BTreeMap::new();
+    for (name, spec) in &file.materials {
+        let m = match spec.get_ref().kind {
+            MaterialKind::Diffuse => {
+                let Some(a) = spec.get_ref().albedo else {
+                    return Err(src.error(
+                        spec.span(),
+                        format!("material '{name}': a diffuse material needs `albedo`"),
+                    ));
+                };
+                if a.0.min_element() < 0.0 || a.0.max_element() > 1.0 {
+                    return Err(src.error(
+                        spec.span(),
+                        format!("material '{name}': albedo {:?} must lie in [0, 1]", a.0.to_array()),
+                    ));
+                }
+                Material::Diffuse { albedo: a.0 }
+            }
+        };
+        materials.insert(name.clone(), m);
+    }
+    let material = |desc: &mut SceneDesc, name: &Spanned<String>| -> Result<u32> {
+        match materials.get(name.get_ref()) {
+            Some(m) => Ok(desc.material(name.get_ref(), *m)),
+            None => Err(src.error(
+                name.span(),
+                format!(
+                    "unknown material '{}' (defined: {})",
+                    name.get_ref(),
+                    materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )),
+        }
+    };
+
+    for l in &file.lights {
+        desc.lights.push(light(&src, l)?);
+    }
+
+    let mesh_count = file
+        .shapes
+        .iter()
+        .filter(|s| s.get_ref().kind == ShapeKind::Mesh)
+        .count();
+    if let Some(p) = &opts.mesh {
+        if mesh_count != 1 {
+            return Err(Error::InvalidSetting(format!(
+                "--mesh {}: {} has {mesh_count} mesh shapes; --mesh replaces the path of its only one",
+                p.display(),
+                path.display()
+            )));
+        }
+    }
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut meshes = vec![];
+    for spanned in &file.shapes {
+        let span = spanned.span();
+        let s = spanned.get_ref();
+        let kind = s.kind.name();
+        let err = |m: String| src.error(span.clone(), format!("{kind} shape: {m}"));
+        for (key, given) in s.given() {
+            if given && !s.kind.keys().contains(&key) {
+                return Err(err(format!("`{key}` does not apply to a {kind}")));
+            }
+        }
+        let need = |key: &str| err(format!("missing `{key}`"));
+        let mat = match &s.material {
+            Some(m) => Some(material(&mut desc, m)?),
+            None if s.kind == ShapeKind::Mesh => None,
+            None => return Err(need("material")),
+        };
+        let mut tri = |v: [Vec3; 3], normals: Option<[Vec3; 3]>, m: u32| {
+            desc.triangles.push(TriangleDesc {
+                vertices: v,
+                normals,
+                material: m,
+            })
+        };
+        match s.kind {
+            ShapeKind::Triangle => {
+                let v = points::<3>(s.vertices.as_deref(), "vertices").map_err(err)?;
+                let n = match &s.normals {
+                    Some(n) => Some(points::<3>(Some(n), "normals").map_err(err)?),
+                    None => None,
+                };
+                tri(v, n, mat.unwrap_or(0));
+            }
+            ShapeKind::Quad => {
+                let [a, b, c, d] = points::<4>(s.vertices.as_deref(), "vertices").map_err(err)?;
+                let m = mat.unwrap_or(0);
+                tri([a, b, c], None, m);
+                tri([a, c, d], None, m);
+            }
+            ShapeKind::Box => {
+                let (lo, hi) = match (s.min, s.max) {
+                    (Some(lo), Some(hi)) => (lo.0, hi.0),
+                    (None, _) => return Err(need("min")),
+                    (_, None) => return Err(need("max")),
+                };
+                if lo.cmpgt(hi).any() {
+                    return Err(err(format!("min {:?} exceeds max {:?}", lo.to_array(), hi.to_array())));
+                }
+                for t in box_triangles(lo, hi) {
+                    tri(t, None, mat.unwrap_or(0));
+                }
+            }
+            ShapeKind::Sphere => {
+                let centre = s.centre.ok_or_else(|| need("centre"))?.0;
+                let radius = s.radius.ok_or_else(|| need("radius"))?.0;
+                if radius <= 0.0 {
+                    return Err(err(format!("radius {radius} must be > 0")));
+                }
+                desc.spheres.push(SphereDesc {
+                    sphere: Sphere { centre, radius },
+                    material: mat.unwrap_or(0),
+                });
+            }
+            ShapeKind::Mesh => {
+                let file_path = s.path.as_ref().ok_or_else(|| need("path"))?;
+                let mesh_path = match &opts.mesh {
+                    Some(p) => p.clone(),
+                    None => dir.join(file_path),
+                };
+                let transform = Transform {
+                    scale: match s.scale {
+                        None => Vec3::ONE,
+                        Some(ScaleSpec::Uniform(k)) => Vec3::splat(k.0),
+                        Some(ScaleSpec::PerAxis(v)) => v.0,
+                    },
+                    rotate_deg: s.rotate.map_or(Vec3::ZERO, |r| r.0),
+                    fit: s.fit.as_ref().map(|f| Fit {
+                        height: f.height.0,
+                        bottom_centre: f.bottom_centre.0,
+                    }),
+                    translate: s.translate.map_or(Vec3::ZERO, |t| t.0),
+                };
+                transform.validate().map_err(err)?;
+                let (mesh, report) = load_mesh_timed(&mesh_path).map_err(|e| missing_mesh(&src, span.clone(), e))?;
+                let smooth = s.smooth.unwrap_or(false) || opts.smooth;
+                mesh.add_to_scene(&mut desc, &transform, mat, smooth)?;
+                meshes.push(report);
+            }
+        }
+    }
+    // Materials no shape uses still belong to the scene, after the used ones.
+    for (name, m) in &materials {
+        desc.material(name, *m);
+    }
+    Ok(LoadedScene { desc, meshes })
+}
+
+/// A missing mesh file is reported at the scene file's line, with the hint
+/// that `--mesh` can point elsewhere; other mesh errors name the mesh file.
+fn missing_mesh(src: &Source, span: std::ops::Range<usize>, e: Error) -> Error {
+    match e {
+        Error::Io { path, source } if source.kind() == std::io::ErrorKind::NotFound => src.error(
+            span,
+            format!(
+                "mesh file {} not found (pass --mesh PATH to use another file)",
+                path.display()
+            ),
+        ),
+        e => e,
+    }
+}
+
+/// Exactly `N` points from a shape's list key.
+fn points<const N: usize>(v: Option<&[Vec3Spec]>, key: &str) -> std::result::Result<[Vec3; N], String> {
+    let v = v.ok_or_else(|| format!("missing `{key}`"))?;
+    if v.len() != N {
+        return Err(format!("`{key}` needs {N} points, found {}", v.len()));
+    }
+    Ok(std::array::from_fn(|i| v[i].0))
+}
+
+/// The 12 triangles of an axis-aligned box.
+fn box_triangles(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+    let c = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Each face as four corner indices in order around it.
+    const FACES: [[usize; 4]; 6] = [
+        [0, 2, 6, 4], // x = min
+        [1, 5, 7, 3], // x = max
+        [0, 4, 5, 1], // y = min
+        [2, 3, 7, 6], // y = max
+        [0, 1, 3, 2], // z = min
+        [4, 6, 7, 5], // z = max
+    ];
+    FACES
+        .iter()
+        .flat_map(|f| [[c(f[0]), c(f[1]), c(f[2])], [c(f[0]), c(f[2]), c(f[3])]])
+        .collect()
+}
+
+fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Light> {
+    let l = spanned.get_ref();
+    let err = |m: String| src.error(spanned.span(), m);
+    let colour = l.colour.map_or(Vec3::ONE, |c| c.0);
+    if colour.min_element() < 0.0 || l.power.0 < 0.0 {
+        return Err(err("light power and colour must be >= 0".into()));
+    }
+    let power = colour * l.power.0;
+    match l.kind {
+        LightKind::Sphere => {
+            if l.position.is_some() {
+                return Err(err("a sphere light takes `centre`, not `position`".into()));
+            }
+            let centre = l.centre.ok_or_else(|| err("sphere light: missing `centre`".into()))?.0;
+            let radius = l.radius.ok_or_else(|| err("sphere light: missing `radius`".into()))?.0;
+            if radius <= 0.0 {
+                return Err(err(format!("sphere light: radius {radius} must be > 0")));
+            }
+            Ok(Light::Sphere {
+                sphere: Sphere { centre, radius },
+                power,
+            })
+        }
+        LightKind::Point => {
+            if l.centre.is_some() || l.radius.is_some() {
+                return Err(err(
+                    "a point light takes `position` only (no `centre` or `radius`)".into()
+                ));
+            }
+            let position = l
+                .position
+                .ok_or_else(|| err("point light: missing `position`".into()))?
+                .0;
+            Ok(Light::Point { position, power })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,256 @@
+use super::*;
+use crate::integrator::{render, RenderSettings};
+use crate::scene::builtin;
+use crate::scene::mesh::tests::bunny_path;
+use crate::Scene;
+use std::path::PathBuf;
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+fn parse_str(text: &str) -> Result<LoadedScene> {
+    parse(Path::new("test.toml"), text, &LoadOptions::default())
+}
+
+/// Renders a small, quick PFM of the scene and returns its bytes.
+fn small_pfm(mut desc: SceneDesc, dir: &Path, name: &str) -> Vec<u8> {
+    desc.camera.width = 64;
+    desc.camera.height = 64;
+    let scene = Scene::build(desc).unwrap();
+    let settings = RenderSettings {
+        ssaa: 2,
+        shadow_samples: 2,
+        ..Default::default()
+    };
+    let out = render(&scene, &settings, &|| {}).unwrap();
+    let p = dir.join(name);
+    crate::image_io::write_image(&out.film, &p, 0.0).unwrap();
+    std::fs::read(p).unwrap()
+}
+
+#[test]
+fn cornell_toml_is_the_builtin_scene_bit_for_bit() {
+    let file = load(&scenes_dir().join("cornell.toml"), &LoadOptions::default()).unwrap();
+    let embedded = builtin::cornell();
+    assert!(file.meshes.is_empty());
+    // Same numbers, in the same order, down to the last bit.
+    assert_eq!(file.desc, embedded);
+    let dir = tempfile::tempdir().unwrap();
+    let a = small_pfm(file.desc, dir.path(), "file.pfm");
+    let b = small_pfm(embedded, dir.path(), "builtin.pfm");
+    assert_eq!(a.len(), 64 * 64 * 12 + "PF\n64 64\n-1.0\n".len());
+    assert!(a == b, "the PFM files differ");
+}
+
+#[test]
+fn every_shape_and_light_type_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.mtl"), "newmtl red\nKd 0.8 0.1 0.1\n").unwrap();
+    std::fs::write(
+        dir.path().join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 2 0 0\nv 0 2 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        width = 32
+
+        [settings]
+        ssaa = 3
+
+        [materials.grey]
+        albedo = [0.5, 0.5, 0.5]
+        [materials.spare]
+        type = "diffuse"
+        albedo = [0, 0, 0]
+
+        [[lights]]
+        type = "point"
+        position = [0, -1, 0]
+        power = 10
+        colour = [1, 0.5, 0]
+        [[lights]]
+        type = "sphere"
+        centre = [0, -1, 1]
+        radius = 0.25
+        power = 2
+
+        [[shapes]]
+        type = "triangle"
+        material = "grey"
+        vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+        normals = [[0, 0, 1], [0, 0, 1], [0, 0, 1]]
+        [[shapes]]
+        type = "quad"
+        material = "grey"
+        vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+        [[shapes]]
+        type = "box"
+        material = "grey"
+        min = [-1, -1, -1]
+        max = [1, 2, 3]
+        [[shapes]]
+        type = "sphere"
+        material = "grey"
+        centre = [0, 0, 5]
+        radius = 0.5
+        [[shapes]]
+        type = "mesh"
+        path = "m.obj"
+        scale = 0.5
+        translate = [0, 0, 1]
+    "#;
+    let path = dir.path().join("s.toml");
+    let s = parse(&path, text, &LoadOptions::default()).unwrap();
+    let d = &s.desc;
+    assert_eq!(d.name, "s");
+    assert_eq!((d.camera.width, d.camera.height), (32, 512));
+    assert_eq!(d.camera.up, Vec3::new(0.0, -1.0, 0.0));
+    assert_eq!(d.settings.ssaa, Some(3));
+    assert_eq!(d.settings.shadow_samples, None);
+    assert_eq!(
+        d.lights[0],
+        Light::Point {
+            position: Vec3::new(0.0, -1.0, 0.0),
+            power: Vec3::new(10.0, 5.0, 0.0),
+        }
+    );
+    assert!(matches!(d.lights[1], Light::Sphere { sphere, .. } if sphere.radius == 0.25));
+    // 1 triangle + 2 for the quad + 12 for the box + 1 from the mesh.
+    assert_eq!(d.triangles.len(), 16);
+    assert_eq!(d.triangles[0].normals, Some([Vec3::Z; 3]));
+    assert_eq!(
+        d.triangles[2].vertices,
+        [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
+    );
+    let mut b = crate::math::Aabb::EMPTY;
+    for t in &d.triangles[3..15] {
+        t.vertices.iter().for_each(|&v| b.grow(v));
+        // Every box face lies in one of the box's planes.
+        let n = crate::geometry::Triangle::new(t.vertices[0], t.vertices[1], t.vertices[2]).normal_raw();
+        assert_eq!(n.abs().cmpgt(Vec3::ZERO).bitmask().count_ones(), 1, "{t:?}");
+    }
+    assert_eq!((b.min, b.max), (Vec3::splat(-1.0), Vec3::new(1.0, 2.0, 3.0)));
+    assert_eq!(d.spheres.len(), 1);
+    // The mesh, scaled then moved, takes its MTL colour as a material.
+    let m = &d.triangles[15];
+    assert_eq!(
+        m.vertices,
+        [
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0)
+        ]
+    );
+    assert_eq!(
+        d.materials[m.material as usize],
+        ("m/red".into(), Material::diffuse(0.8, 0.1, 0.1))
+    );
+    // Unused materials still belong to the scene.
+    assert!(d.materials.iter().any(|(n, _)| n == "spare"));
+    assert_eq!(s.meshes.len(), 1);
+    assert_eq!(s.meshes[0].triangles, 1);
+    Scene::build(s.desc).unwrap();
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 40\n";
+
+#[test]
+fn errors_name_the_file_and_line() {
+    let m = "[materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n";
+    let cases: Vec<(String, usize, &str)> = vec![
+        (format!("{CAMERA}fov = 3\n"), 5, "unknown field `fov`"),
+        ("[camera]\nposition = [0, 0]\n".into(), 2, "length 2"),
+        ("[camera\n".into(), 1, ""),
+        (format!("{CAMERA}[settings]\nssaa = -1\n"), 6, "u32"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\ncentre = [0, 0, 0]\n"), 7, "missing `radius`"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"cone\"\n"), 8, "unknown variant `cone`"),
+        (format!("{CAMERA}{m}\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"gray\"\ncentre = [0, 0, 0]\nradius = 1\n"), 10, "unknown material 'gray'"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"quad\"\nmaterial = \"grey\"\nradius = 1\nvertices = []\n"), 7, "`radius` does not apply to a quad"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"quad\"\nmaterial = \"grey\"\nvertices = [[0, 0, 0]]\n"), 7, "needs 4 points"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"triangle\"\nmaterial = \"grey\"\nvertices = [[0, 0, nan], [1, 0, 0], [0, 1, 0]]\n"), 10, "finite"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"a.obj\"\nscale = [1, 2]\n"), 10, "a number or an array of three numbers"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"a.obj\"\nscale = 0\n"), 7, "non-zero"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"a.obj\"\nfit = {{ height = 1 }}\n"), 10, "bottom_centre"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"no-such.obj\"\n"), 7, "no-such.obj not found (pass --mesh PATH"),
+        (format!("{CAMERA}[materials.a]\nalbedo = [2, 0, 0]\n"), 5, "[0, 1]"),
+        (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\npower = 1\n"), 5, "missing `radius`"),
+        (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nradius = 1\npower = 1\n"), 5, "position` only"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 180\n".into(), 1, "fov_y"),
+        (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 6, "ssaa must be between 1 and 64"),
+    ];
+    for (text, line, what) in cases {
+        let e = parse_str(&text).expect_err(&text).to_string();
+        assert!(
+            e.starts_with(&format!("test.toml:{line}: ")),
+            "wrong line in '{e}' for\n{text}"
+        );
+        assert!(e.contains(what), "'{e}' does not say '{what}'");
+        assert!(!e.contains('\n'), "'{e}' is not one line");
+    }
+}
+
+#[test]
+fn mesh_option_replaces_the_one_mesh_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("real.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let text = format!(
+        "{CAMERA}[materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n[[shapes]]\ntype = \"mesh\"\npath = \"absent.obj\"\nmaterial = \"grey\"\n"
+    );
+    let opts = LoadOptions {
+        mesh: Some(obj.clone()),
+        smooth: false,
+    };
+    let s = parse(Path::new("x.toml"), &text, &opts).unwrap();
+    assert_eq!(s.desc.triangles.len(), 1);
+    assert_eq!(s.meshes[0].path, obj);
+    // A scene without a mesh has nothing for --mesh to replace.
+    let e = parse(Path::new("x.toml"), CAMERA, &opts).unwrap_err().to_string();
+    assert!(e.contains("--mesh") && e.contains("0 mesh shapes"), "{e}");
+}
+
+#[test]
+fn cornell_bunny_toml_is_the_builtin_scene() {
+    let Some(bunny) = bunny_path() else { return };
+    let opts = LoadOptions {
+        mesh: Some(bunny),
+        smooth: false,
+    };
+    let file = load(&scenes_dir().join("cornell-bunny.toml"), &opts).unwrap();
+    let embedded = builtin::by_name("cornell-bunny", &opts).unwrap().unwrap();
+    assert_eq!(file.desc, embedded.desc);
+}
+
+#[test]
+fn smooth_passes_vertex_normals_on_only_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("n.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nelement face 1\n\
+         property list uchar int vertex_indices\nend_header\n0 0 0 0 0 2\n1 0 0 0 0 1\n0 1 0 0 1 1\n3 0 1 2\n",
+    )
+    .unwrap();
+    let scene = |smooth_key: &str, smooth_opt: bool| {
+        let text = format!(
+            "{CAMERA}[materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n\
+             [[shapes]]\ntype = \"mesh\"\npath = \"n.ply\"\nmaterial = \"grey\"\nrotate = [0, 0, 90]\n{smooth_key}"
+        );
+        let opts = LoadOptions {
+            mesh: None,
+            smooth: smooth_opt,
+        };
+        parse(&dir.path().join("s.toml"), &text, &opts).unwrap().desc.triangles[0].normals
+    };
+    assert_eq!(scene("", false), None);
+    assert_eq!(scene("smooth = false\n", false), None);
+    // Normalised and turned with the mesh: z stays, y turns into -x.
+    let want = Some([Vec3::Z, Vec3::Z, Vec3::new(-1.0, 0.0, 1.0).normalize()]);
+    assert_eq!(scene("smooth = true\n", false), want);
+    assert_eq!(scene("", true), want);
+}

@@ -1,0 +1,188 @@
+//! Triangle meshes read from files: Wavefront OBJ (parsed by `tobj`, with
+//! its MTL materials) and Stanford PLY (our own reader, `ply.rs`, after Greg
+//! Turk's format description). A mesh is kept in object space; a
+//! [`Transform`] places it in the scene when its triangles are added.
+//!
+//! Every error names the file and the line (or, for binary PLY, the byte
+//! offset). Degenerate triangles are not errors here: `Scene::build` drops
+//! and counts them.
+
+mod obj;
+mod ply;
+
+use super::transform::Transform;
+use super::{SceneDesc, TriangleDesc};
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::math::{Aabb, Vec3};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// A named part of a mesh (an OBJ group or object; the whole of a PLY file).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshPart {
+    pub name: String,
+    /// Material name given by `usemtl` (when its MTL file was found).
+    pub material: Option<String>,
+    /// Lambertian albedo from the material's MTL `Kd`.
+    pub albedo: Option<Vec3>,
+    /// The part's triangles, a range of `Mesh::triangles`.
+    pub triangles: Range<usize>,
+}
+
+/// An indexed triangle mesh in object space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    pub path: PathBuf,
+    pub positions: Vec<Vec3>,
+    /// Per-vertex normals, as many as positions; zero where a vertex has none.
+    /// `None` when the file has no normals at all.
+    pub normals: Option<Vec<Vec3>>,
+    /// Vertex index triples, all within `positions`.
+    pub triangles: Vec<[u32; 3]>,
+    pub parts: Vec<MeshPart>,
+    /// Things worth telling the user that do not stop the load (a missing MTL file).
+    pub warnings: Vec<String>,
+}
+
+/// Reads a mesh, choosing the format by the file's extension (.obj or .ply).
+pub fn load_mesh(path: &Path) -> Result<Mesh> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    let bytes = || {
+        std::fs::read(path).map_err(|e| Error::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })
+    };
+    let mesh = match ext.as_deref() {
+        Some("obj") => obj::parse(path, &bytes()?)?,
+        Some("ply") => ply::parse(path, &bytes()?)?,
+        _ => {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                message: "unknown mesh format (use a .obj or .ply file)".into(),
+            })
+        }
+    };
+    if mesh.triangles.is_empty() {
+        return Err(Error::Parse {
+            path: path.to_path_buf(),
+            message: "the mesh has no faces".into(),
+        });
+    }
+    Ok(mesh)
+}
+
+/// Reads a mesh and reports how long it took.
+pub fn load_mesh_timed(path: &Path) -> Result<(Mesh, MeshReport)> {
+    let start = std::time::Instant::now();
+    let mesh = load_mesh(path)?;
+    let report = MeshReport::new(&mesh, start.elapsed().as_secs_f64());
+    Ok((mesh, report))
+}
+
+impl Mesh {
+    /// Bounding box of the vertices the triangles use.
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for t in &self.triangles {
+            for &i in t {
+                b.grow(self.positions[i as usize]);
+            }
+        }
+        b
+    }
+
+    /// Adds the mesh's triangles to the scene, placed by `transform`. With
+    /// `material` every triangle uses it; without, each part uses its MTL
+    /// albedo as a diffuse material named `<file stem>/<material>`.
+    /// `smooth` passes the file's vertex normals on for shading.
+    pub fn add_to_scene(
+        &self,
+        desc: &mut SceneDesc,
+        transform: &Transform,
+        material: Option<u32>,
+        smooth: bool,
+    ) -> Result<()> {
+        let placed = transform.apply(self)?;
+        let stem = self
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        desc.triangles.reserve(self.triangles.len());
+        for part in &self.parts {
+            let m = match (material, &part.albedo) {
+                (Some(m), _) => m,
+                (None, Some(albedo)) => {
+                    let name = format!("{stem}/{}", part.material.as_deref().unwrap_or(&part.name));
+                    desc.material(&name, Material::Diffuse { albedo: *albedo })
+                }
+                (None, None) => {
+                    return Err(Error::Parse {
+                        path: self.path.clone(),
+                        message: format!(
+                            "part '{}' has no MTL material with a Kd albedo; give the mesh a material",
+                            part.name
+                        ),
+                    })
+                }
+            };
+            for t in &self.triangles[part.triangles.clone()] {
+                let [a, b, c] = t.map(|i| i as usize);
+                let normals = match (&placed.normals, smooth) {
+                    (Some(n), true) => {
+                        let ns = [n[a], n[b], n[c]];
+                        // A vertex without a normal makes the triangle flat.
+                        ns.iter().all(|v| *v != Vec3::ZERO).then_some(ns)
+                    }
+                    _ => None,
+                };
+                let p = &placed.positions;
+                desc.triangles.push(TriangleDesc {
+                    vertices: [p[a], p[b], p[c]],
+                    normals,
+                    material: m,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What loading a mesh took, for `raytracer info` and the render summary.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshReport {
+    pub path: PathBuf,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub has_normals: bool,
+    pub seconds: f64,
+    pub warnings: Vec<String>,
+}
+
+impl MeshReport {
+    pub fn new(mesh: &Mesh, seconds: f64) -> Self {
+        MeshReport {
+            path: mesh.path.clone(),
+            vertices: mesh.positions.len(),
+            triangles: mesh.triangles.len(),
+            has_normals: mesh.normals.is_some(),
+            seconds,
+            warnings: mesh.warnings.clone(),
+        }
+    }
+}
+
+/// A mesh's vertices in world space (see `Transform::apply`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedVertices {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+}
+
+#[cfg(test)]
+pub(crate) mod tests;
