@@ -108,3 +108,35 @@ fn radiance_falls_with_the_square_of_height() {
     );
     assert!((a / b - 4.0).abs() < 0.02, "ratio {}", a / b);
 }
+
+#[test]
+fn a_sphere_light_never_shadows_its_own_samples() {
+    // Every point of the plane sees the whole light, so no single shadow
+    // sample may come back black.
+    let light = Light::Sphere {
+        sphere: Sphere {
+            centre: Vec3::new(0.0, HEIGHT, 0.0),
+            radius: 0.5,
+        },
+        power: Vec3::splat(POWER),
+    };
+    let mut desc = plane_scene(light);
+    desc.camera.fov_y_deg = 60.0;
+    desc.camera.width = 64;
+    desc.camera.height = 64;
+    let scene = Scene::build(desc).unwrap();
+    let settings = RenderSettings {
+        ssaa: 1,
+        shadow_samples: 1,
+        integrator: IntegratorKind::Direct,
+        ..Default::default()
+    };
+    let film = render(&scene, &settings, &|| {}).unwrap().film;
+    let black = film.pixels.iter().filter(|p| p.x <= 0.0).count();
+    assert_eq!(
+        black,
+        0,
+        "{black} of {} pixels lost their light sample",
+        film.pixels.len()
+    );
+}

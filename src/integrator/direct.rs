@@ -78,10 +78,14 @@ pub fn irradiance(scene: &Scene, hit: &Hit, wo: Vec3, n: u32, rng: &mut Rng, sta
             if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
                 continue;
             }
+            // Aim from the offset origin at the sampled point itself: a ray
+            // parallel to wi would meet a sphere light short of it and the
+            // light would shadow itself.
             let o = offset_origin(hit.p, ng, ls.wi);
-            let dist = (ls.wi * ls.dist + hit.p - o).length();
+            let to_light = hit.p + ls.wi * ls.dist - o;
+            let dist = to_light.length();
             stats.shadow_rays += 1;
-            if !scene.occluded(&Ray::new(o, ls.wi), 0.0, dist * (1.0 - 1e-4)) {
+            if !scene.occluded(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4)) {
                 sum += ls.weight * cos;
             }
         }

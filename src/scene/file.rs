@@ -96,6 +96,8 @@ struct SettingsSpec {
 enum MaterialKind {
     #[default]
     Diffuse,
+    Mirror,
+    Glass,
 }
 
 #[derive(Debug, Deserialize)]
@@ -104,6 +106,10 @@ struct MaterialSpec {
     #[serde(rename = "type", default)]
     kind: MaterialKind,
     albedo: Option<Vec3Spec>,
+    /// Mirror reflectance (default white).
+    reflectance: Option<Vec3Spec>,
+    /// Glass index of refraction (default 1.5).
+    ior: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -327,7 +333,37 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                 }
                 Material::Diffuse { albedo: a.0 }
             }
+            MaterialKind::Mirror => {
+                let r = spec.get_ref().reflectance.map_or(Vec3::ONE, |r| r.0);
+                if r.min_element() < 0.0 || r.max_element() > 1.0 {
+                    return Err(src.error(
+                        spec.span(),
+                        format!("material '{name}': reflectance {:?} must lie in [0, 1]", r.to_array()),
+                    ));
+                }
+                Material::Mirror { reflectance: r }
+            }
+            MaterialKind::Glass => {
+                let ior = spec.get_ref().ior.unwrap_or(1.5);
+                if !(ior.is_finite() && (1.0..=5.0).contains(&ior)) {
+                    return Err(src.error(spec.span(), format!("material '{name}': ior {ior} must lie in [1, 5]")));
+                }
+                Material::Glass { ior }
+            }
         };
+        // Keys that belong to another material type are mistakes, not options.
+        let sp = spec.get_ref();
+        let stray = match sp.kind {
+            MaterialKind::Diffuse => sp.reflectance.map(|_| "reflectance").or(sp.ior.map(|_| "ior")),
+            MaterialKind::Mirror => sp.albedo.map(|_| "albedo").or(sp.ior.map(|_| "ior")),
+            MaterialKind::Glass => sp.albedo.map(|_| "albedo").or(sp.reflectance.map(|_| "reflectance")),
+        };
+        if let Some(key) = stray {
+            return Err(src.error(
+                spec.span(),
+                format!("material '{name}': `{key}` does not apply to this type"),
+            ));
+        }
         materials.insert(name.clone(), m);
     }
     let material = |desc: &mut SceneDesc, name: &Spanned<String>| -> Result<u32> {
