@@ -13,6 +13,8 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::{stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub const TILE: u32 = 32;
 
@@ -130,12 +132,39 @@ pub fn render_tiles(
     on_tile: &(dyn Fn() + Sync),
 ) -> (Film, RayStats) {
     let cam = &scene.camera;
-    let (w, h) = (cam.width, cam.height);
+    let spp = settings.ssaa * settings.ssaa;
+    let mut sums = vec![Vec3::ZERO; cam.width as usize * cam.height as usize];
+    let never = AtomicBool::new(false);
+    let stats = accumulate_tiles(scene, settings, est, 0..spp, &mut sums, &never, on_tile).unwrap_or_default();
+    let mut film = Film::new(cam.width, cam.height);
+    for (p, sum) in film.pixels.iter_mut().zip(sums) {
+        *p = sum / spp as f32;
+    }
+    (film, stats)
+}
+
+/// Adds camera samples `samples` (indices into each pixel's fixed sequence of
+/// ssaa^2 samples) to the per-pixel sums, tile by tile.
+///
+/// A render is this over `0..spp` followed by a division by spp; the preview
+/// window runs it over consecutive ranges. Each pixel's samples are added in
+/// index order onto its running sum, so any split into ranges gives the same
+/// bits as one pass. `cancel` is checked before every row of a tile; when it
+/// is set, `sums` is left untouched and `None` returned.
+pub fn accumulate_tiles(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    samples: Range<u32>,
+    sums: &mut [Vec3],
+    cancel: &AtomicBool,
+    on_tile: &(dyn Fn() + Sync),
+) -> Option<RayStats> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
     let tiles_x = w.div_ceil(TILE);
     let ntiles = tile_count(w, h) as u32;
-    let n = settings.ssaa;
-    let spp = n * n;
-    let tiles: Vec<(u32, Vec<Vec3>, RayStats)> = (0..ntiles)
+    let prior: &[Vec3] = sums;
+    let tiles: Option<Vec<(u32, Vec<Vec3>, RayStats)>> = (0..ntiles)
         .into_par_iter()
         .map(|t| {
             let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
@@ -143,39 +172,61 @@ pub fn render_tiles(
             let mut stats = RayStats::default();
             let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
+                }
                 for x in x0..x1 {
-                    let pixel = y as u64 * w as u64 + x as u64;
-                    let mut sum = Vec3::ZERO;
-                    for s in 0..spp {
-                        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
-                        let u = stratified(s, n, rng.next_2d());
-                        let off = settings.filter.sample(u);
-                        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
-                        stats.camera_rays += 1;
-                        let l = est.li(scene, &ray, &mut rng, &mut stats);
-                        // A NaN or infinite sample would poison the pixel; drop it.
-                        if l.is_finite() {
-                            sum += l;
-                        }
-                    }
-                    out.push(sum / spp as f32);
+                    let mut sum = prior[(y * w + x) as usize];
+                    add_pixel_samples(scene, settings, est, x, y, samples.clone(), &mut sum, &mut stats);
+                    out.push(sum);
                 }
             }
             on_tile();
-            (t, out, stats)
+            Some((t, out, stats))
         })
         .collect();
-    let mut film = Film::new(w, h);
     let mut stats = RayStats::default();
-    for (t, px, s) in tiles {
+    for (t, px, s) in tiles? {
         let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
         let tw = (x0 + TILE).min(w) - x0;
         for (i, p) in px.into_iter().enumerate() {
-            film.set(x0 + i as u32 % tw, y0 + i as u32 / tw, p);
+            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+            sums[(y * w + x) as usize] = p;
         }
         stats.add(&s);
     }
-    (film, stats)
+    Some(stats)
+}
+
+/// Adds samples `samples` of pixel (x, y) to `sum`, in index order. Sample s
+/// is jittered in stratum s of the pixel's ssaa x ssaa grid, with random
+/// numbers keyed by (seed, pixel, s).
+#[allow(clippy::too_many_arguments)]
+pub fn add_pixel_samples(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    x: u32,
+    y: u32,
+    samples: Range<u32>,
+    sum: &mut Vec3,
+    stats: &mut RayStats,
+) {
+    let cam = &scene.camera;
+    let n = settings.ssaa;
+    let pixel = y as u64 * cam.width as u64 + x as u64;
+    for s in samples {
+        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
+        let u = stratified(s, n, rng.next_2d());
+        let off = settings.filter.sample(u);
+        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+        stats.camera_rays += 1;
+        let l = est.li(scene, &ray, &mut rng, stats);
+        // A NaN or infinite sample would poison the pixel; drop it.
+        if l.is_finite() {
+            *sum += l;
+        }
+    }
 }
 
 /// A 2D sample for light sampling that is shifted per shading point.
