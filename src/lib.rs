@@ -15,6 +15,7 @@ pub mod material;
 pub mod math;
 pub mod sampling;
 pub mod scene;
+pub mod viewer;
 
 pub use error::{Error, Result};
 pub use film::Film;
