@@ -32,6 +32,19 @@ pub struct Cli {
 pub enum Command {
     /// Print statistics of a scene: triangles, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
     Info(SceneArgs),
+    /// Open an interactive preview window that refines the image while nothing moves (press H for the keys).
+    View(ViewArgs),
+}
+
+/// `view` takes the render options; `--output` names the pictures P saves:
+/// `view.png` gives `view-0001.png` and `view-0001.exr`, then `-0002`, ...
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("output", |a| a
+    .default_value("view.png")
+    .help("Name for pictures saved with P: NAME.png saves NAME-0001.png and NAME-0001.exr, then -0002, ...")))]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
 }
 
 #[derive(Args, Debug, Clone)]

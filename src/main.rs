@@ -42,6 +42,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Info(args)) => info(&args),
+        Some(Command::View(args)) => view(&args.render),
         None => render(&cli.render),
     }
 }
@@ -77,6 +78,17 @@ fn render(args: &cli::RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+fn view(args: &cli::RenderArgs) -> Result<()> {
+    let (desc, settings) = cli::prepare(args)?;
+    let scene = Scene::build(desc)?;
+    let options = raytracer::viewer::ViewOptions {
+        output: args.output.clone(),
+        exposure: args.exposure,
+        quiet: args.quiet,
+    };
+    Ok(raytracer::viewer::run(scene, settings, options)?)
 }
 
 fn info(args: &cli::SceneArgs) -> Result<()> {
