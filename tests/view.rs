@@ -14,6 +14,17 @@ use std::time::{Duration, Instant};
 /// Generous: the machine may be busy; these only bound a hang.
 const WINDOW_TIMEOUT: Duration = Duration::from_secs(60);
 const RENDER_TIMEOUT: Duration = Duration::from_secs(180);
+/// Small, so the window finishes refining in a moment.
+const SIZE_AND_SAMPLES: [&str; 8] = [
+    "--width",
+    "96",
+    "--height",
+    "72",
+    "--ssaa",
+    "2",
+    "--shadow-samples",
+    "2",
+];
 
 #[test]
 fn view_without_a_display_exits_2_with_one_line() {
@@ -178,17 +189,8 @@ fn view_under_xvfb_saves_and_follows_the_light() {
     let log = logs.path().join("view.log");
     let logfile = std::fs::File::create(&log).unwrap();
     let child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
-        .args([
-            "view",
-            "--width",
-            "96",
-            "--height",
-            "72",
-            "--ssaa",
-            "2",
-            "--shadow-samples",
-            "2",
-        ])
+        .arg("view")
+        .args(SIZE_AND_SAMPLES)
         .env("DISPLAY", &display)
         .env_remove("WAYLAND_DISPLAY")
         .current_dir(dir.path())
@@ -216,6 +218,15 @@ fn view_under_xvfb_saves_and_follows_the_light() {
 
     s.wait_done(0);
     let first = s.save(1);
+    // Refined to the end, the window holds the offline render exactly.
+    let offline = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(["-q", "-o", "offline.exr"])
+        .args(SIZE_AND_SAMPLES)
+        .current_dir(logs.path())
+        .status()
+        .unwrap();
+    assert!(offline.success());
+    assert_eq!(first, read_image(&logs.path().join("offline.exr")).unwrap());
 
     // Three presses of D move the light towards the picture's right.
     s.key(&["d", "d", "d"]);

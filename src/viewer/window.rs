@@ -263,6 +263,7 @@ fn save(film: &Arc<Film>, options: &ViewOptions, n: u32) -> std::thread::JoinHan
 /// The render thread: applies the newest pose, then refines until done or
 /// until the pose changes again; sleeps while there is nothing to do.
 fn render_loop(mut scene: Scene, settings: &RenderSettings, controller: &Controller, shared: &Shared) -> Result<()> {
+    let home_camera = scene.camera.clone();
     let light_home: Vec<_> = scene.lights.iter().map(|l| l.position()).collect();
     let mut integrator = view_integrator(settings);
     let mut acc = Progressive::new(scene.camera.width, scene.camera.height, settings);
@@ -285,7 +286,16 @@ fn render_loop(mut scene: Scene, settings: &RenderSettings, controller: &Control
         };
         let cancel = &shared.cancel;
         if applied != Some(pose_id) {
-            if let Some(cam) = controller.camera(&pose, &scene.desc.camera) {
+            // The scene's own camera where the pose is the initial one, so the
+            // finished image is the offline render's to the bit.
+            let camera = if pose.camera_position == controller.initial.camera_position
+                && pose.camera_forward == controller.initial.camera_forward
+            {
+                Some(home_camera.clone())
+            } else {
+                controller.camera(&pose, &scene.desc.camera)
+            };
+            if let Some(cam) = camera {
                 scene.camera = cam;
             }
             // Light transport is traced again only when the light moved.
