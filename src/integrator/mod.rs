@@ -149,8 +149,9 @@ pub fn render_tiles(
 /// A render is this over `0..spp` followed by a division by spp; the preview
 /// window runs it over consecutive ranges. Each pixel's samples are added in
 /// index order onto its running sum, so any split into ranges gives the same
-/// bits as one pass. `cancel` is checked before every row of a tile; when it
-/// is set, `sums` is left untouched and `None` returned.
+/// bits as one pass. `sums` holds one entry per pixel, rows from the top.
+/// `cancel` is checked before every row of a tile; when it is set, `sums` is
+/// left untouched and `None` returned.
 pub fn accumulate_tiles(
     scene: &Scene,
     settings: &RenderSettings,
@@ -161,6 +162,7 @@ pub fn accumulate_tiles(
     on_tile: &(dyn Fn() + Sync),
 ) -> Option<RayStats> {
     let (w, h) = (scene.camera.width, scene.camera.height);
+    assert_eq!(sums.len(), w as usize * h as usize, "one sum per pixel");
     let tiles_x = w.div_ceil(TILE);
     let ntiles = tile_count(w, h) as u32;
     let prior: &[Vec3] = sums;
@@ -176,7 +178,7 @@ pub fn accumulate_tiles(
                     return None;
                 }
                 for x in x0..x1 {
-                    let mut sum = prior[(y * w + x) as usize];
+                    let mut sum = prior[y as usize * w as usize + x as usize];
                     add_pixel_samples(scene, settings, est, x, y, samples.clone(), &mut sum, &mut stats);
                     out.push(sum);
                 }
@@ -191,7 +193,7 @@ pub fn accumulate_tiles(
         let tw = (x0 + TILE).min(w) - x0;
         for (i, p) in px.into_iter().enumerate() {
             let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            sums[(y * w + x) as usize] = p;
+            sums[y as usize * w as usize + x as usize] = p;
         }
         stats.add(&s);
     }
