@@ -35,6 +35,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Assemble EXR parts rendered with --crop or --tile into the whole frame.
     Merge(MergeArgs),
+    /// Open an interactive preview window that refines the image while nothing moves (press H for the keys).
+    View(ViewArgs),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -58,6 +60,17 @@ pub struct CompareArgs {
     /// Relative error shown as full red in the --diff picture.
     #[arg(long, default_value_t = 0.5)]
     pub diff_scale: f32,
+}
+
+/// `view` takes the render options; `--output` names the pictures P saves:
+/// `view.png` gives `view-0001.png` and `view-0001.exr`, then `-0002`, ...
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("output", |a| a
+    .default_value("view.png")
+    .help("Name for pictures saved with P: NAME.png saves NAME-0001.png and NAME-0001.exr, then -0002, ...")))]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
 }
 
 #[derive(Args, Debug, Clone)]

@@ -41,6 +41,9 @@ pub enum Error {
     ImageWrite { path: PathBuf, message: String },
     #[error("invalid scene: {0}")]
     Scene(String),
+    /// The preview window cannot run (no display, no window, built without it).
+    #[error("view: {0}")]
+    Window(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -17,6 +17,7 @@ pub mod math;
 pub mod metrics;
 pub mod sampling;
 pub mod scene;
+pub mod viewer;
 
 pub use error::{Error, Result};
 pub use film::Film;

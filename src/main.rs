@@ -45,6 +45,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Info(args)) => info(&args).map(|_| ExitCode::SUCCESS),
         Some(Command::Compare(args)) => compare(&args).map(|_| ExitCode::SUCCESS),
         Some(Command::Merge(args)) => merge(&args).map(|_| ExitCode::SUCCESS),
+        Some(Command::View(args)) => view(&args.render).map(|_| ExitCode::SUCCESS),
         None => render(&cli.render),
     }
 }
@@ -141,6 +142,21 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn view(args: &cli::RenderArgs) -> Result<()> {
+    if args.crop.is_some() || args.tile.is_some() {
+        anyhow::bail!("view shows the whole frame: --crop and --tile are for offline renders");
+    }
+    let (loaded, settings) = cli::prepare(args)?;
+    report_meshes(&loaded, &args.scene, args.quiet);
+    let scene = Scene::build(loaded.desc)?;
+    let options = raytracer::viewer::ViewOptions {
+        output: args.output.clone(),
+        exposure: args.exposure,
+        quiet: args.quiet,
+    };
+    Ok(raytracer::viewer::run(scene, settings, options)?)
 }
 
 fn info(args: &cli::SceneArgs) -> Result<()> {

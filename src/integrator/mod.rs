@@ -13,6 +13,7 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::{stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Set when the process is asked to stop (SIGINT/SIGTERM): tiles not yet
@@ -158,8 +159,8 @@ pub fn frame_window(scene: &Scene, settings: &RenderSettings) -> Result<FrameWin
     })
 }
 
-/// The tile loop shared by every integrator. Returns the film, the ray
-/// counts and the number of tiles rendered.
+/// The tile loop shared by every integrator. Returns the film (the crop, or
+/// the whole frame), the ray counts and the number of tiles rendered.
 pub fn render_tiles(
     scene: &Scene,
     settings: &RenderSettings,
@@ -167,57 +168,113 @@ pub fn render_tiles(
     on_tile: &(dyn Fn() + Sync),
 ) -> (Film, RayStats, u64) {
     let cam = &scene.camera;
-    let w = cam.width;
+    let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
+    let spp = settings.ssaa * settings.ssaa;
+    let mut sums = vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize];
+    let never = AtomicBool::new(false);
+    let (stats, done) = accumulate_tiles(scene, settings, est, 0..spp, &mut sums, &never, on_tile).unwrap_or_default();
+    let mut film = Film::new(rect.width(), rect.height());
+    for (p, sum) in film.pixels.iter_mut().zip(sums) {
+        *p = sum / spp as f32;
+    }
+    (film, stats, done)
+}
+
+/// Adds camera samples `samples` (indices into each pixel's fixed sequence of
+/// ssaa^2 samples) to the per-pixel sums of the crop rectangle (the whole
+/// frame without one), tile by tile.
+///
+/// A render is this over `0..spp` followed by a division by spp; the preview
+/// window runs it over consecutive ranges. Each pixel's samples are added in
+/// index order onto its running sum, so any split into ranges gives the same
+/// bits as one pass. `sums` holds one entry per pixel of the rectangle, rows
+/// from the top. `cancel` is checked before every row of a tile; when it is
+/// set, `sums` is left untouched and `None` returned. Tiles not started when
+/// [`INTERRUPTED`] is set are skipped; the count of tiles done says so.
+pub fn accumulate_tiles(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    samples: Range<u32>,
+    sums: &mut [Vec3],
+    cancel: &AtomicBool,
+    on_tile: &(dyn Fn() + Sync),
+) -> Option<(RayStats, u64)> {
+    let cam = &scene.camera;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
     let (rw, rh) = (rect.width(), rect.height());
+    assert_eq!(sums.len(), rw as usize * rh as usize, "one sum per pixel");
     let tiles_x = rw.div_ceil(TILE);
     let ntiles = tile_count(rw, rh) as u32;
-    let n = settings.ssaa;
-    let spp = n * n;
-    let tiles: Vec<(u32, Vec<Vec3>, RayStats)> = (0..ntiles)
+    let prior: &[Vec3] = sums;
+    let tiles: Option<Vec<(u32, Vec<Vec3>, RayStats)>> = (0..ntiles)
         .into_par_iter()
         .filter(|_| !INTERRUPTED.load(Ordering::Relaxed))
         .map(|t| {
-            let (x0, y0) = (rect.x0 + (t % tiles_x) * TILE, rect.y0 + (t / tiles_x) * TILE);
-            let (x1, y1) = ((x0 + TILE).min(rect.x1), (y0 + TILE).min(rect.y1));
+            // Tile bounds relative to the rectangle.
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(rw), (y0 + TILE).min(rh));
             let mut stats = RayStats::default();
             let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
+                }
                 for x in x0..x1 {
-                    let pixel = y as u64 * w as u64 + x as u64;
-                    let mut sum = Vec3::ZERO;
-                    for s in 0..spp {
-                        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
-                        let u = stratified(s, n, rng.next_2d());
-                        let off = settings.filter.sample(u);
-                        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
-                        stats.camera_rays += 1;
-                        let l = est.li(scene, &ray, &mut rng, &mut stats);
-                        // A NaN or infinite sample would poison the pixel; drop it.
-                        if l.is_finite() {
-                            sum += l;
-                        }
-                    }
-                    out.push(sum / spp as f32);
+                    let mut sum = prior[y as usize * rw as usize + x as usize];
+                    let (fx, fy) = (rect.x0 + x, rect.y0 + y);
+                    add_pixel_samples(scene, settings, est, fx, fy, samples.clone(), &mut sum, &mut stats);
+                    out.push(sum);
                 }
             }
             on_tile();
-            (t, out, stats)
+            Some((t, out, stats))
         })
         .collect();
-    let mut film = Film::new(rw, rh);
-    let mut stats = RayStats::default();
+    let tiles = tiles?;
     let done = tiles.len() as u64;
+    let mut stats = RayStats::default();
     for (t, px, s) in tiles {
-        // Tile origin relative to the film.
         let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
         let tw = (x0 + TILE).min(rw) - x0;
         for (i, p) in px.into_iter().enumerate() {
-            film.set(x0 + i as u32 % tw, y0 + i as u32 / tw, p);
+            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+            sums[y as usize * rw as usize + x as usize] = p;
         }
         stats.add(&s);
     }
-    (film, stats, done)
+    Some((stats, done))
+}
+
+/// Adds samples `samples` of pixel (x, y) to `sum`, in index order. Sample s
+/// is jittered in stratum s of the pixel's ssaa x ssaa grid, with random
+/// numbers keyed by (seed, pixel, s).
+#[allow(clippy::too_many_arguments)]
+pub fn add_pixel_samples(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    x: u32,
+    y: u32,
+    samples: Range<u32>,
+    sum: &mut Vec3,
+    stats: &mut RayStats,
+) {
+    let cam = &scene.camera;
+    let n = settings.ssaa;
+    let pixel = y as u64 * cam.width as u64 + x as u64;
+    for s in samples {
+        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
+        let u = stratified(s, n, rng.next_2d());
+        let off = settings.filter.sample(u);
+        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+        stats.camera_rays += 1;
+        let l = est.li(scene, &ray, &mut rng, stats);
+        // A NaN or infinite sample would poison the pixel; drop it.
+        if l.is_finite() {
+            *sum += l;
+        }
+    }
 }
 
 /// A 2D sample for light sampling that is shifted per shading point.

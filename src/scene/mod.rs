@@ -377,6 +377,27 @@ impl Scene {
         &self.materials[id as usize]
     }
 
+    /// Moves light `index` (and the sphere it emits from) to `position`,
+    /// keeping its size and power. The BVH holds no lights, so nothing is
+    /// rebuilt; an index out of range changes nothing.
+    pub fn move_light(&mut self, index: usize, position: Vec3) {
+        let Some(light) = self.lights.get_mut(index) else {
+            return;
+        };
+        match light {
+            Light::Sphere { sphere, .. } => sphere.centre = position,
+            Light::Point { position: p, .. } => *p = position,
+        }
+        if let Some(l) = self.desc.lights.get_mut(index) {
+            *l = *light;
+        }
+        for s in &mut self.spheres {
+            if s.light == Some(index as u32) {
+                s.sphere.centre = position;
+            }
+        }
+    }
+
     /// Bounding box of all geometry (triangles, spheres and lights).
     pub fn bounds(&self) -> crate::math::Aabb {
         let mut b = if self.triangles.is_empty() {

@@ -1,0 +1,344 @@
+//! Progressive refinement for the preview window: a quick low-resolution
+//! image first, then passes that add camera samples to per-pixel sums while
+//! nothing moves, until the render's full sample count is reached.
+//!
+//! Pass k adds sample indices [a_k, b_k) of each pixel's fixed sequence
+//! through `integrator::accumulate_tiles`, the loop the offline render runs
+//! over 0..spp in one go; so after the last pass the image is bit for bit the
+//! offline render with the same settings and seed. Pass sizes double (1, 1,
+//! 2, 4, ...) so the first images come fast and later passes spend little on
+//! per-pass overhead, the classic progressive scheme of interactive ray
+//! tracers (e.g. pbrt-v4's and Mitsuba's interactive viewers).
+//!
+//! What renders is a [`ViewIntegrator`]: besides the per-ray estimators it
+//! has a hook, [`ViewIntegrator::light_moved`], run before the first pass and
+//! again only when the light moves, where an integrator that caches light
+//! transport (a photon map) traces it again.
+
+use crate::film::Film;
+use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstimator, RayStats, RenderSettings};
+use crate::math::Vec3;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Side, in pixels, of the blocks the first low-resolution pass shades with one ray each.
+pub const LOW_RES_BLOCK: u32 = 4;
+
+/// An integrator as the preview window drives it.
+pub trait ViewIntegrator: Send {
+    /// Runs before the first pass and whenever the light has moved (never for
+    /// camera moves): the place to trace photons again. Returns false when
+    /// `cancel` stopped it, and is then called again for the next pose.
+    fn light_moved(&mut self, scene: &Scene, settings: &RenderSettings, cancel: &AtomicBool) -> bool;
+
+    /// The estimator whose samples accumulate into the image.
+    fn estimator(&self) -> &dyn RadianceEstimator;
+
+    /// A cheap estimator for the first low-resolution pass.
+    fn low_res_estimator(&self) -> &dyn RadianceEstimator;
+}
+
+/// Direct lighting: nothing to trace when the light moves.
+pub struct DirectView {
+    full: direct::DirectLighting,
+    quick: direct::DirectLighting,
+}
+
+impl DirectView {
+    pub fn new(settings: &RenderSettings) -> Self {
+        DirectView {
+            full: direct::DirectLighting {
+                shadow_samples: settings.shadow_samples,
+            },
+            quick: direct::DirectLighting {
+                shadow_samples: settings.shadow_samples.min(1),
+            },
+        }
+    }
+}
+
+impl ViewIntegrator for DirectView {
+    fn light_moved(&mut self, _scene: &Scene, _settings: &RenderSettings, _cancel: &AtomicBool) -> bool {
+        true
+    }
+
+    fn estimator(&self) -> &dyn RadianceEstimator {
+        &self.full
+    }
+
+    fn low_res_estimator(&self) -> &dyn RadianceEstimator {
+        &self.quick
+    }
+}
+
+/// The view integrator for the render settings' integrator.
+pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
+    match settings.integrator {
+        IntegratorKind::Direct => Box::new(DirectView::new(settings)),
+    }
+}
+
+/// Per-pixel sample sums and how many samples of each pixel they hold.
+#[derive(Clone, Debug)]
+pub struct Progressive {
+    width: u32,
+    height: u32,
+    sums: Vec<Vec3>,
+    done: u32,
+    target: u32,
+    /// Rays of the completed passes since the last reset.
+    pub stats: RayStats,
+}
+
+impl Progressive {
+    /// An empty accumulator for a `width` x `height` image that stops at the
+    /// settings' ssaa^2 samples per pixel.
+    pub fn new(width: u32, height: u32, settings: &RenderSettings) -> Self {
+        Progressive {
+            width,
+            height,
+            sums: vec![Vec3::ZERO; width as usize * height as usize],
+            done: 0,
+            target: settings.ssaa * settings.ssaa,
+            stats: RayStats::default(),
+        }
+    }
+
+    /// Forgets every sample (the camera or the light moved).
+    pub fn reset(&mut self) {
+        self.sums.fill(Vec3::ZERO);
+        self.done = 0;
+        self.stats = RayStats::default();
+    }
+
+    /// Samples per pixel accumulated so far.
+    pub fn samples(&self) -> u32 {
+        self.done
+    }
+
+    /// Samples per pixel at which refinement stops.
+    pub fn target(&self) -> u32 {
+        self.target
+    }
+
+    pub fn is_complete(&self) -> bool {
+        self.done >= self.target
+    }
+
+    /// Sample indices the next pass adds: as many as are done already (at
+    /// least one), capped at the target.
+    pub fn next_pass(&self) -> Option<Range<u32>> {
+        if self.is_complete() {
+            return None;
+        }
+        let n = self.done.max(1).min(self.target - self.done);
+        Some(self.done..self.done + n)
+    }
+
+    /// Adds the next pass's samples. Returns false, with the sums as they
+    /// were, when `cancel` was set during the pass or nothing was left to do.
+    pub fn run_pass(
+        &mut self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        est: &dyn RadianceEstimator,
+        cancel: &AtomicBool,
+    ) -> bool {
+        let Some(range) = self.next_pass() else {
+            return false;
+        };
+        let end = range.end;
+        match accumulate_tiles(scene, settings, est, range, &mut self.sums, cancel, &|| {}) {
+            Some((s, _)) => {
+                self.done = end;
+                self.stats.camera_rays += s.camera_rays;
+                self.stats.shadow_rays += s.shadow_rays;
+                self.stats.other_rays += s.other_rays;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The mean of the samples so far (black before the first pass); the
+    /// same division as the offline render, so equal to it once complete.
+    pub fn film(&self) -> Film {
+        let mut film = Film::new(self.width, self.height);
+        if self.done > 0 {
+            for (p, s) in film.pixels.iter_mut().zip(&self.sums) {
+                *p = *s / self.done as f32;
+            }
+        }
+        film
+    }
+}
+
+/// A quick full-size image from one ray through the centre of every `block`
+/// x `block` pixel block, each block filled with its ray's radiance.
+/// Returns `None` when `cancel` was set (checked per block row).
+pub fn low_res_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    est: &dyn RadianceEstimator,
+    block: u32,
+    cancel: &AtomicBool,
+) -> Option<Film> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let block = block.max(1);
+    let (bw, bh) = (w.div_ceil(block), h.div_ceil(block));
+    let rows: Option<Vec<Vec<Vec3>>> = (0..bh)
+        .into_par_iter()
+        .map(|by| {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            let mut stats = RayStats::default();
+            let row = (0..bw)
+                .map(|bx| {
+                    let (x0, y0) = (bx * block, by * block);
+                    let cx = (x0 as f32 + 0.5 * block as f32).min(w as f32);
+                    let cy = (y0 as f32 + 0.5 * block as f32).min(h as f32);
+                    // Keyed apart from the accumulation passes' sample indices.
+                    let mut rng = Rng::keyed(settings.seed, (by * bw + bx) as u64, u64::MAX);
+                    let l = est.li(scene, &cam.generate_ray(cx, cy), &mut rng, &mut stats);
+                    if l.is_finite() {
+                        l
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect();
+            Some(row)
+        })
+        .collect();
+    let rows = rows?;
+    let mut film = Film::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            film.set(x, y, rows[(y / block) as usize][(x / block) as usize]);
+        }
+    }
+    Some(film)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::Filter;
+    use crate::integrator;
+    use crate::scene::builtin;
+
+    fn small_cornell() -> Scene {
+        let mut d = builtin::cornell();
+        d.camera.width = 37;
+        d.camera.height = 29;
+        Scene::build(d).unwrap()
+    }
+
+    fn settings() -> RenderSettings {
+        RenderSettings {
+            ssaa: 3,
+            shadow_samples: 2,
+            filter: Filter::Tent,
+            seed: 11,
+            threads: Some(2),
+            integrator: IntegratorKind::Direct,
+            crop: None,
+        }
+    }
+
+    #[test]
+    fn passes_double_and_end_at_the_target() {
+        let mut p = Progressive::new(4, 4, &settings());
+        let mut ranges = vec![];
+        while let Some(r) = p.next_pass() {
+            ranges.push(r.clone());
+            p.done = r.end;
+        }
+        assert_eq!(ranges, vec![0..1, 1..2, 2..4, 4..8, 8..9]);
+        assert!(p.is_complete());
+    }
+
+    #[test]
+    fn completed_passes_equal_the_offline_render_bit_for_bit() {
+        let scene = small_cornell();
+        let s = settings();
+        let offline = integrator::render(&scene, &s, &|| {}).unwrap();
+        let view = view_integrator(&s);
+        let never = AtomicBool::new(false);
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
+        let mut passes = 0;
+        while p.run_pass(&scene, &s, view.estimator(), &never) {
+            passes += 1;
+            if !p.is_complete() {
+                // Part way, the image is a different (noisier) estimate.
+                assert_ne!(p.film(), offline.film);
+            }
+        }
+        assert_eq!(passes, 5);
+        assert_eq!(p.samples(), 9);
+        assert_eq!(p.film(), offline.film);
+        assert_eq!(p.stats, offline.stats);
+    }
+
+    #[test]
+    fn a_cancelled_pass_changes_nothing() {
+        let scene = small_cornell();
+        let s = settings();
+        let view = view_integrator(&s);
+        let (never, cancelled) = (AtomicBool::new(false), AtomicBool::new(true));
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
+        assert!(p.run_pass(&scene, &s, view.estimator(), &never));
+        let before = p.film();
+        assert!(!p.run_pass(&scene, &s, view.estimator(), &cancelled));
+        assert_eq!(p.samples(), 1);
+        assert_eq!(p.film(), before);
+        assert!(low_res_pass(&scene, &s, view.low_res_estimator(), 4, &cancelled).is_none());
+        // Refinement carries on to the offline image after the cancel.
+        while p.run_pass(&scene, &s, view.estimator(), &never) {}
+        assert_eq!(p.film(), integrator::render(&scene, &s, &|| {}).unwrap().film);
+    }
+
+    #[test]
+    fn reset_starts_over() {
+        let scene = small_cornell();
+        let s = settings();
+        let view = view_integrator(&s);
+        let never = AtomicBool::new(false);
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
+        p.run_pass(&scene, &s, view.estimator(), &never);
+        p.run_pass(&scene, &s, view.estimator(), &never);
+        p.reset();
+        assert_eq!(p.samples(), 0);
+        assert_eq!(p.next_pass(), Some(0..1));
+        assert!(p.film().pixels.iter().all(|&v| v == Vec3::ZERO));
+    }
+
+    #[test]
+    fn low_res_pass_is_blocky_and_close_to_the_full_image() {
+        let mut d = builtin::cornell();
+        (d.camera.width, d.camera.height) = (98, 97);
+        let scene = Scene::build(d).unwrap();
+        let s = settings();
+        let view = view_integrator(&s);
+        let never = AtomicBool::new(false);
+        let f = low_res_pass(&scene, &s, view.low_res_estimator(), 4, &never).unwrap();
+        assert_eq!((f.width, f.height), (98, 97));
+        // Every 4x4 block (including the clipped last ones) is one colour.
+        for y in 0..f.height {
+            for x in 0..f.width {
+                assert_eq!(f.get(x, y), f.get(x / 4 * 4, y / 4 * 4), "({x}, {y})");
+            }
+        }
+        // Clamped as on screen, so that hitting or missing the small, very
+        // bright light with a block's one ray does not dominate the mean.
+        let full = integrator::render(&scene, &s, &|| {}).unwrap().film;
+        let shown = |f: &Film| f.pixels.iter().map(|p| p.min(Vec3::ONE)).sum::<Vec3>() / f.pixels.len() as f32;
+        let (a, b) = (shown(&f), shown(&full));
+        assert!((a - b).length() < 0.15 * b.length(), "{a:?} vs {b:?}");
+    }
+}
