@@ -254,3 +254,48 @@ fn smooth_passes_vertex_normals_on_only_when_asked() {
     assert_eq!(scene("smooth = true\n", false), want);
     assert_eq!(scene("", true), want);
 }
+
+#[test]
+fn mirror_and_glass_materials_are_read_and_checked() {
+    let base = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [materials.m]
+        type = "mirror"
+        reflectance = [0.9, 0.8, 0.7]
+        [materials.g]
+        type = "glass"
+        ior = 1.33
+        [materials.plain_glass]
+        type = "glass"
+    "#;
+    let d = parse_str(base).unwrap().desc;
+    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| *m);
+    assert_eq!(
+        get("m"),
+        Some(Material::Mirror {
+            reflectance: Vec3::new(0.9, 0.8, 0.7)
+        })
+    );
+    assert_eq!(get("g"), Some(Material::Glass { ior: 1.33 }));
+    assert_eq!(get("plain_glass"), Some(Material::Glass { ior: 1.5 }));
+    for (bad, what) in [
+        ("[materials.x]\ntype = \"glass\"\nalbedo = [1, 1, 1]\n", "albedo"),
+        ("[materials.x]\ntype = \"glass\"\nior = 0.5\n", "ior"),
+        (
+            "[materials.x]\ntype = \"mirror\"\nreflectance = [2, 0, 0]\n",
+            "reflectance",
+        ),
+        (
+            "[materials.x]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\nior = 1.5\n",
+            "ior",
+        ),
+        ("[materials.x]\ntype = \"metal\"\n", "metal"),
+    ] {
+        let text = format!("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 40\n{bad}");
+        let e = parse_str(&text).unwrap_err().to_string();
+        assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
+    }
+}
