@@ -14,7 +14,7 @@ use crate::math::Vec3;
 use std::f32::consts::PI;
 
 /// Names accepted by `--scene`.
-pub const NAMES: &[&str] = &["cornell", "cornell-bunny", "cornell-final"];
+pub const NAMES: &[&str] = &["cornell", "cornell-bunny", "cornell-final", "cornell-specular"];
 
 /// Cornell box data (side 555) to the coursework's [-1, 1]^3 with x and y negated.
 pub fn cornell_point(x: f32, y: f32, z: f32) -> Vec3 {
@@ -165,6 +165,32 @@ pub fn cornell() -> SceneDesc {
     d
 }
 
+/// Scene `cornell-specular`: `cornell` with the tall block a perfect mirror,
+/// no short block, a glass sphere (ior 1.5) on the floor, and the light moved
+/// behind the sphere so that it focuses a caustic on the floor in front of it.
+pub fn cornell_specular() -> SceneDesc {
+    let mut d = empty("cornell-specular", cornell_camera(512, 512));
+    add_room(&mut d, &cornell_colours());
+    let tall = d.material("tall_block", Material::Mirror { reflectance: Vec3::ONE });
+    add_block(&mut d, &TALL_BLOCK, tall);
+    let glass = d.material("glass_sphere", Material::Glass { ior: 1.5 });
+    d.spheres.push(super::SphereDesc {
+        sphere: Sphere {
+            centre: Vec3::new(0.33, 0.7, -0.39),
+            radius: 0.3,
+        },
+        material: glass,
+    });
+    d.lights.push(Light::Sphere {
+        sphere: Sphere {
+            centre: Vec3::new(0.0, -0.6, 0.3),
+            radius: 0.1,
+        },
+        power: Vec3::splat(14.0 * PI),
+    });
+    d
+}
+
 /// Where the bunny of `cornell-bunny` goes: turned 180 degrees about z,
 /// 0.617336 high, standing on the floor where the short block stood.
 pub fn bunny_transform() -> Transform {
@@ -273,6 +299,18 @@ pub fn by_name(name: &str, opts: &LoadOptions) -> Result<Option<LoadedScene>> {
             }
             Ok(Some(LoadedScene {
                 desc: cornell(),
+                meshes: vec![],
+            }))
+        }
+        "cornell-specular" => {
+            if let Some(p) = &opts.mesh {
+                return Err(Error::InvalidSetting(format!(
+                    "--mesh {}: scene 'cornell-specular' has no mesh",
+                    p.display()
+                )));
+            }
+            Ok(Some(LoadedScene {
+                desc: cornell_specular(),
                 meshes: vec![],
             }))
         }

@@ -299,3 +299,9 @@ fn mirror_and_glass_materials_are_read_and_checked() {
         assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
     }
 }
+
+#[test]
+fn cornell_specular_toml_is_the_builtin_scene() {
+    let file = load(&scenes_dir().join("cornell-specular.toml"), &LoadOptions::default()).unwrap();
+    assert_eq!(file.desc, builtin::cornell_specular());
+}
