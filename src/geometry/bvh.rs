@@ -48,6 +48,8 @@ pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     /// `order[i]` is the input index of the primitive stored at slot `i`.
     pub order: Vec<u32>,
+    /// The triangles in slot order.
+    tris: Vec<Triangle>,
 }
 
 /// Figures `raytracer info` prints.
@@ -83,8 +85,10 @@ struct Bin {
 }
 
 impl Bvh {
-    /// Builds over primitives given by their bounds.
-    pub fn build(bounds: &[Aabb]) -> Bvh {
+    /// Builds over the triangles; slot `i` of every query result is
+    /// triangle `order[i]` of `tris`.
+    pub fn build(tris: &[Triangle]) -> Bvh {
+        let bounds: Vec<Aabb> = tris.iter().map(|t| t.bounds()).collect();
         let mut prims: Vec<BuildPrim> = bounds
             .iter()
             .enumerate()
@@ -104,11 +108,16 @@ impl Bvh {
         if prims.is_empty() {
             // An empty leaf with empty bounds: every ray misses it.
             nodes[0].set_bounds(&Aabb::EMPTY);
-            return Bvh { nodes, order: vec![] };
+            return Bvh {
+                nodes,
+                order: vec![],
+                tris: vec![],
+            };
         }
         build_node(&mut nodes, 0, &mut prims, 0, 0);
-        let order = prims.iter().map(|p| p.index).collect();
-        Bvh { nodes, order }
+        let order: Vec<u32> = prims.iter().map(|p| p.index).collect();
+        let tris = order.iter().map(|&i| tris[i as usize]).collect();
+        Bvh { nodes, order, tris }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -117,7 +126,8 @@ impl Bvh {
 
     /// Closest hit among `tris` (stored in BVH order) in (t_min, t_max):
     /// the slot of the triangle and the hit.
-    pub fn intersect(&self, tris: &[Triangle], ray: &Ray, t_min: f32, mut t_max: f32) -> Option<(u32, TriHit)> {
+    pub fn intersect(&self, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<(u32, TriHit)> {
+        let tris = &self.tris;
         if self.order.is_empty() {
             return None;
         }
@@ -177,7 +187,8 @@ impl Bvh {
     }
 
     /// Whether any triangle blocks the ray in (t_min, t_max).
-    pub fn occluded(&self, tris: &[Triangle], ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        let tris = &self.tris;
         if self.order.is_empty() {
             return false;
         }
@@ -424,8 +435,7 @@ mod tests {
     #[test]
     fn matches_brute_force_on_random_soup() {
         let tris = random_tris(3000, 9);
-        let bvh = Bvh::build(&tris.iter().map(|t| t.bounds()).collect::<Vec<_>>());
-        let ordered: Vec<Triangle> = bvh.order.iter().map(|&i| tris[i as usize]).collect();
+        let bvh = Bvh::build(&tris);
         let mut r = Rng::new(5, 5);
         let mut hits = 0;
         for _ in 0..5000 {
@@ -433,11 +443,11 @@ mod tests {
             let d = crate::sampling::uniform_sphere(r.next_2d());
             let ray = Ray::new(o, d);
             let got = bvh
-                .intersect(&ordered, &ray, 0.0, f32::INFINITY)
+                .intersect(&ray, 0.0, f32::INFINITY)
                 .map(|(s, h)| (bvh.order[s as usize], h.t));
             let want = brute(&tris, &ray);
             assert_eq!(got, want);
-            assert_eq!(bvh.occluded(&ordered, &ray, 0.0, f32::INFINITY), want.is_some());
+            assert_eq!(bvh.occluded(&ray, 0.0, f32::INFINITY), want.is_some());
             hits += want.is_some() as usize;
         }
         assert!(hits > 500);
@@ -450,18 +460,18 @@ mod tests {
     fn coincident_primitives_build_a_bounded_tree() {
         let t = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
         let tris = vec![t; 100];
-        let bvh = Bvh::build(&tris.iter().map(|t| t.bounds()).collect::<Vec<_>>());
+        let bvh = Bvh::build(&tris);
         let s = bvh.stats();
         assert!(s.leaf_sizes.iter().enumerate().all(|(k, &c)| c == 0 || k <= MAX_LEAF));
         let ray = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z);
-        assert!(bvh.intersect(&tris, &ray, 0.0, f32::INFINITY).is_some());
+        assert!(bvh.intersect(&ray, 0.0, f32::INFINITY).is_some());
     }
 
     #[test]
     fn empty_bvh_misses() {
         let bvh = Bvh::build(&[]);
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
-        assert!(bvh.intersect(&[], &ray, 0.0, f32::INFINITY).is_none());
-        assert!(!bvh.occluded(&[], &ray, 0.0, f32::INFINITY));
+        assert!(bvh.intersect(&ray, 0.0, f32::INFINITY).is_none());
+        assert!(!bvh.occluded(&ray, 0.0, f32::INFINITY));
     }
 }
