@@ -5,7 +5,7 @@
 //! our BVH and the `obvhs` crate's CWBVH on them, single-threaded.
 //!
 //! ```text
-//! cargo run --release --example bvh_rays -- [--write FILE] [--reps N] [--builds N]
+//! cargo run --release --example bvh_rays -- [--write FILE] [--reps N] [--builds N] [--ours-only]
 //! ```
 //!
 //! Lines starting with `build` and `result` are read by `bench/bvh-vs-embree.sh`.
@@ -27,6 +27,8 @@ struct Args {
     write: Option<PathBuf>,
     reps: usize,
     builds: usize,
+    /// Skip the obvhs crate (quicker runs while tuning ours).
+    ours_only: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -34,6 +36,7 @@ fn parse_args() -> Result<Args, String> {
         write: None,
         reps: 5,
         builds: 9,
+        ours_only: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -42,6 +45,7 @@ fn parse_args() -> Result<Args, String> {
             "--write" => a.write = Some(PathBuf::from(value()?)),
             "--reps" => a.reps = value()?.parse().map_err(|e| format!("--reps: {e}"))?,
             "--builds" => a.builds = value()?.parse().map_err(|e| format!("--builds: {e}"))?,
+            "--ours-only" => a.ours_only = true,
             _ => return Err(format!("unknown option {k}")),
         }
     }
@@ -134,6 +138,10 @@ fn main() -> ExitCode {
             Query::Occluded => time_set(set, args.reps, |r| bvh.occluded(&r.ray, r.t_min, r.t_max)),
         };
         report("ours", set, hits, time);
+    }
+
+    if args.ours_only {
+        return ExitCode::SUCCESS;
     }
 
     // obvhs: CWBVH with its medium preset ("around Embree's build time"),

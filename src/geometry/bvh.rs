@@ -23,6 +23,7 @@
 
 use super::triangle::{TriHit, Triangle};
 use crate::math::{Aabb, Ray, Vec3};
+use arrayvec::ArrayVec;
 use glam::{BVec4A, Vec3A, Vec4};
 use rayon::prelude::*;
 
@@ -56,7 +57,7 @@ const EMPTY_CHILD: u32 = LEAF;
 
 /// One node: the boxes of its four children, lane by lane, and their references.
 /// Aligned to a cache line so that a node spans exactly two.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 struct Node4 {
     /// `bounds[axis][0]` holds the children's minima along `axis`, `[1]` the maxima.
@@ -67,7 +68,7 @@ struct Node4 {
 /// Four triangles in the layout of `Triangle` (vertex and two edges), lane by
 /// lane; `slot[i]` is the slot of lane i, or `u32::MAX` for padding (a
 /// degenerate triangle no ray hits).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(16))]
 struct Tri4 {
     v0: [Vec4; 3],
@@ -77,7 +78,7 @@ struct Tri4 {
 }
 
 /// The tree, its triangle packets, and the order of the triangles.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
     /// `nodes[0]` is the root.
     nodes: Vec<Node4>,
@@ -106,8 +107,9 @@ impl Default for Bvh {
 }
 
 impl Bvh {
-    /// The most triangles a BVH can hold (the leaf reference's packet index field).
-    pub const MAX_TRIANGLES: usize = (LEAF_FIRST_MASK as usize + 1) * WIDTH / 2;
+    /// The most triangles a BVH can hold: the packet index field of a leaf
+    /// reference, with at worst one packet per triangle.
+    pub const MAX_TRIANGLES: usize = LEAF_FIRST_MASK as usize + 1;
 
     /// Builds over the triangles; slot `i` of every query result is triangle
     /// `order[i]` of `tris`.
@@ -177,8 +179,9 @@ impl Bvh {
         let r = TraversalRay::new(ray, t_min);
         let mut t_max = t_max;
         let mut best: Option<(u32, TriHit)> = None;
-        let mut stack = [(0u32, 0.0f32); STACK];
-        let mut sp = 0usize;
+        // An ArrayVec starts uninitialised; zeroing a fixed array per ray
+        // took a tenth of the traversal time.
+        let mut stack: ArrayVec<(u32, f32), STACK> = ArrayVec::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF == 0 {
@@ -206,8 +209,9 @@ impl Bvh {
                         n += 1;
                         m &= m - 1;
                     }
-                    stack[sp..sp + n - 1].copy_from_slice(&hits[..n - 1]);
-                    sp += n - 1;
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
+                    }
                     cur = hits[n - 1].0;
                     continue;
                 }
@@ -221,11 +225,9 @@ impl Bvh {
             }
             // Pop the next node that can still hold a closer hit.
             loop {
-                if sp == 0 {
+                let Some((n, t_enter)) = stack.pop() else {
                     return best;
-                }
-                sp -= 1;
-                let (n, t_enter) = stack[sp];
+                };
                 if t_enter <= t_max {
                     cur = n;
                     break;
@@ -237,8 +239,7 @@ impl Bvh {
     /// Whether any triangle blocks the ray in (t_min, t_max).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let r = TraversalRay::new(ray, t_min);
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
+        let mut stack: ArrayVec<u32, STACK> = ArrayVec::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF == 0 {
@@ -248,8 +249,7 @@ impl Bvh {
                     cur = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
                     while mask != 0 {
-                        stack[sp] = node.child[mask.trailing_zeros() as usize];
-                        sp += 1;
+                        stack.push(node.child[mask.trailing_zeros() as usize]);
                         mask &= mask - 1;
                     }
                     continue;
@@ -257,11 +257,10 @@ impl Bvh {
             } else if self.leaf_packets(cur).iter().any(|p| r.hits_any_triangle(p, t_max)) {
                 return true;
             }
-            if sp == 0 {
-                return false;
+            match stack.pop() {
+                Some(n) => cur = n,
+                None => return false,
             }
-            sp -= 1;
-            cur = stack[sp];
         }
     }
 
@@ -318,7 +317,8 @@ impl Bvh {
 }
 
 /// A ray prepared for box and packet tests: its origin and direction in all
-/// lanes, the reciprocal direction, and which box plane is near on each axis.
+/// lanes, the reciprocal direction, which box plane is near on each axis,
+/// and the origin the near and far planes are measured from.
 struct TraversalRay {
     o: [Vec4; 3],
     d: [Vec4; 3],
@@ -326,6 +326,10 @@ struct TraversalRay {
     /// Index into `Node4::bounds[axis]` of the near plane: 1 (the maxima) for
     /// a negative direction.
     near: [bool; 3],
+    /// The origin for near-plane and far-plane distances. They differ from `o`
+    /// only on axes the ray is parallel to (see `new`).
+    o_near: [Vec4; 3],
+    o_far: [Vec4; 3],
     t_min: Vec4,
 }
 
@@ -337,14 +341,33 @@ impl TraversalRay {
     fn new(ray: &Ray, t_min: f32) -> Self {
         let o = ray.o.to_array();
         let d = ray.d.to_array();
-        // A zero component becomes a tiny one of the same sign: the box
-        // distances stay finite and no 0 * inf makes a NaN.
-        let inv = d.map(|x| 1.0 / if x.abs() < 1e-30 { 1e-30f32.copysign(x) } else { x });
+        let mut inv = [0.0; 3];
+        let (mut o_near, mut o_far) = (o, o);
+        for a in 0..3 {
+            if d[a].abs() >= 1e-30 {
+                inv[a] = 1.0 / d[a];
+            } else {
+                // Parallel to the slabs of this axis. 1/0 would make 0 * inf =
+                // NaN for a ray lying in a box face, and a finite stand-in alone
+                // gives distance 0 there, culling a box the ray runs along. So:
+                // a finite stand-in, and the origin moved outwards for each
+                // plane by delta (many ulps, and delta * 1e30 beyond any ray
+                // length): within the slab, faces included, the near distance
+                // is hugely negative and the far one hugely positive; outside
+                // it by more than delta the box is culled.
+                inv[a] = 1e30f32.copysign(d[a]);
+                let delta = o[a].abs() * 1e-6 + 1e-15;
+                let (up, down) = (o[a] + delta, o[a] - delta);
+                (o_near[a], o_far[a]) = if inv[a] > 0.0 { (up, down) } else { (down, up) };
+            }
+        }
         TraversalRay {
             o: o.map(Vec4::splat),
             d: d.map(Vec4::splat),
             inv_d: inv.map(Vec4::splat),
-            near: inv.map(|x| x.is_sign_negative()),
+            near: inv.map(|x| x < 0.0),
+            o_near: o_near.map(Vec4::splat),
+            o_far: o_far.map(Vec4::splat),
             t_min: Vec4::splat(t_min),
         }
     }
@@ -356,8 +379,8 @@ impl TraversalRay {
         let b = &node.bounds;
         let slab = |axis: usize| {
             let near = self.near[axis] as usize;
-            let t0 = (b[axis][near] - self.o[axis]) * self.inv_d[axis];
-            let t1 = (b[axis][1 - near] - self.o[axis]) * self.inv_d[axis];
+            let t0 = (b[axis][near] - self.o_near[axis]) * self.inv_d[axis];
+            let t1 = (b[axis][1 - near] - self.o_far[axis]) * self.inv_d[axis];
             (t0, t1)
         };
         let (nx, fx) = slab(0);
@@ -392,7 +415,8 @@ impl TraversalRay {
         let qz = sx * e1y - e1x * sy;
         let v = ((dx * qx) + (dy * qy) + (dz * qz)) * inv;
         let t = ((e2x * qx) + (e2y * qy) + (e2z * qz)) * inv;
-        let det_ok = det.cmpne(Vec4::ZERO) & det.is_finite_mask();
+        // Finite and non-zero; `abs < inf` is false for NaN too.
+        let det_ok = det.cmpne(Vec4::ZERO) & det.abs().cmplt(Vec4::INFINITY);
         let u_ok = u.cmpge(Vec4::ZERO) & u.cmple(Vec4::ONE);
         // Written as the negation of the scalar test's rejection, so NaNs agree.
         let v_ok = !(v.cmplt(Vec4::ZERO) | (u + v).cmpgt(Vec4::ONE));

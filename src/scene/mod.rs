@@ -228,6 +228,13 @@ impl Scene {
             }
         }
 
+        if tris.len() > Bvh::MAX_TRIANGLES {
+            return Err(Error::Scene(format!(
+                "{} triangles; the BVH holds at most {}",
+                tris.len(),
+                Bvh::MAX_TRIANGLES
+            )));
+        }
         let start = std::time::Instant::now();
         let bvh = Bvh::build(&tris);
         let bvh_build_seconds = start.elapsed().as_secs_f64();
