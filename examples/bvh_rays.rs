@@ -8,6 +8,8 @@
 //! cargo run --release --example bvh_rays -- [--write FILE] [--reps N] [--builds N] [--ours-only]
 //! ```
 //!
+//! `--reps 0` skips the ray sets and times the builds only.
+//!
 //! Lines starting with `build` and `result` are read by `bench/bvh-vs-embree.sh`.
 //! Builds are timed on the wall clock (median; single-threaded ones also in
 //! the thread's CPU time), ray sets in the thread's CPU time (best of `--reps`
@@ -49,7 +51,6 @@ fn parse_args() -> Result<Args, String> {
             _ => return Err(format!("unknown option {k}")),
         }
     }
-    a.reps = a.reps.max(1);
     a.builds = a.builds.max(1);
     Ok(a)
 }
@@ -98,7 +99,12 @@ fn main() -> ExitCode {
         }
     };
     let world = common::world_triangles(&desc);
-    let sets = common::standard_ray_sets(&desc);
+    // `--reps 0` times builds only.
+    let sets = if args.reps > 0 || args.write.is_some() {
+        common::standard_ray_sets(&desc)
+    } else {
+        vec![]
+    };
     if let Some(path) = &args.write {
         if let Err(e) = common::write_ray_file(path, &world, &sets) {
             eprintln!("bvh_rays: {}: {e}", path.display());
@@ -132,7 +138,7 @@ fn main() -> ExitCode {
         );
     }
     let bvh = Bvh::build(&tris);
-    for set in &sets {
+    for set in sets.iter().filter(|_| args.reps > 0) {
         let (hits, time) = match set.query {
             Query::Closest => time_set(set, args.reps, |r| bvh.intersect(&r.ray, r.t_min, r.t_max).is_some()),
             Query::Occluded => time_set(set, args.reps, |r| bvh.occluded(&r.ray, r.t_min, r.t_max)),
@@ -178,7 +184,7 @@ fn main() -> ExitCode {
             r.t_max,
         )
     };
-    for set in &sets {
+    for set in sets.iter().filter(|_| args.reps > 0) {
         let (hits, time) = match set.query {
             Query::Closest => time_set(set, args.reps, |r| {
                 let mut hit = obvhs::ray::RayHit::none();

@@ -147,8 +147,12 @@ impl Bvh {
             inner => inner,
         };
         let mut nodes = Vec::with_capacity(tris.len() / 4 + 1);
-        let mut packets = Vec::with_capacity(tris.len() / 2 + 1);
-        flatten(&root, &ids, tris, &mut nodes, &mut packets);
+        let mut packet_slots = Vec::with_capacity(tris.len() / 2 + 1);
+        flatten(&root, &mut nodes, &mut packet_slots);
+        let packets = packet_slots
+            .par_iter()
+            .map(|&(first, count)| make_packet(first, count, &ids, tris))
+            .collect();
         let order = ids;
         Bvh { nodes, packets, order }
     }
@@ -829,31 +833,17 @@ fn build_node(
     BuildNode::Inner(built)
 }
 
-/// Lays the tree out depth first; returns the reference to `node`.
-fn flatten(node: &BuildNode, ids: &[u32], tris: &[Triangle], nodes: &mut Vec<Node4>, packets: &mut Vec<Tri4>) -> u32 {
+/// Lays the tree out depth first; returns the reference to `node`. Leaves
+/// only reserve their packets: `packet_slots` gets each packet's first slot
+/// and triangle count, and `make_packet` fills it in afterwards, in parallel.
+fn flatten(node: &BuildNode, nodes: &mut Vec<Node4>, packet_slots: &mut Vec<(u32, u32)>) -> u32 {
     match node {
         BuildNode::Leaf { start, count } => {
-            let first = packets.len() as u32;
-            for chunk_start in (*start..start + count).step_by(WIDTH) {
-                let mut p = Tri4 {
-                    v0: [Vec4::ZERO; 3],
-                    e1: [Vec4::ZERO; 3],
-                    e2: [Vec4::ZERO; 3],
-                    slot: [u32::MAX; WIDTH],
-                };
-                for lane in 0..WIDTH.min(start + count - chunk_start) {
-                    let slot = chunk_start + lane;
-                    let t = &tris[ids[slot] as usize];
-                    for axis in 0..3 {
-                        p.v0[axis][lane] = t.v0[axis];
-                        p.e1[axis][lane] = t.e1[axis];
-                        p.e2[axis][lane] = t.e2[axis];
-                    }
-                    p.slot[lane] = slot as u32;
-                }
-                packets.push(p);
+            let first = packet_slots.len() as u32;
+            for s in (*start..start + count).step_by(WIDTH) {
+                packet_slots.push((s as u32, WIDTH.min(start + count - s) as u32));
             }
-            let n = packets.len() as u32 - first;
+            let n = packet_slots.len() as u32 - first;
             LEAF | (n << LEAF_COUNT_SHIFT) | first
         }
         BuildNode::Inner(children) => {
@@ -863,7 +853,7 @@ fn flatten(node: &BuildNode, ids: &[u32], tris: &[Triangle], nodes: &mut Vec<Nod
                 child: [EMPTY_CHILD; WIDTH],
             });
             for (lane, (b, child)) in children.iter().enumerate() {
-                let r = flatten(child, ids, tris, nodes, packets);
+                let r = flatten(child, nodes, packet_slots);
                 let n = &mut nodes[idx];
                 n.child[lane] = r;
                 for axis in 0..3 {
@@ -873,6 +863,28 @@ fn flatten(node: &BuildNode, ids: &[u32], tris: &[Triangle], nodes: &mut Vec<Nod
             }
             idx as u32
         }
+    }
+}
+
+/// The packet of the `count` triangles from slot `first` on; unused lanes
+/// hold a degenerate triangle that no ray hits.
+fn make_packet(first: u32, count: u32, ids: &[u32], tris: &[Triangle]) -> Tri4 {
+    let mut lanes = [Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO); WIDTH];
+    let mut slot = [u32::MAX; WIDTH];
+    for lane in 0..count as usize {
+        let s = first as usize + lane;
+        lanes[lane] = tris[ids[s] as usize];
+        slot[lane] = s as u32;
+    }
+    let gather = |f: fn(&Triangle) -> Vec3| -> [Vec4; 3] {
+        let v = lanes.map(|t| f(&t));
+        [0, 1, 2].map(|axis| Vec4::new(v[0][axis], v[1][axis], v[2][axis], v[3][axis]))
+    };
+    Tri4 {
+        v0: gather(|t| t.v0),
+        e1: gather(|t| t.e1),
+        e2: gather(|t| t.e2),
+        slot,
     }
 }
 
