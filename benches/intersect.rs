@@ -1,14 +1,18 @@
 //! Ray-triangle tests (issue 2): Cramer's rule against Moller-Trumbore on the
 //! same 4096 random (ray, triangle) pairs, about half of them hits. Criterion
 //! reports the time of one pass over all pairs; divide by 4096 for ns per
-//! test, or read the throughput line (tests per second).
+//! test, or read the throughput line (tests per second). Time is the
+//! benchmark thread's CPU time, so other work on a shared machine counts as
+//! little as it can.
 //!
 //! cargo bench --bench intersect
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use raytracer::geometry::Triangle;
 use raytracer::math::{Ray, Vec3};
 use raytracer::sampling::Rng;
+use std::time::Duration;
 
 const PAIRS: usize = 4096;
 
@@ -29,7 +33,36 @@ fn pairs() -> Vec<(Ray, Triangle)> {
         .collect()
 }
 
-fn bench(c: &mut Criterion) {
+/// Criterion measurement by the thread's CPU time, shown like wall time.
+struct ThreadCpuTime;
+
+static WALL: WallTime = WallTime;
+
+impl Measurement for ThreadCpuTime {
+    type Intermediate = cpu_time::ThreadTime;
+    type Value = Duration;
+
+    fn start(&self) -> Self::Intermediate {
+        cpu_time::ThreadTime::now()
+    }
+    fn end(&self, start: Self::Intermediate) -> Duration {
+        start.elapsed()
+    }
+    fn add(&self, a: &Duration, b: &Duration) -> Duration {
+        *a + *b
+    }
+    fn zero(&self) -> Duration {
+        Duration::ZERO
+    }
+    fn to_f64(&self, d: &Duration) -> f64 {
+        d.as_nanos() as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        WALL.formatter()
+    }
+}
+
+fn bench(c: &mut Criterion<ThreadCpuTime>) {
     let pairs = pairs();
     let hits = pairs
         .iter()
@@ -61,5 +94,9 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(ThreadCpuTime);
+    targets = bench
+}
 criterion_main!(benches);

@@ -138,6 +138,15 @@ fn main() -> ExitCode {
         );
     }
     let bvh = Bvh::build(&tris);
+    let st = bvh.stats();
+    println!(
+        "stats impl=ours nodes={} leaves={} depth={} sah_cost={:.2} mib={:.2}",
+        st.nodes,
+        st.leaves,
+        st.depth,
+        st.sah_cost,
+        st.bytes as f64 / (1 << 20) as f64
+    );
     for set in sets.iter().filter(|_| args.reps > 0) {
         let (hits, time) = match set.query {
             Query::Closest => time_set(set, args.reps, |r| bvh.intersect(&r.ray, r.t_min, r.t_max).is_some()),
