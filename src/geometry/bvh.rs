@@ -17,9 +17,12 @@
 //! nearest child first and skip stacked nodes farther than the closest hit so
 //! far; `occluded` stops at the first blocker. The far distance of every box
 //! is widened by 1 + 2 gamma(3) (Ize 2013, "Robust BVH Ray Traversal"), so
-//! rounding never culls a box the ray touches. Leaves test four triangles at
-//! once with exactly the arithmetic of `Triangle::intersect_mt`, so a query
-//! returns bit for bit what a loop over all triangles would.
+//! rounding never culls a box the ray touches; rays parallel to an axis, even
+//! lying in a box face, are handled exactly (see `TraversalRay::new`). Leaves
+//! test four triangles at once with exactly the arithmetic of
+//! `Triangle::intersect_mt`, so a query returns bit for bit what a loop over
+//! all triangles would (but for the test's spurious hits far off a triangle
+//! for rays almost in its plane, which the boxes rightly cull).
 
 use super::triangle::{TriHit, Triangle};
 use crate::math::{Aabb, Ray, Vec3};
