@@ -270,9 +270,15 @@ impl Scene {
             }
         }
 
+        if tris.len() > Bvh::MAX_TRIANGLES {
+            return Err(Error::Scene(format!(
+                "{} triangles; the BVH holds at most {}",
+                tris.len(),
+                Bvh::MAX_TRIANGLES
+            )));
+        }
         let start = std::time::Instant::now();
-        let bounds: Vec<_> = tris.iter().map(|t| t.bounds()).collect();
-        let bvh = Bvh::build(&bounds);
+        let bvh = Bvh::build(&tris);
         let bvh_build_seconds = start.elapsed().as_secs_f64();
         let triangles = bvh.order.iter().map(|&i| tris[i as usize]).collect();
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
@@ -307,7 +313,7 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut best_t = t_max;
         let mut best = None;
-        if let Some((slot, h)) = self.bvh.intersect(&self.triangles, ray, t_min, t_max) {
+        if let Some((slot, h)) = self.bvh.intersect(ray, t_min, t_max) {
             best_t = h.t;
             best = Some((true, slot as usize, h.u, h.v));
         }
@@ -370,7 +376,7 @@ impl Scene {
         self.spheres
             .iter()
             .any(|s| s.sphere.intersect(ray, t_min, t_max).is_some())
-            || self.bvh.occluded(&self.triangles, ray, t_min, t_max)
+            || self.bvh.occluded(ray, t_min, t_max)
     }
 
     pub fn material(&self, id: u32) -> &Material {
