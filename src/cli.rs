@@ -5,7 +5,9 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use raytracer::film::{Filter, PixelRect};
 use raytracer::integrator::{IntegratorKind, RenderSettings};
+use raytracer::photon::{Gather, GatherFilter, PhotonSettings};
 use raytracer::scene::{LoadOptions, LoadedScene};
+use raytracer::SceneDesc;
 use std::path::PathBuf;
 
 /// Largest image side we accept; beyond it the film alone would not fit.
@@ -116,9 +118,40 @@ pub struct RenderArgs {
     /// Pixel reconstruction filter.
     #[arg(long, value_enum, default_value_t = Filter::Box)]
     pub filter: Filter,
-    /// Light transport algorithm.
-    #[arg(long, value_enum, default_value_t = IntegratorKind::Direct)]
-    pub integrator: IntegratorKind,
+    /// Light transport algorithm [default: the scene's: photon for cornell, else direct].
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorKind>,
+    /// Path tracer: samples per pixel (replaces --ssaa) [default: 64].
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// Path tracer: most bounces, 1 = direct light only [default: no limit, Russian roulette ends paths].
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
+    /// Photons emitted; 0 turns photon mapping off (direct light only) [default: the scene's, else 200000].
+    #[arg(long, value_name = "N")]
+    pub photons: Option<u64>,
+    /// Surface hits traced per photon, the first being its direct-light hit [default: the scene's, else 5].
+    #[arg(long, value_name = "N")]
+    pub max_bounces: Option<u32>,
+    /// Store the photons' first hits (direct light) too; final gathering always does.
+    #[arg(long)]
+    pub store_first_hit: bool,
+    /// Photon gather radius; with --gather-k, the largest radius searched [default: the scene's, else 0.1; unbounded with --gather-k].
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    pub gather_radius: Option<f32>,
+    /// Gather the K nearest photons (the radius is the distance to the K-th) instead of all within the radius.
+    #[arg(long, value_name = "K")]
+    pub gather_k: Option<u32>,
+    /// Weight gathered photons with Jensen's cone filter (k = 1.1), normalised.
+    #[arg(long)]
+    pub cone_filter: bool,
+    /// Photons a gather may use, by the cosine between their surface normal and the shaded one: none (any photon
+    /// arriving on the shaded side), normal (> 0.9), report (> 0.25) [default: the scene's, else none].
+    #[arg(long, value_enum)]
+    pub gather_filter: Option<GatherFilter>,
+    /// Final-gather rays per shading point; 0 reads the photon map at the visible point [default: the scene's, else 0].
+    #[arg(long, value_name = "N")]
+    pub final_gather: Option<u32>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -204,6 +237,11 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
         (None, Some(t)) => Some(parse_tile(t, w, h, |k| std::env::var(k).ok())?),
         (None, None) => None,
     };
+    let spp = args.spp.unwrap_or(64);
+    if spp == 0 || spp > 1 << 20 {
+        bail!("--spp {spp}: must be between 1 and {}", 1 << 20);
+    }
+    let photon = photon_settings(args, desc)?;
     raytracer::image_io::check_writable(&args.output).context("cannot write the output")?;
     let settings = RenderSettings {
         ssaa,
@@ -211,8 +249,11 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
         filter: args.filter,
         seed: args.seed,
         threads: args.threads,
-        integrator: args.integrator,
+        integrator: args.integrator.or(desc.settings.integrator).unwrap_or_default(),
         crop,
+        spp,
+        max_depth: args.max_depth,
+        photon,
     };
     Ok((loaded, settings))
 }
@@ -264,6 +305,43 @@ pub fn parse_tile(text: &str, w: u32, h: u32, env: impl Fn(&str) -> Option<Strin
         bail!("--tile {text}: need 0 <= I < N <= {h} (the image height)");
     }
     Ok(PixelRect::band(index, count, w, h))
+}
+
+/// Photon options over the scene's presets over the defaults, checked
+/// (including the memory the map may need) before any work starts.
+fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings> {
+    let preset = &desc.settings;
+    let default = PhotonSettings::default();
+    let k = args.gather_k.or(preset.gather_k);
+    // A k given on the command line is not bounded by the scene's radius.
+    let scene_radius = if args.gather_k.is_some() {
+        None
+    } else {
+        preset.gather_radius
+    };
+    let radius = args.gather_radius.or(scene_radius).unwrap_or(if k.is_some() {
+        f32::INFINITY
+    } else {
+        default.gather.radius
+    });
+    let settings = PhotonSettings {
+        photons: args.photons.or(preset.photons).unwrap_or(default.photons),
+        max_bounces: args.max_bounces.or(preset.max_bounces).unwrap_or(default.max_bounces),
+        store_first_hit: args.store_first_hit,
+        roulette: true,
+        gather: Gather {
+            radius,
+            k,
+            cone: args.cone_filter,
+            filter: args.gather_filter.or(preset.gather_filter).unwrap_or_default(),
+        },
+        final_gather: args
+            .final_gather
+            .or(preset.final_gather)
+            .unwrap_or(default.final_gather),
+    };
+    settings.validate()?;
+    Ok(settings)
 }
 
 #[cfg(test)]

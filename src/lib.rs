@@ -15,6 +15,7 @@ pub mod limits;
 pub mod material;
 pub mod math;
 pub mod metrics;
+pub mod photon;
 pub mod sampling;
 pub mod scene;
 pub mod viewer;

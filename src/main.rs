@@ -124,6 +124,16 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     }
     raytracer::image_io::write_image_in_frame(&out.film, &out.window, &[], &args.output, args.exposure)?;
     if !args.quiet {
+        if let Some(p) = &out.photons {
+            eprintln!(
+                "photons: {} emitted, {} stored ({:.1} MiB), traced in {:.2} s, kd-tree built in {:.3} s",
+                p.emitted,
+                p.stored,
+                p.bytes as f64 / (1 << 20) as f64,
+                p.trace_seconds,
+                p.build_seconds
+            );
+        }
         println!(
             "{} {}x{}{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
             scene.name,
@@ -133,7 +143,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
                 Some(r) => format!(" (crop {},{},{},{})", r.x0, r.y0, r.x1, r.y1),
                 None => String::new(),
             },
-            settings.ssaa * settings.ssaa,
+            settings.samples_per_pixel(),
             settings.shadow_samples,
             settings.integrator,
             out.seconds,

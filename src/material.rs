@@ -11,6 +11,10 @@ use std::f32::consts::FRAC_1_PI;
 pub enum Material {
     /// Lambertian: f = albedo / pi.
     Diffuse { albedo: Vec3 },
+    /// Lambertian that also emits radiance `le` from both sides, uniformly. It is
+    /// seen by camera and bounce rays only: shadow rays and photons come from
+    /// `Light`s, so use it for analytic scenes (the white furnace), not as a lamp.
+    Emissive { albedo: Vec3, le: Vec3 },
     /// Perfect specular reflection, scaled by `reflectance`.
     Mirror { reflectance: Vec3 },
     /// Smooth dielectric with index of refraction `ior` (outside is vacuum/air).
@@ -43,22 +47,27 @@ impl Material {
 
     /// The Lambertian BRDF value (zero for specular materials, whose BSDF is a delta).
     pub fn f(&self) -> Vec3 {
-        match self {
-            Material::Diffuse { albedo } => *albedo * FRAC_1_PI,
-            _ => Vec3::ZERO,
-        }
+        self.albedo() * FRAC_1_PI
     }
 
     /// Diffuse reflectance (zero for specular materials).
     pub fn albedo(&self) -> Vec3 {
         match self {
-            Material::Diffuse { albedo } => *albedo,
+            Material::Diffuse { albedo } | Material::Emissive { albedo, .. } => *albedo,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Emitted radiance, the same in every direction.
+    pub fn le(&self) -> Vec3 {
+        match self {
+            Material::Emissive { le, .. } => *le,
             _ => Vec3::ZERO,
         }
     }
 
     pub fn is_specular(&self) -> bool {
-        !matches!(self, Material::Diffuse { .. })
+        matches!(self, Material::Mirror { .. } | Material::Glass { .. })
     }
 
     /// Samples the specular lobe for outgoing direction `wo` (pointing away
@@ -67,7 +76,7 @@ impl Material {
     /// Fresnel reflectance, so the weight is 1 (or 1/eta^2 for radiance).
     pub fn sample_specular(&self, wo: Vec3, n: Vec3, u: f32, mode: Transport) -> Option<SpecularSample> {
         match *self {
-            Material::Diffuse { .. } => None,
+            Material::Diffuse { .. } | Material::Emissive { .. } => None,
             Material::Mirror { reflectance } => Some(SpecularSample {
                 wi: reflect(wo, n),
                 weight: reflectance,

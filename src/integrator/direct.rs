@@ -22,8 +22,8 @@ impl RadianceEstimator for DirectLighting {
         if let Some(l) = hit.light {
             return beta * scene.lights[l as usize].radiance();
         }
-        let f = scene.material(hit.material).f();
-        beta * f * irradiance(scene, &hit, wo, self.shadow_samples, rng, stats)
+        let m = scene.material(hit.material);
+        beta * (m.le() + m.f() * irradiance(scene, &hit, wo, self.shadow_samples, rng, stats))
     }
 }
 
@@ -66,7 +66,7 @@ pub fn irradiance(scene: &Scene, hit: &Hit, wo: Vec3, n: u32, rng: &mut Rng, sta
     let ng = hit.ng * flip;
     let ns = hit.ns * flip;
     let mut e = Vec3::ZERO;
-    for light in &scene.lights {
+    for (li, light) in scene.lights.iter().enumerate() {
         let shift = rng.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
@@ -85,11 +85,41 @@ pub fn irradiance(scene: &Scene, hit: &Hit, wo: Vec3, n: u32, rng: &mut Rng, sta
             let to_light = hit.p + ls.wi * ls.dist - o;
             let dist = to_light.length();
             stats.shadow_rays += 1;
-            if !scene.occluded(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4)) {
+            if !scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32) {
                 sum += ls.weight * cos;
             }
         }
         e += sum / n as f32;
     }
     e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::cornell;
+    use std::f32::consts::PI;
+
+    #[test]
+    fn ceiling_above_the_light_gets_the_inverse_square_irradiance() {
+        // Outside a uniform Lambertian sphere the irradiance at normal incidence is
+        // Phi / (4 pi d^2): 14 pi / (4 pi 0.5^2) = 14 on the ceiling 0.5 above the
+        // light's centre. Shadow rays towards the light's silhouette must not be
+        // blocked by the light itself.
+        let scene = Scene::build(cornell()).unwrap();
+        let p = Vec3::new(0.0, -1.0, -0.7);
+        let ray = Ray::new(Vec3::new(0.0, 0.0, -0.7), (p - Vec3::new(0.3, 0.0, -0.7)).normalize());
+        let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let mut rng = Rng::new(1, 2);
+        let mut stats = RayStats::default();
+        let n = 2000;
+        let e: Vec3 = (0..n)
+            .map(|_| irradiance(&scene, &hit, -ray.d, 4, &mut rng, &mut stats))
+            .sum::<Vec3>()
+            / n as f32;
+        let cos_d2 = (hit.p - Vec3::new(0.0, -0.5, -0.7)).normalize().y.abs()
+            / (hit.p - Vec3::new(0.0, -0.5, -0.7)).length_squared();
+        let expected = 14.0 * PI / (4.0 * PI) * cos_d2;
+        assert!((e.x - expected).abs() / expected < 0.01, "{e:?} vs {expected}");
+    }
 }

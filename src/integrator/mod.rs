@@ -5,12 +5,17 @@
 //! summed in a fixed order from random numbers keyed by (seed, pixel,
 //! sample), so the image is bit-identical for any thread count or tile order.
 
+#[cfg(test)]
+pub(crate) mod analytic;
 pub mod direct;
+pub mod path;
+pub mod photon;
 
 use crate::error::{Error, Result};
 use crate::film::{Film, Filter, FrameWindow, PixelRect};
 use crate::math::{Ray, Vec2, Vec3};
-use crate::sampling::{stratified, Rng};
+use crate::photon::{PhotonSettings, PhotonStats};
+use crate::sampling::{hammersley_shifted, stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -29,6 +34,10 @@ pub enum IntegratorKind {
     /// Direct light only (shadow rays to the lights).
     #[default]
     Direct,
+    /// Direct light by shadow rays, indirect light from a photon map.
+    Photon,
+    /// Reference path tracer (unbiased, slow to converge).
+    Path,
 }
 
 /// Settings common to every integrator.
@@ -45,6 +54,22 @@ pub struct RenderSettings {
     pub integrator: IntegratorKind,
     /// Render only this rectangle of the frame (`None`: the whole frame).
     pub crop: Option<PixelRect>,
+    /// Samples per pixel of the path tracer (it ignores `ssaa`).
+    pub spp: u32,
+    /// Path tracer: most bounces (1 = direct light only); `None`: unlimited.
+    pub max_depth: Option<u32>,
+    /// Photon mapping settings.
+    pub photon: PhotonSettings,
+}
+
+impl RenderSettings {
+    /// Camera samples per pixel of the chosen integrator.
+    pub fn samples_per_pixel(&self) -> u32 {
+        match self.integrator {
+            IntegratorKind::Path => self.spp,
+            _ => self.ssaa * self.ssaa,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -57,6 +82,9 @@ impl Default for RenderSettings {
             threads: None,
             integrator: IntegratorKind::Direct,
             crop: None,
+            spp: 64,
+            max_depth: None,
+            photon: PhotonSettings::default(),
         }
     }
 }
@@ -93,6 +121,8 @@ pub struct RenderOutput {
     pub window: FrameWindow,
     pub stats: RayStats,
     pub seconds: f64,
+    /// The photon pass, when there was one.
+    pub photons: Option<PhotonStats>,
 }
 
 /// The radiance carried along one camera ray.
@@ -117,15 +147,28 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     if settings.ssaa == 0 {
         return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
     }
+    if settings.integrator == IntegratorKind::Path && settings.spp == 0 {
+        return Err(Error::InvalidSetting("--spp must be at least 1".into()));
+    }
+    if settings.integrator == IntegratorKind::Photon {
+        settings.photon.validate()?;
+    }
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
-    let (film, stats, tiles_done) = with_threads(settings.threads, || match settings.integrator {
+    let ((film, stats, tiles_done), photons) = with_threads(settings.threads, || match settings.integrator {
         IntegratorKind::Direct => {
             let est = direct::DirectLighting {
                 shadow_samples: settings.shadow_samples,
             };
-            render_tiles(scene, settings, &est, on_tile)
+            (render_tiles(scene, settings, &est, on_tile), None)
         }
+        IntegratorKind::Path => {
+            let est = path::PathTracer {
+                max_depth: settings.max_depth,
+            };
+            (render_tiles(scene, settings, &est, on_tile), None)
+        }
+        IntegratorKind::Photon => photon::render(scene, settings, on_tile),
     })?;
     Ok(RenderOutput {
         film,
@@ -134,6 +177,7 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
         window,
         stats,
         seconds: start.elapsed().as_secs_f64(),
+        photons,
     })
 }
 
@@ -169,7 +213,7 @@ pub fn render_tiles(
 ) -> (Film, RayStats, u64) {
     let cam = &scene.camera;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
-    let spp = settings.ssaa * settings.ssaa;
+    let spp = settings.samples_per_pixel();
     let mut sums = vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize];
     let never = AtomicBool::new(false);
     let (stats, done) = accumulate_tiles(scene, settings, est, 0..spp, &mut sums, &never, on_tile).unwrap_or_default();
@@ -181,7 +225,7 @@ pub fn render_tiles(
 }
 
 /// Adds camera samples `samples` (indices into each pixel's fixed sequence of
-/// ssaa^2 samples) to the per-pixel sums of the crop rectangle (the whole
+/// `samples_per_pixel` samples) to the per-pixel sums of the crop rectangle (the whole
 /// frame without one), tile by tile.
 ///
 /// A render is this over `0..spp` followed by a division by spp; the preview
@@ -246,9 +290,10 @@ pub fn accumulate_tiles(
     Some((stats, done))
 }
 
-/// Adds samples `samples` of pixel (x, y) to `sum`, in index order. Sample s
-/// is jittered in stratum s of the pixel's ssaa x ssaa grid, with random
-/// numbers keyed by (seed, pixel, s).
+/// Adds samples `samples` of pixel (x, y) to `sum`, in index order, with
+/// random numbers keyed by (seed, pixel, s). When the sample count is a square
+/// n^2, sample s is jittered in stratum s of an n x n grid; otherwise the
+/// pixel's samples form a Hammersley set shifted per pixel.
 #[allow(clippy::too_many_arguments)]
 pub fn add_pixel_samples(
     scene: &Scene,
@@ -261,11 +306,22 @@ pub fn add_pixel_samples(
     stats: &mut RayStats,
 ) {
     let cam = &scene.camera;
-    let n = settings.ssaa;
+    let spp = settings.samples_per_pixel();
+    let n = (spp as f64).sqrt().round() as u32;
+    let grid = n * n == spp;
     let pixel = y as u64 * cam.width as u64 + x as u64;
+    let shift = if grid {
+        Vec2::ZERO
+    } else {
+        Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
+    };
     for s in samples {
         let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
-        let u = stratified(s, n, rng.next_2d());
+        let u = if grid {
+            stratified(s, n, rng.next_2d())
+        } else {
+            hammersley_shifted(s, spp, shift)
+        };
         let off = settings.filter.sample(u);
         let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
         stats.camera_rays += 1;

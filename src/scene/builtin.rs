@@ -162,6 +162,14 @@ pub fn cornell() -> SceneDesc {
     let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
     add_block(&mut d, &TALL_BLOCK, tall);
     d.lights.push(cornell_light());
+    // Photon mapping by default, with the settings measured best for time and
+    // error against the path tracer (BENCHMARKS-photon.md): 200k photons, up to
+    // 10 hits each (5 loses 1% of the light), radius 0.1, no gather filter (in
+    // this box of right angles it only darkens the corners).
+    d.settings.integrator = Some(crate::integrator::IntegratorKind::Photon);
+    d.settings.photons = Some(200_000);
+    d.settings.max_bounces = Some(10);
+    d.settings.gather_radius = Some(0.1);
     d
 }
 
@@ -268,9 +276,18 @@ pub fn cornell_final(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
         },
         power: Vec3::splat(16.0 * PI),
     });
+    // The report's final settings: 8x8 supersampling, 400 shadow samples,
+    // 750,000 photons of at most 5 bounces (first hits not stored), gathered
+    // within 0.4 where the surface normals' cosine exceeds 0.25.
     d.settings = SceneSettings {
         ssaa: Some(8),
         shadow_samples: Some(400),
+        integrator: Some(crate::integrator::IntegratorKind::Photon),
+        photons: Some(750_000),
+        max_bounces: Some(5),
+        gather_radius: Some(0.4),
+        gather_filter: Some(crate::photon::GatherFilter::Report),
+        ..SceneSettings::default()
     };
     Ok(d)
 }

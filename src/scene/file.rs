@@ -89,6 +89,29 @@ struct CameraSpec {
 struct SettingsSpec {
     ssaa: Option<u32>,
     shadow_samples: Option<u32>,
+    integrator: Option<IntegratorSpec>,
+    photons: Option<u64>,
+    max_bounces: Option<u32>,
+    gather_radius: Option<f32>,
+    gather_k: Option<u32>,
+    gather_filter: Option<GatherFilterSpec>,
+    final_gather: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum IntegratorSpec {
+    Direct,
+    Photon,
+    Path,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum GatherFilterSpec {
+    None,
+    Normal,
+    Report,
 }
 
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
@@ -308,9 +331,35 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
         if s.shadow_samples.is_some_and(|n| n > 65_536) {
             return Err(src.error(settings.span(), "settings: shadow_samples must be at most 65536"));
         }
+        if s.gather_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
+            return Err(src.error(settings.span(), "settings: gather_radius must be a positive number"));
+        }
+        if s.gather_k == Some(0) {
+            return Err(src.error(settings.span(), "settings: gather_k must be at least 1"));
+        }
+        if s.max_bounces == Some(0) {
+            return Err(src.error(settings.span(), "settings: max_bounces must be at least 1"));
+        }
+        use crate::integrator::IntegratorKind;
+        use crate::photon::GatherFilter;
         desc.settings = SceneSettings {
             ssaa: s.ssaa,
             shadow_samples: s.shadow_samples,
+            integrator: s.integrator.map(|i| match i {
+                IntegratorSpec::Direct => IntegratorKind::Direct,
+                IntegratorSpec::Photon => IntegratorKind::Photon,
+                IntegratorSpec::Path => IntegratorKind::Path,
+            }),
+            photons: s.photons,
+            max_bounces: s.max_bounces,
+            gather_radius: s.gather_radius,
+            gather_k: s.gather_k,
+            gather_filter: s.gather_filter.map(|f| match f {
+                GatherFilterSpec::None => GatherFilter::None,
+                GatherFilterSpec::Normal => GatherFilter::Normal,
+                GatherFilterSpec::Report => GatherFilter::Report,
+            }),
+            final_gather: s.final_gather,
         };
     }
 

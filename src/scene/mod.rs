@@ -84,6 +84,14 @@ pub struct SphereDesc {
 pub struct SceneSettings {
     pub ssaa: Option<u32>,
     pub shadow_samples: Option<u32>,
+    pub integrator: Option<crate::integrator::IntegratorKind>,
+    /// Photon mapping presets (see `photon::PhotonSettings`).
+    pub photons: Option<u64>,
+    pub max_bounces: Option<u32>,
+    pub gather_radius: Option<f32>,
+    pub gather_k: Option<u32>,
+    pub gather_filter: Option<crate::photon::GatherFilter>,
+    pub final_gather: Option<u32>,
 }
 
 /// Everything needed to build a scene, before any acceleration structure.
@@ -376,6 +384,18 @@ impl Scene {
         self.spheres
             .iter()
             .any(|s| s.sphere.intersect(ray, t_min, t_max).is_some())
+            || self.bvh.occluded(ray, t_min, t_max)
+    }
+
+    /// Whether anything but light `light`'s own sphere blocks the segment: the
+    /// shadow test towards a point sampled on that light. The light itself is
+    /// left out because near its silhouette the sampled point's distance is
+    /// ill-conditioned (a tangent ray), and a relative epsilon on `t_max` then
+    /// lets the light shadow itself.
+    pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
+        self.spheres
+            .iter()
+            .any(|s| s.light != Some(light) && s.sphere.intersect(ray, t_min, t_max).is_some())
             || self.bvh.occluded(ray, t_min, t_max)
     }
 

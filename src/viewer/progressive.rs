@@ -77,7 +77,9 @@ impl ViewIntegrator for DirectView {
 /// The view integrator for the render settings' integrator.
 pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
     match settings.integrator {
-        IntegratorKind::Direct => Box::new(DirectView::new(settings)),
+        // The preview does not yet trace photons: photon and path renders are
+        // previewed with their direct light.
+        IntegratorKind::Direct | IntegratorKind::Photon | IntegratorKind::Path => Box::new(DirectView::new(settings)),
     }
 }
 
@@ -247,7 +249,7 @@ mod tests {
             seed: 11,
             threads: Some(2),
             integrator: IntegratorKind::Direct,
-            crop: None,
+            ..RenderSettings::default()
         }
     }
 

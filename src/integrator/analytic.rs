@@ -1,0 +1,90 @@
+//! Scenes with known answers for integrator and photon tests: the inside of a
+//! diffuse sphere (white furnace, or lit by a small sphere light at its centre)
+//! and a closed diffuse box.
+
+use crate::geometry::Sphere;
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Vec3;
+use crate::scene::{CameraDesc, Scene, SceneDesc, SceneSettings, SphereDesc, TriangleDesc};
+
+fn empty(camera: CameraDesc) -> SceneDesc {
+    SceneDesc {
+        name: "analytic".into(),
+        camera,
+        materials: vec![],
+        triangles: vec![],
+        spheres: vec![],
+        lights: vec![],
+        settings: SceneSettings::default(),
+    }
+}
+
+/// A camera inside, off the centre, looking away from it at the wall.
+fn inside_camera(size: u32) -> CameraDesc {
+    CameraDesc {
+        position: Vec3::new(0.0, 0.0, 0.3),
+        look_at: Vec3::new(0.0, 0.0, 1.0),
+        up: Vec3::Y,
+        fov_y_deg: 60.0,
+        width: size,
+        height: size,
+    }
+}
+
+/// The inside of a sphere of radius 1 at the origin, of the given material,
+/// with an optional sphere light (radius, power) at its centre.
+pub fn closed_sphere(material: Material, light: Option<(f32, f32)>, size: u32) -> Scene {
+    let mut d = empty(inside_camera(size));
+    let m = d.material("wall", material);
+    d.spheres.push(SphereDesc {
+        sphere: Sphere {
+            centre: Vec3::ZERO,
+            radius: 1.0,
+        },
+        material: m,
+    });
+    if let Some((radius, power)) = light {
+        d.lights.push(Light::Sphere {
+            sphere: Sphere {
+                centre: Vec3::ZERO,
+                radius,
+            },
+            power: Vec3::splat(power),
+        });
+    }
+    Scene::build(d).unwrap()
+}
+
+/// A closed cube [-1, 1]^3 of 12 triangles of one grey albedo, lit by `light`.
+pub fn closed_box(albedo: f32, light: Light) -> Scene {
+    let mut d = empty(inside_camera(8));
+    let m = d.material("wall", Material::diffuse(albedo, albedo, albedo));
+    let c = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { -1.0 } else { 1.0 },
+        )
+    };
+    // Each face as two triangles over its four corners.
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    for f in faces {
+        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            d.triangles.push(TriangleDesc {
+                vertices: t.map(c),
+                normals: None,
+                material: m,
+            });
+        }
+    }
+    d.lights.push(light);
+    Scene::build(d).unwrap()
+}

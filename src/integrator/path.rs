@@ -1,0 +1,152 @@
+//! Reference path tracer: the unbiased estimate the photon mapper is measured
+//! against.
+//!
+//! pbrt-v4's `PathIntegrator` (13.4) reduced to diffuse surfaces: at every
+//! vertex, next-event estimation to the lights (one shadow ray per light,
+//! `direct::irradiance`), then a cosine-distributed bounce (throughput *= albedo)
+//! and, from the third vertex on, Russian roulette with survival probability
+//! min(max throughput, 0.95). A light hit by a camera ray gives its Le; after a
+//! bounce only next-event estimation counts light from lights (one sphere light
+//! at a time, so no MIS is needed). Emissive surfaces are not sampled by shadow
+//! rays, so their Le counts wherever a path hits them.
+//!
+//! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
+//! bounces (0: emitted light only, 1: direct light only; default: no limit,
+//! roulette ends paths).
+
+use super::direct::irradiance;
+use super::{RadianceEstimator, RayStats};
+use crate::math::{offset_origin, to_world, Ray, Vec3};
+use crate::sampling::{cosine_hemisphere, Rng};
+use crate::scene::Scene;
+
+/// Roulette starts after this many bounces.
+const ROULETTE_DEPTH: u32 = 2;
+/// Survival probability cap, so that paths in a white furnace end too.
+const MAX_SURVIVAL: f32 = 0.95;
+
+pub struct PathTracer {
+    /// Most bounces: emission is counted up to this many bounces, next-event
+    /// estimation at one fewer (1: direct light only); `None`: unlimited.
+    pub max_depth: Option<u32>,
+}
+
+impl RadianceEstimator for PathTracer {
+    fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let mut ray = *camera_ray;
+        let mut depth = 0;
+        while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
+            if let Some(li) = hit.light {
+                if depth == 0 {
+                    l += beta * scene.lights[li as usize].radiance();
+                }
+                break;
+            }
+            let m = scene.material(hit.material);
+            l += beta * m.le();
+            // The last vertex only adds what it emits (D vertices: D bounces).
+            if self.max_depth.is_some_and(|d| depth >= d) {
+                break;
+            }
+            // Next-event estimation.
+            let wo = -ray.d;
+            l += beta * m.f() * irradiance(scene, &hit, wo, 1, rng, stats);
+            depth += 1;
+            // Bounce: f cos / pdf = albedo for a cosine-distributed direction.
+            let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
+            let (ng, ns) = (hit.ng * side, hit.ns * side);
+            let d = to_world(cosine_hemisphere(rng.next_2d()), ns);
+            if d.dot(ng) <= 0.0 {
+                break;
+            }
+            beta *= m.albedo();
+            if depth >= ROULETTE_DEPTH {
+                let q = beta.max_element().min(MAX_SURVIVAL);
+                if rng.next_f32() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            stats.other_rays += 1;
+            ray = Ray::new(offset_origin(hit.p, ng, d), d);
+        }
+        l
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::integrator::analytic::closed_sphere;
+    use crate::integrator::{render, IntegratorKind, RenderSettings};
+    use crate::material::Material;
+    use crate::math::Vec3;
+    use std::f32::consts::PI;
+
+    fn path(spp: u32, max_depth: Option<u32>) -> RenderSettings {
+        RenderSettings {
+            integrator: IntegratorKind::Path,
+            spp,
+            max_depth,
+            ..RenderSettings::default()
+        }
+    }
+
+    #[test]
+    fn white_furnace_converges_to_le_over_one_minus_albedo() {
+        for (a, le) in [(0.5, 1.0), (0.8, 0.3)] {
+            let scene = closed_sphere(
+                Material::Emissive {
+                    albedo: Vec3::splat(a),
+                    le: Vec3::new(le, 2.0 * le, 0.5 * le),
+                },
+                None,
+                16,
+            );
+            let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+            let mean = film.mean(0, 0, 16, 16);
+            let expected = Vec3::new(le, 2.0 * le, 0.5 * le) / (1.0 - a);
+            let err = ((mean - expected) / expected).abs().max_element();
+            assert!(err < 0.01, "albedo {a}: {mean:?} vs {expected:?}");
+        }
+    }
+
+    #[test]
+    fn depth_limit_counts_bounces() {
+        // With at most D bounces, L = Le (1 + a + ... + a^D); D = 0 sees emission only.
+        let (a, le) = (0.5, 1.0);
+        let scene = closed_sphere(
+            Material::Emissive {
+                albedo: Vec3::splat(a),
+                le: Vec3::splat(le),
+            },
+            None,
+            8,
+        );
+        // The first two path vertices are always traced (exact); later ones
+        // face Russian roulette (right on average).
+        for (d, tolerance) in [(0u32, 1e-4), (1, 1e-4), (2, 0.01), (4, 0.01)] {
+            let film = render(&scene, &path(256, Some(d)), &|| {}).unwrap().film;
+            let expected = (0..=d).map(|k| a.powi(k as i32)).sum::<f32>() * le;
+            let mean = film.mean(0, 0, 8, 8).x;
+            assert!(
+                (mean - expected).abs() / expected < tolerance,
+                "depth {d}: {mean} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn sphere_lit_from_its_centre_matches_radiosity() {
+        // Direct irradiance E0 = Phi / (4 pi R^2) everywhere on the wall; with every
+        // bounce landing on the wall again, L = a E0 / (pi (1 - a)).
+        let (a, phi) = (0.6, 10.0);
+        let scene = closed_sphere(Material::diffuse(a, a, a), Some((0.01, phi)), 16);
+        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let e0 = phi / (4.0 * PI);
+        let expected = a * e0 / (PI * (1.0 - a));
+        let mean = film.mean(0, 0, 16, 16).x;
+        assert!((mean - expected).abs() / expected < 0.01, "{mean} vs {expected}");
+    }
+}

@@ -1,0 +1,299 @@
+//! Photon mapping integrator: direct light by shadow rays, indirect light from
+//! the photon map (Jensen 2001, "Realistic Image Synthesis Using Photon
+//! Mapping", chapter 9).
+//!
+//! At a camera ray's diffuse hit x:
+//! - without final gathering, L = Le + f E_direct(shadow rays) + f E_photons(x),
+//!   where the map holds only photons after their first bounce (indirect
+//!   light), or first hits too when `--shadow-samples 0` leaves direct light to
+//!   the map;
+//! - with final gathering (9.3), N cosine-distributed rays leave x and the
+//!   indirect light is albedo x the mean radiance they bring back. At a gather
+//!   ray's hit y the radiance is Le(y) + f(y) E_photons(y) with the *global*
+//!   map, first-hit photons included: they are the direct light at y, i.e. the
+//!   one-bounce indirect light at x. A gather ray that reaches a light brings
+//!   nothing back, since shadow rays already counted that light (unless they are
+//!   off). So every path light -> ... -> y -> x -> camera is counted once, and
+//!   the only bias left is the blur of the density estimate one bounce away.
+//!
+//! Parameters (see `PhotonSettings`): `--photons`, `--max-bounces`,
+//! `--store-first-hit`, `--gather-radius`, `--gather-k`, `--cone-filter`,
+//! `--gather-filter`, `--final-gather`.
+
+use super::direct::irradiance;
+use super::{RadianceEstimator, RayStats};
+use crate::math::{offset_origin, to_world, Ray, Vec3};
+use crate::photon::estimate;
+use crate::photon::map::Neighbour;
+use crate::photon::{Gather, PhotonMap};
+use crate::sampling::{cosine_hemisphere, hammersley_shifted, Rng};
+use crate::scene::{Hit, Scene};
+use std::cell::RefCell;
+
+pub struct PhotonMapping<'a> {
+    /// `None` when no photons were traced: direct light only.
+    pub map: Option<&'a PhotonMap>,
+    pub gather: Gather,
+    pub shadow_samples: u32,
+    pub final_gather: u32,
+}
+
+thread_local! {
+    /// k-nearest scratch space, reused across shading points of a thread.
+    static SCRATCH: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
+}
+
+impl PhotonMapping<'_> {
+    /// Photon irradiance at a hit, on the side `wo` faces.
+    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, direct: bool) -> Vec3 {
+        let n = if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng };
+        SCRATCH.with(|s| estimate::irradiance(map, &self.gather, hit.p, n, direct, &mut s.borrow_mut()))
+    }
+
+    /// Indirect irradiance at `hit` by final gathering: the mean radiance
+    /// brought back by cosine-distributed rays, times pi.
+    fn final_gather(
+        &self,
+        scene: &Scene,
+        map: &PhotonMap,
+        hit: &Hit,
+        wo: Vec3,
+        rng: &mut Rng,
+        stats: &mut RayStats,
+    ) -> Vec3 {
+        let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
+        let (ng, ns) = (hit.ng * side, hit.ns * side);
+        let n = self.final_gather;
+        let shift = rng.next_2d();
+        let mut sum = Vec3::ZERO;
+        for i in 0..n {
+            let d = to_world(cosine_hemisphere(hammersley_shifted(i, n, shift)), ns);
+            if d.dot(ng) <= 0.0 {
+                continue;
+            }
+            stats.other_rays += 1;
+            let Some(y) = scene.intersect(&Ray::new(offset_origin(hit.p, ng, d), d), 0.0, f32::INFINITY) else {
+                continue;
+            };
+            if let Some(l) = y.light {
+                if self.shadow_samples == 0 {
+                    sum += scene.lights[l as usize].radiance();
+                }
+                continue;
+            }
+            let m = scene.material(y.material);
+            sum += m.le() + m.f() * self.photon_irradiance(map, &y, -d, true);
+        }
+        // E = integral L cos = pi * mean(L) under the pdf cos / pi.
+        sum * (std::f32::consts::PI / n as f32)
+    }
+}
+
+impl RadianceEstimator for PhotonMapping<'_> {
+    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+        let Some(hit) = scene.intersect(ray, 0.0, f32::INFINITY) else {
+            return Vec3::ZERO;
+        };
+        if let Some(l) = hit.light {
+            return scene.lights[l as usize].radiance();
+        }
+        let m = scene.material(hit.material);
+        let wo = -ray.d;
+        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats);
+        if let Some(map) = self.map {
+            e += if self.final_gather > 0 {
+                self.final_gather(scene, map, &hit, wo, rng, stats)
+            } else {
+                self.photon_irradiance(map, &hit, wo, self.shadow_samples == 0)
+            };
+        }
+        m.le() + m.f() * e
+    }
+}
+
+/// Traces the photon map (if any photons are asked for), then renders.
+pub fn render(
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    on_tile: &(dyn Fn() + Sync),
+) -> ((crate::Film, RayStats, u64), Option<crate::photon::PhotonStats>) {
+    let mut ps = settings.photon;
+    // Final gathering and photon-only direct light read first-hit photons.
+    ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
+    let built = (ps.photons > 0).then(|| crate::photon::build_map(scene, &ps, settings.seed));
+    let est = PhotonMapping {
+        map: built.as_ref().map(|(m, _)| m),
+        gather: ps.gather,
+        shadow_samples: settings.shadow_samples,
+        final_gather: ps.final_gather,
+    };
+    let out = super::render_tiles(scene, settings, &est, on_tile);
+    (out, built.map(|(_, s)| s))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::integrator::analytic::closed_sphere;
+    use crate::integrator::{render, IntegratorKind, RenderSettings};
+    use crate::material::Material;
+    use crate::photon::PhotonSettings;
+    use std::f32::consts::PI;
+
+    fn photon(photons: u64, final_gather: u32) -> RenderSettings {
+        let mut s = RenderSettings {
+            integrator: IntegratorKind::Photon,
+            ssaa: 2,
+            ..RenderSettings::default()
+        };
+        s.photon = PhotonSettings {
+            photons,
+            final_gather,
+            ..PhotonSettings::default()
+        };
+        s
+    }
+
+    #[test]
+    fn sphere_lit_from_its_centre_matches_truncated_radiosity() {
+        // Direct irradiance E0 = Phi / (4 pi R^2) on the whole wall, and a photon's
+        // k-th hit carries Phi a^(k-1) spread evenly over it. Photons reach at most
+        // B = 5 hits, so L = (a E0 / pi) (1 + a + ... + a^(B-1)); with final
+        // gathering the gather rays see all B hits one bounce away, so
+        // L = (a E0 / pi) (1 + a (1 + ... + a^(B-1))). A ball of radius r around a
+        // point of a sphere cuts out a cap of area exactly pi r^2, so the density
+        // estimate has no curvature bias here.
+        let (a, phi) = (0.5f32, 10.0);
+        let scene = closed_sphere(Material::diffuse(a, a, a), Some((0.01, phi)), 16);
+        let e0 = phi / (4.0 * PI);
+        let geometric = |n: i32| (1.0 - a.powi(n)) / (1.0 - a);
+        for (fg, expected) in [
+            (0, a * e0 / PI * geometric(5)),
+            (16, a * e0 / PI * (1.0 + a * geometric(5))),
+        ] {
+            let film = render(&scene, &photon(200_000, fg), &|| {}).unwrap().film;
+            let mean = film.mean(0, 0, 16, 16).x;
+            assert!(
+                (mean - expected).abs() / expected < 0.02,
+                "final gather {fg}: {mean} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn no_photons_is_direct_light_only() {
+        let scene = crate::Scene::build(crate::scene::builtin::cornell()).unwrap();
+        let mut scene = scene;
+        scene.camera = crate::camera::Camera::new(
+            scene.camera.position,
+            glam::Vec3::ZERO,
+            glam::Vec3::new(0.0, -1.0, 0.0),
+            53.13,
+            24,
+            24,
+        )
+        .unwrap();
+        let direct = RenderSettings::default();
+        let a = render(&scene, &direct, &|| {}).unwrap();
+        let b = render(&scene, &photon(0, 0), &|| {}).unwrap();
+        let c = render(&scene, &RenderSettings { ssaa: 2, ..direct }, &|| {}).unwrap();
+        assert!(a.photons.is_none() && b.photons.is_none());
+        assert_eq!(b.film, c.film);
+    }
+
+    fn small_cornell(size: u32) -> crate::Scene {
+        let mut d = crate::scene::builtin::cornell();
+        d.camera.width = size;
+        d.camera.height = size;
+        crate::Scene::build(d).unwrap()
+    }
+
+    /// Mean over 8x8-pixel blocks, and whether a block shows the light.
+    fn blocks(film: &crate::Film) -> Vec<(f32, bool)> {
+        let mut out = vec![];
+        for by in 0..film.height / 8 {
+            for bx in 0..film.width / 8 {
+                let (x0, y0) = (bx * 8, by * 8);
+                let lum = |x, y| crate::math::luminance(film.get(x, y));
+                let light = (y0..y0 + 8).any(|y| (x0..x0 + 8).any(|x| lum(x, y) > 10.0));
+                let mean = (y0..y0 + 8).flat_map(|y| (x0..x0 + 8).map(move |x| (x, y)));
+                out.push((mean.map(|(x, y)| lum(x, y)).sum::<f32>() / 64.0, light));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn cornell_matches_the_path_traced_reference() {
+        let scene = small_cornell(64);
+        let reference = RenderSettings {
+            integrator: IntegratorKind::Path,
+            spp: 128,
+            ..RenderSettings::default()
+        };
+        let mut pm = photon(100_000, 0);
+        pm.photon.max_bounces = 10;
+        let r = blocks(&render(&scene, &reference, &|| {}).unwrap().film);
+        let p = blocks(&render(&scene, &pm, &|| {}).unwrap().film);
+        let (mut sr, mut sp, mut sq, mut n) = (0.0, 0.0, 0.0, 0.0);
+        let mut worst = 0.0f32;
+        for (&(a, light), &(b, _)) in r.iter().zip(&p) {
+            if light {
+                continue;
+            }
+            sr += a;
+            sp += b;
+            let e = (b - a) / a;
+            sq += e * e;
+            worst = worst.max(e.abs());
+            n += 1.0;
+        }
+        let (ratio, rms) = (sp / sr, (sq / n).sqrt());
+        // Mean luminance (light left out) within 5%; measured: 0.988. The photon
+        // estimate's biases (blur, dark corners and edges, 10-hit truncation) cost
+        // about 1% at this radius.
+        assert!((ratio - 1.0).abs() < 0.05, "luminance ratio {ratio}");
+        // Per 8x8 block: the reference's noise is ~1% (9% per pixel at 64 spp,
+        // over 64 pixels at 128 spp) and the photon map's low-frequency noise 2-3%
+        // (about 100 photons per gather disc at 100k photons, 10% noise on the
+        // indirect light, which is a third of the total, and a block sees about
+        // two discs). Its bias is largest where the gather disc reaches past a
+        // surface's edge: the floor along the open front of the room and the
+        // corners come out 5-10% dark, the floor by the short block 6% bright.
+        // Measured: RMS 2.8%, worst block 9.7%; a bug in the power, the density
+        // normalisation or the filters moves these by far more.
+        assert!(rms < 0.05, "rms block error {rms}, worst {worst}");
+        assert!(worst < 0.15, "worst block error {worst}, rms {rms}");
+    }
+
+    #[test]
+    fn purple_wall_bleeds_onto_the_floor() {
+        // How purple the floor looks, (r + b) / 2g, over a band of 27 floor points
+        // from the front to the back of the room.
+        let scene = small_cornell(128);
+        let purple = |film: &crate::Film, x0: f32| {
+            let mut c = glam::Vec3::ZERO;
+            for (i, j) in (0..9).flat_map(|i| (0..3).map(move |j| (i, j))) {
+                let p = glam::Vec3::new(x0 + 0.07 * j as f32, 1.0, -0.9 + 0.1 * i as f32);
+                let (x, y) = scene.camera.project(p).unwrap();
+                c += film.get(x as u32, y as u32);
+            }
+            (c.x + c.z) / (2.0 * c.y)
+        };
+        let (wall, centre) = (-0.94, -0.4);
+        let direct = RenderSettings {
+            ssaa: 2,
+            ..RenderSettings::default()
+        };
+        let direct = render(&scene, &direct, &|| {}).unwrap().film;
+        let pm = render(&scene, &photon(400_000, 0), &|| {}).unwrap().film;
+        // Direct light is white: the green floor's own 0.2 everywhere.
+        assert!((purple(&direct, wall) - 0.2).abs() < 1e-3);
+        assert!((purple(&direct, centre) - 0.2).abs() < 1e-3);
+        // The path-traced reference (4096 spp) has 0.2203 by the wall and 0.2113 at
+        // the centre: the excess over 0.2 is 1.8 times larger by the wall. Photon
+        // maps with seeds 0..5 give ratios of 1.4 to 1.8.
+        let (w, c) = (purple(&pm, wall) - 0.2, purple(&pm, centre) - 0.2);
+        assert!(c > 0.005, "centre excess {c}");
+        assert!(w > 1.25 * c, "excess by the wall {w}, at the centre {c}");
+    }
+}
