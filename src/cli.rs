@@ -62,6 +62,10 @@ pub struct CompareArgs {
     /// Relative error shown as full red in the --diff picture.
     #[arg(long, default_value_t = 0.5)]
     pub diff_scale: f32,
+    /// Leave out pixels whose reference luminance is above this (a visible
+    /// light, say), so they do not dominate the figures.
+    #[arg(long, value_name = "L")]
+    pub max_luminance: Option<f32>,
 }
 
 /// `view` takes the render options; `--output` names the pictures P saves:

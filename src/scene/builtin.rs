@@ -163,7 +163,7 @@ pub fn cornell() -> SceneDesc {
     add_block(&mut d, &TALL_BLOCK, tall);
     d.lights.push(cornell_light());
     // Photon mapping by default, with the settings measured best for time and
-    // error against the path tracer (BENCHMARKS-photon.md): 200k photons, up to
+    // error against the path tracer (BENCHMARKS.md): 200k photons, up to
     // 10 hits each (5 loses 1% of the light), radius 0.1, no gather filter (in
     // this box of right angles it only darkens the corners).
     d.settings.integrator = Some(crate::integrator::IntegratorKind::Photon);
