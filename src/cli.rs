@@ -229,9 +229,9 @@ fn state_files(args: &StateFileArgs, settings: &RenderSettings) -> Result<StateF
         }
     }
     let minutes = args.checkpoint_every;
-    if !(minutes.is_finite() && minutes >= 0.0) {
-        bail!("--checkpoint-every {minutes}: must be a number of minutes >= 0");
-    }
+    let every = std::time::Duration::try_from_secs_f64(minutes * 60.0).map_err(|_| {
+        anyhow::anyhow!("--checkpoint-every {minutes:?}: must be a number of minutes >= 0, at most a few centuries")
+    })?;
     for (name, given) in [
         ("--save-photons", &args.save_photons),
         ("--checkpoint", &args.checkpoint),
@@ -249,7 +249,7 @@ fn state_files(args: &StateFileArgs, settings: &RenderSettings) -> Result<StateF
         save_photons: args.save_photons.clone(),
         load_photons: args.load_photons.clone(),
         checkpoint: args.checkpoint.clone(),
-        checkpoint_every: std::time::Duration::from_secs_f64(minutes * 60.0),
+        checkpoint_every: every,
         resume: args.resume.clone(),
         stop_after_passes: args.stop_after_passes,
     })

@@ -203,6 +203,10 @@ fn view(args: &cli::RenderArgs) -> Result<()> {
     if args.crop.is_some() || args.tile.is_some() {
         anyhow::bail!("view shows the whole frame: --crop and --tile are for offline renders");
     }
+    let f = &args.files;
+    if f.save_photons.is_some() || f.load_photons.is_some() || f.checkpoint.is_some() || f.resume.is_some() {
+        anyhow::bail!("view keeps nothing between runs: --save-photons, --load-photons, --checkpoint and --resume are for offline renders");
+    }
     let (loaded, settings) = cli::prepare(args)?;
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;

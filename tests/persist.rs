@@ -207,6 +207,20 @@ fn a_stopped_path_render_resumes_to_the_uninterrupted_image() {
         "--checkpoint",
         "progressive",
     );
+    refused(
+        &[
+            "--quiet",
+            "--integrator",
+            "path",
+            "--checkpoint-every",
+            "nan",
+            "-o",
+            "x.exr",
+        ],
+        d,
+        "--checkpoint-every",
+        "minutes",
+    );
     assert!(!d.join("x.exr").exists());
 }
 
