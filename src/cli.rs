@@ -43,9 +43,8 @@ pub enum Command {
     Photons(PhotonsArgs),
 }
 
-/// `photons` takes the render options; those that decide the map count.
+/// `photons` takes the render options (those that decide the map count) and needs --save-photons.
 #[derive(Args, Debug, Clone)]
-#[command(mut_arg("save_photons", |a| a.required(true)))]
 pub struct PhotonsArgs {
     #[command(flatten)]
     pub render: RenderArgs,

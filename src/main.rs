@@ -186,6 +186,9 @@ fn report_photons(p: &raytracer::photon::PhotonStats, files: &integrator::StateF
 
 /// `photons`: trace the photon map and save it, render nothing.
 fn photons(args: &cli::RenderArgs) -> Result<()> {
+    if args.files.save_photons.is_none() {
+        anyhow::bail!("photons: give --save-photons FILE, where the map goes");
+    }
     let mut args = args.clone();
     args.integrator = Some(integrator::IntegratorKind::Photon);
     let (loaded, settings) = cli::prepare_settings(&args)?;

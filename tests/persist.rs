@@ -101,6 +101,7 @@ fn a_saved_photon_map_renders_the_traced_image_and_bad_maps_are_refused() {
     bad("map.phm", &["--seed", "1"], "other settings");
     bad("map.phm", &["--light-radius", "0.2"], "different scene");
     bad("render.pfm", &[], "no such file");
+    refused(&["photons", "--quiet"], d, "--save-photons", "FILE");
     refused(
         &["--integrator", "path", "--quiet", "--load-photons", "map.phm"],
         d,
