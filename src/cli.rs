@@ -4,7 +4,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use raytracer::film::{Filter, PixelRect};
-use raytracer::integrator::{IntegratorKind, RenderSettings};
+use raytracer::integrator::{IntegratorKind, RenderSettings, StateFiles};
 use raytracer::photon::{Gather, GatherFilter, PhotonSettings};
 use raytracer::scene::{LoadOptions, LoadedScene};
 use raytracer::SceneDesc;
@@ -39,6 +39,15 @@ pub enum Command {
     Merge(MergeArgs),
     /// Open an interactive preview window that refines the image while nothing moves (press H for the keys).
     View(ViewArgs),
+    /// Trace the photon map of a scene and save it (--save-photons FILE) for renders that --load-photons it.
+    Photons(PhotonsArgs),
+}
+
+/// `photons` takes the render options (those that decide the map count) and needs --save-photons.
+#[derive(Args, Debug, Clone)]
+pub struct PhotonsArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -175,6 +184,78 @@ pub struct RenderArgs {
     /// Print nothing (no progress bar, no summary, no warnings) [default: off].
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub files: StateFileArgs,
+}
+
+/// Files that carry work between runs (photon maps, checkpoints).
+#[derive(Args, Debug, Clone)]
+pub struct StateFileArgs {
+    /// Photon integrator: write the traced photon map to FILE, for renders that --load-photons it.
+    #[arg(long, value_name = "FILE", conflicts_with = "load_photons")]
+    pub save_photons: Option<PathBuf>,
+    /// Photon integrator: read the photon map from FILE (written by --save-photons for the same scene, --photons,
+    /// --max-bounces and --seed) instead of tracing it.
+    #[arg(long, value_name = "FILE")]
+    pub load_photons: Option<PathBuf>,
+    /// Path tracer: save the render's state to FILE between passes, every --checkpoint-every minutes and when
+    /// interrupted; --resume FILE continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Minutes between checkpoints (fractions allowed).
+    #[arg(long, value_name = "MINUTES", default_value_t = 5.0)]
+    pub checkpoint_every: f64,
+    /// Continue the render saved in FILE by --checkpoint (same scene and settings); the image is the one an
+    /// uninterrupted render gives.
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Stop as if interrupted after this many passes (for tests).
+    #[arg(long, value_name = "N", hide = true)]
+    pub stop_after_passes: Option<u32>,
+}
+
+/// Checks the state-file options against the integrator, before any work starts.
+fn state_files(args: &StateFileArgs, settings: &RenderSettings) -> Result<StateFiles> {
+    let photons = settings.integrator == IntegratorKind::Photon && settings.photon.photons > 0;
+    for (name, given) in [
+        ("--save-photons", &args.save_photons),
+        ("--load-photons", &args.load_photons),
+    ] {
+        if given.is_some() && !photons {
+            bail!("{name}: only the photon integrator with --photons > 0 has a photon map");
+        }
+    }
+    let progressive = settings.integrator == IntegratorKind::Path;
+    for (name, given) in [("--checkpoint", &args.checkpoint), ("--resume", &args.resume)] {
+        if given.is_some() && !progressive {
+            bail!("{name}: only progressive renders (--integrator path) have checkpoints");
+        }
+    }
+    let minutes = args.checkpoint_every;
+    let every = std::time::Duration::try_from_secs_f64(minutes * 60.0).map_err(|_| {
+        anyhow::anyhow!("--checkpoint-every {minutes:?}: must be a number of minutes >= 0, at most a few centuries")
+    })?;
+    for (name, given) in [
+        ("--save-photons", &args.save_photons),
+        ("--checkpoint", &args.checkpoint),
+    ] {
+        if let Some(p) = given {
+            raytracer::image_io::check_file_writable(name, p)?;
+        }
+    }
+    for (name, given) in [("--load-photons", &args.load_photons), ("--resume", &args.resume)] {
+        if let Some(p) = given.as_ref().filter(|p| !p.is_file()) {
+            bail!("{name} {}: no such file", p.display());
+        }
+    }
+    Ok(StateFiles {
+        save_photons: args.save_photons.clone(),
+        load_photons: args.load_photons.clone(),
+        checkpoint: args.checkpoint.clone(),
+        checkpoint_every: every,
+        resume: args.resume.clone(),
+        stop_after_passes: args.stop_after_passes,
+    })
 }
 
 /// Resolves `--scene`, `--mesh` and `--smooth` to a description.
@@ -188,6 +269,13 @@ pub fn load_scene(args: &SceneArgs) -> Result<LoadedScene> {
 
 /// Checks every option and applies it to the scene, before any work starts.
 pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
+    let prepared = prepare_settings(args)?;
+    raytracer::image_io::check_writable(&args.output).context("cannot write the output")?;
+    Ok(prepared)
+}
+
+/// [`prepare`] for commands that write no image.
+pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
     let mut loaded = load_scene(&args.scene)?;
     let desc = &mut loaded.desc;
     if let Some(w) = args.width {
@@ -246,8 +334,7 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
         bail!("--spp {spp}: must be between 1 and {}", 1 << 20);
     }
     let photon = photon_settings(args, desc)?;
-    raytracer::image_io::check_writable(&args.output).context("cannot write the output")?;
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         ssaa,
         shadow_samples,
         filter: args.filter,
@@ -258,7 +345,9 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
         spp,
         max_depth: args.max_depth,
         photon,
+        files: Default::default(),
     };
+    settings.files = state_files(&args.files, &settings)?;
     Ok((loaded, settings))
 }
 

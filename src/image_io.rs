@@ -38,9 +38,16 @@ impl Format {
 /// extension and an existing, writable folder.
 pub fn check_writable(path: &Path) -> Result<Format> {
     let fmt = Format::from_path(path)?;
+    check_file_writable("--output", path)?;
+    Ok(fmt)
+}
+
+/// Checks that the file `option` names can be written (atomically: its
+/// folder must take a temporary file), before any work that would be lost.
+pub fn check_file_writable(option: &str, path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(Error::InvalidSetting(format!(
-            "--output {}: is a directory",
+            "{option} {}: is a directory",
             path.display()
         )));
     }
@@ -49,10 +56,10 @@ pub fn check_writable(path: &Path) -> Result<Format> {
     match std::fs::File::create(&probe) {
         Ok(_) => {
             let _ = std::fs::remove_file(&probe);
-            Ok(fmt)
+            Ok(())
         }
         Err(e) => Err(Error::InvalidSetting(format!(
-            "--output {}: cannot write to {}: {e}",
+            "{option} {}: cannot write to {}: {e}",
             path.display(),
             dir.display()
         ))),

@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Parser;
 use cli::{Cli, Command};
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::integrator::{self, tile_count};
+use raytracer::integrator;
 use raytracer::scene::LoadedScene;
 use raytracer::Scene;
 use std::io::IsTerminal;
@@ -46,6 +46,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Compare(args)) => compare(&args).map(|_| ExitCode::SUCCESS),
         Some(Command::Merge(args)) => merge(&args).map(|_| ExitCode::SUCCESS),
         Some(Command::View(args)) => view(&args.render).map(|_| ExitCode::SUCCESS),
+        Some(Command::Photons(args)) => photons(&args.render).map(|_| ExitCode::SUCCESS),
         None => render(&cli.render),
     }
 }
@@ -102,7 +103,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let b = ProgressBar::new(tile_count(rect.width(), rect.height()));
+        let b = ProgressBar::new(integrator::progress_ticks(&settings, rect.width(), rect.height()));
         if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} tiles, {elapsed} elapsed, {eta} left") {
             b.set_style(style);
         }
@@ -114,25 +115,29 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let _ = ctrlc::set_handler(|| integrator::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
     let out = integrator::render(&scene, &settings, &|| bar.inc(1))?;
     bar.finish_and_clear();
-    if out.tiles_done < out.tiles_total {
+    if !out.is_complete() {
         let path = partial_path(&args.output);
-        let tiles = format!("{}/{}", out.tiles_done, out.tiles_total);
-        let attrs = [("raytracer.partial", "true"), ("raytracer.tiles", tiles.as_str())];
+        let (what, done) = match out.passes {
+            Some((done, all)) => ("passes", format!("{done}/{all}")),
+            None => ("tiles", format!("{}/{}", out.tiles_done, out.tiles_total)),
+        };
+        let key = format!("raytracer.{what}");
+        let attrs = [("raytracer.partial", "true"), (key.as_str(), done.as_str())];
         raytracer::image_io::write_image_in_frame(&out.film, &out.window, &attrs, &path, args.exposure)?;
-        eprintln!("interrupted: {tiles} tiles rendered, saved to {}", path.display());
+        let checkpoint = match (&settings.files.checkpoint, out.passes) {
+            (Some(c), Some(_)) => format!("; checkpoint {} (continue with --resume)", c.display()),
+            _ => String::new(),
+        };
+        eprintln!(
+            "interrupted: {done} {what} rendered, saved to {}{checkpoint}",
+            path.display()
+        );
         return Ok(ExitCode::from(EXIT_INTERRUPTED));
     }
     raytracer::image_io::write_image_in_frame(&out.film, &out.window, &[], &args.output, args.exposure)?;
     if !args.quiet {
         if let Some(p) = &out.photons {
-            eprintln!(
-                "photons: {} emitted, {} stored ({:.1} MiB), traced in {:.2} s, kd-tree built in {:.3} s",
-                p.emitted,
-                p.stored,
-                p.bytes as f64 / (1 << 20) as f64,
-                p.trace_seconds,
-                p.build_seconds
-            );
+            report_photons(p, &settings.files);
         }
         println!(
             "{} {}x{}{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
@@ -154,9 +159,56 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The photon pass's summary line.
+fn report_photons(p: &raytracer::photon::PhotonStats, files: &integrator::StateFiles) {
+    let mib = p.bytes as f64 / (1 << 20) as f64;
+    match &files.load_photons {
+        Some(f) => eprintln!(
+            "photons: {} emitted, {} stored ({mib:.1} MiB), loaded from {} in {:.3} s",
+            p.emitted,
+            p.stored,
+            f.display(),
+            p.load_seconds
+        ),
+        None => eprintln!(
+            "photons: {} emitted, {} stored ({mib:.1} MiB), traced in {:.2} s, kd-tree built in {:.3} s{}",
+            p.emitted,
+            p.stored,
+            p.trace_seconds,
+            p.build_seconds,
+            match &files.save_photons {
+                Some(f) => format!(", saved to {} in {:.3} s", f.display(), p.save_seconds),
+                None => String::new(),
+            }
+        ),
+    }
+}
+
+/// `photons`: trace the photon map and save it, render nothing.
+fn photons(args: &cli::RenderArgs) -> Result<()> {
+    if args.files.save_photons.is_none() {
+        anyhow::bail!("photons: give --save-photons FILE, where the map goes");
+    }
+    let mut args = args.clone();
+    args.integrator = Some(integrator::IntegratorKind::Photon);
+    let (loaded, settings) = cli::prepare_settings(&args)?;
+    report_meshes(&loaded, &args.scene, args.quiet);
+    let scene = Scene::build(loaded.desc)?;
+    report_dropped(&scene, args.quiet);
+    let map = integrator::with_threads(settings.threads, || integrator::photon::global_map(&scene, &settings))??;
+    if let (Some((_, p)), false) = (&map, args.quiet) {
+        report_photons(p, &settings.files);
+    }
+    Ok(())
+}
+
 fn view(args: &cli::RenderArgs) -> Result<()> {
     if args.crop.is_some() || args.tile.is_some() {
         anyhow::bail!("view shows the whole frame: --crop and --tile are for offline renders");
+    }
+    let f = &args.files;
+    if f.save_photons.is_some() || f.load_photons.is_some() || f.checkpoint.is_some() || f.resume.is_some() {
+        anyhow::bail!("view keeps nothing between runs: --save-photons, --load-photons, --checkpoint and --resume are for offline renders");
     }
     let (loaded, settings) = cli::prepare(args)?;
     report_meshes(&loaded, &args.scene, args.quiet);

@@ -7,6 +7,7 @@
 
 #[cfg(test)]
 pub(crate) mod analytic;
+pub mod checkpoint;
 pub mod direct;
 pub mod path;
 pub mod photon;
@@ -19,7 +20,9 @@ use crate::sampling::{hammersley_shifted, stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::ops::Range;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 /// Set when the process is asked to stop (SIGINT/SIGTERM): tiles not yet
 /// started are skipped, and the render returns what it finished. Signals are
@@ -60,6 +63,26 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
+    /// Files that carry work between runs.
+    pub files: StateFiles,
+}
+
+/// Files that carry work between runs: photon maps and checkpoints of
+/// progressive renders. All off by default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StateFiles {
+    /// Write the traced photon map here (`--save-photons`).
+    pub save_photons: Option<PathBuf>,
+    /// Read the photon map from here instead of tracing it (`--load-photons`).
+    pub load_photons: Option<PathBuf>,
+    /// Write a progressive render's state here between passes, at most every
+    /// `checkpoint_every`, and when interrupted (`--checkpoint`).
+    pub checkpoint: Option<PathBuf>,
+    pub checkpoint_every: Duration,
+    /// Continue the progressive render saved here (`--resume`).
+    pub resume: Option<PathBuf>,
+    /// Stop as if interrupted after this many passes of this run (for tests).
+    pub stop_after_passes: Option<u32>,
 }
 
 impl RenderSettings {
@@ -85,6 +108,7 @@ impl Default for RenderSettings {
             spp: 64,
             max_depth: None,
             photon: PhotonSettings::default(),
+            files: StateFiles::default(),
         }
     }
 }
@@ -102,7 +126,7 @@ impl RayStats {
         self.camera_rays + self.shadow_rays + self.other_rays
     }
 
-    fn add(&mut self, o: &RayStats) {
+    pub(crate) fn add(&mut self, o: &RayStats) {
         self.camera_rays += o.camera_rays;
         self.shadow_rays += o.shadow_rays;
         self.other_rays += o.other_rays;
@@ -123,6 +147,16 @@ pub struct RenderOutput {
     pub seconds: f64,
     /// The photon pass, when there was one.
     pub photons: Option<PhotonStats>,
+    /// Passes done and passes in all, for a progressive render; fewer done
+    /// means interrupted (the film averages the passes done).
+    pub passes: Option<(u32, u32)>,
+}
+
+impl RenderOutput {
+    /// Whether every tile and pass was rendered.
+    pub fn is_complete(&self) -> bool {
+        self.tiles_done == self.tiles_total && self.passes.is_none_or(|(done, all)| done == all)
+    }
 }
 
 /// The radiance carried along one camera ray.
@@ -155,30 +189,48 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
     }
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
-    let ((film, stats, tiles_done), photons) = with_threads(settings.threads, || match settings.integrator {
-        IntegratorKind::Direct => {
-            let est = direct::DirectLighting {
-                shadow_samples: settings.shadow_samples,
-            };
-            (render_tiles(scene, settings, &est, on_tile), None)
-        }
-        IntegratorKind::Path => {
-            let est = path::PathTracer {
-                max_depth: settings.max_depth,
-            };
-            (render_tiles(scene, settings, &est, on_tile), None)
-        }
-        IntegratorKind::Photon => photon::render(scene, settings, on_tile),
-    })?;
+    let tiles_total = tile_count(window.rect.width(), window.rect.height());
+    let (film, stats, tiles_done, photons, passes) = with_threads(settings.threads, || -> Result<_> {
+        Ok(match settings.integrator {
+            IntegratorKind::Direct => {
+                let est = direct::DirectLighting {
+                    shadow_samples: settings.shadow_samples,
+                };
+                let (film, stats, done) = render_tiles(scene, settings, &est, on_tile);
+                (film, stats, done, None, None)
+            }
+            IntegratorKind::Path => {
+                let mut state = path::Progressive::new(scene, settings);
+                let passes = checkpoint::run(scene, settings, &mut state, on_tile)?;
+                let (film, stats) = state.finish(passes.0);
+                (film, stats, tiles_total, None, Some(passes))
+            }
+            IntegratorKind::Photon => {
+                let ((film, stats, done), photons) = photon::render(scene, settings, on_tile)?;
+                (film, stats, done, photons, None)
+            }
+        })
+    })??;
     Ok(RenderOutput {
         film,
         tiles_done,
-        tiles_total: tile_count(window.rect.width(), window.rect.height()),
+        tiles_total,
         window,
         stats,
         seconds: start.elapsed().as_secs_f64(),
         photons,
+        passes,
     })
+}
+
+/// Ticks `render` gives its `on_tile` callback in all: one per tile, per
+/// pass for progressive renders.
+pub fn progress_ticks(settings: &RenderSettings, width: u32, height: u32) -> u64 {
+    let passes = match settings.integrator {
+        IntegratorKind::Path => path::Progressive::passes_for(settings.spp) as u64,
+        _ => 1,
+    };
+    tile_count(width, height) * passes
 }
 
 /// Number of tiles a rectangle is cut into (for progress bars).

@@ -13,12 +13,24 @@
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
 //! roulette ends paths).
+//!
+//! The render is progressive ([`Progressive`]): passes of consecutive sample
+//! indices, ceil(spp / 64) samples each, added onto per-pixel sums. Each
+//! pixel's samples are added in index order whatever the passes, so the image
+//! is the one-pass render bit for bit, and a render can be checkpointed
+//! between passes and resumed (`integrator::checkpoint`).
 
+use super::checkpoint::{self, Buffer};
 use super::direct::irradiance;
-use super::{RadianceEstimator, RayStats};
+use super::{accumulate_tiles, RadianceEstimator, RayStats, RenderSettings};
+use crate::film::{Film, PixelRect};
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::sampling::{cosine_hemisphere, Rng};
 use crate::scene::Scene;
+use std::sync::atomic::AtomicBool;
+
+/// A render is cut into at most this many passes.
+const MAX_PASSES: u32 = 64;
 
 /// Roulette starts after this many bounces.
 const ROULETTE_DEPTH: u32 = 2;
@@ -73,6 +85,123 @@ impl RadianceEstimator for PathTracer {
             ray = Ray::new(offset_origin(hit.p, ng, d), d);
         }
         l
+    }
+}
+
+/// The path tracer's render in passes: the per-pixel sums of the samples so far.
+pub struct Progressive<'a> {
+    settings: &'a RenderSettings,
+    est: PathTracer,
+    rect: PixelRect,
+    sums: Vec<Vec3>,
+    stats: RayStats,
+}
+
+impl<'a> Progressive<'a> {
+    pub fn new(scene: &Scene, settings: &'a RenderSettings) -> Self {
+        let cam = &scene.camera;
+        let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
+        Progressive {
+            settings,
+            est: PathTracer {
+                max_depth: settings.max_depth,
+            },
+            rect,
+            sums: vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize],
+            stats: RayStats::default(),
+        }
+    }
+
+    /// Samples per pass for a render of `spp` samples per pixel.
+    pub fn samples_per_pass(spp: u32) -> u32 {
+        spp.div_ceil(MAX_PASSES).max(1)
+    }
+
+    pub fn passes_for(spp: u32) -> u32 {
+        spp.div_ceil(Self::samples_per_pass(spp))
+    }
+
+    fn samples_after(&self, passes: u32) -> u32 {
+        (passes * Self::samples_per_pass(self.settings.spp)).min(self.settings.spp)
+    }
+
+    /// The image after `passes` passes (the average of the samples so far)
+    /// and the rays this run traced.
+    pub fn finish(self, passes: u32) -> (Film, RayStats) {
+        let film = checkpoint::film_of_sums(
+            self.rect.width(),
+            self.rect.height(),
+            &self.sums,
+            self.samples_after(passes),
+        );
+        (film, self.stats)
+    }
+}
+
+impl checkpoint::Progressive for Progressive<'_> {
+    fn key(&self) -> String {
+        let s = self.settings;
+        let r = self.rect;
+        format!(
+            "integrator=path spp={} samples_per_pass={} max_depth={:?} filter={:?} seed={} crop={},{},{},{}",
+            s.spp,
+            Self::samples_per_pass(s.spp),
+            s.max_depth,
+            s.filter,
+            s.seed,
+            r.x0,
+            r.y0,
+            r.x1,
+            r.y1
+        )
+    }
+
+    fn total_passes(&self) -> u32 {
+        Self::passes_for(self.settings.spp)
+    }
+
+    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: &(dyn Fn() + Sync)) -> bool {
+        let samples = self.samples_after(pass)..self.samples_after(pass + 1);
+        // Tiles finished before an interruption must not count: keep the sums to go back to.
+        let before = self.sums.clone();
+        let never = AtomicBool::new(false);
+        let ntiles = super::tile_count(self.rect.width(), self.rect.height());
+        match accumulate_tiles(
+            scene,
+            self.settings,
+            &self.est,
+            samples,
+            &mut self.sums,
+            &never,
+            on_tile,
+        ) {
+            Some((stats, done)) if done == ntiles => {
+                self.stats.add(&stats);
+                true
+            }
+            _ => {
+                self.sums = before;
+                false
+            }
+        }
+    }
+
+    fn save(&self) -> Vec<(String, Buffer)> {
+        let flat = self.sums.iter().flat_map(|v| v.to_array()).collect();
+        vec![("sums".into(), Buffer::F32(flat))]
+    }
+
+    fn restore(&mut self, buffers: Vec<(String, Buffer)>) -> std::result::Result<(), String> {
+        let want = self.sums.len() * 3;
+        match &buffers[..] {
+            [(tag, Buffer::F32(v))] if tag == "sums" && v.len() == want => {
+                for (s, c) in self.sums.iter_mut().zip(v.chunks_exact(3)) {
+                    *s = Vec3::new(c[0], c[1], c[2]);
+                }
+                Ok(())
+            }
+            _ => Err(format!("expected one f32 buffer 'sums' of {want} values")),
+        }
     }
 }
 

@@ -22,10 +22,12 @@
 
 use super::direct::irradiance;
 use super::{RadianceEstimator, RayStats};
+use crate::error::Result;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::photon::estimate;
+use crate::photon::file;
 use crate::photon::map::Neighbour;
-use crate::photon::{Gather, PhotonMap};
+use crate::photon::{Gather, PhotonMap, PhotonSettings, PhotonStats};
 use crate::sampling::{cosine_hemisphere, hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
 use std::cell::RefCell;
@@ -111,16 +113,61 @@ impl RadianceEstimator for PhotonMapping<'_> {
     }
 }
 
-/// Traces the photon map (if any photons are asked for), then renders.
+/// The photon settings that decide the map: final gathering and photon-only
+/// direct light read first-hit photons, so these store them.
+pub fn map_settings(settings: &super::RenderSettings) -> PhotonSettings {
+    let mut ps = settings.photon;
+    ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
+    ps
+}
+
+/// The global photon map: read from `--load-photons`, or traced (and written
+/// to `--save-photons` if asked); `None` when no photons are asked for.
+pub fn global_map(scene: &Scene, settings: &super::RenderSettings) -> Result<Option<(PhotonMap, PhotonStats)>> {
+    let ps = map_settings(settings);
+    if ps.photons == 0 {
+        return Ok(None);
+    }
+    let header = file::header(scene, file::key(&ps, settings.seed));
+    if let Some(path) = &settings.files.load_photons {
+        let start = std::time::Instant::now();
+        let mut maps = file::load(path, &header)?;
+        let global = file::take(&mut maps, GLOBAL, path)?;
+        let stats = PhotonStats {
+            emitted: global.emitted,
+            stored: global.map.len(),
+            bytes: global.map.bytes(),
+            load_seconds: start.elapsed().as_secs_f64(),
+            ..PhotonStats::default()
+        };
+        return Ok(Some((global.map, stats)));
+    }
+    let (map, mut stats) = crate::photon::build_map(scene, &ps, settings.seed);
+    if let Some(path) = &settings.files.save_photons {
+        let start = std::time::Instant::now();
+        let stored = file::StoredMap {
+            tag: GLOBAL.into(),
+            emitted: stats.emitted,
+            map,
+        };
+        file::save(path, &header, std::slice::from_ref(&stored))?;
+        stats.save_seconds = start.elapsed().as_secs_f64();
+        return Ok(Some((stored.map, stats)));
+    }
+    Ok(Some((map, stats)))
+}
+
+/// Tag of the global map in photon map files.
+const GLOBAL: &str = "global";
+
+/// Gets the photon map (if any photons are asked for), then renders.
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
     on_tile: &(dyn Fn() + Sync),
-) -> ((crate::Film, RayStats, u64), Option<crate::photon::PhotonStats>) {
-    let mut ps = settings.photon;
-    // Final gathering and photon-only direct light read first-hit photons.
-    ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
-    let built = (ps.photons > 0).then(|| crate::photon::build_map(scene, &ps, settings.seed));
+) -> Result<((crate::Film, RayStats, u64), Option<PhotonStats>)> {
+    let ps = map_settings(settings);
+    let built = global_map(scene, settings)?;
     let est = PhotonMapping {
         map: built.as_ref().map(|(m, _)| m),
         gather: ps.gather,
@@ -128,7 +175,7 @@ pub fn render(
         final_gather: ps.final_gather,
     };
     let out = super::render_tiles(scene, settings, &est, on_tile);
-    (out, built.map(|(_, s)| s))
+    Ok((out, built.map(|(_, s)| s)))
 }
 
 #[cfg(test)]

@@ -96,6 +96,50 @@ impl Photon {
         self.flags & DIRECT != 0
     }
 
+    /// The 32-byte little-endian record of photon map files: position 3 x
+    /// f32, power 3 x f16 bits, flags, a zero byte, wi, n, object (u32 each).
+    pub fn to_le_bytes(&self) -> [u8; 32] {
+        let mut b = [0u8; 32];
+        for (i, c) in self.p.to_array().into_iter().enumerate() {
+            b[4 * i..4 * i + 4].copy_from_slice(&c.to_le_bytes());
+        }
+        for (i, c) in self.power.into_iter().enumerate() {
+            b[12 + 2 * i..14 + 2 * i].copy_from_slice(&c.to_le_bytes());
+        }
+        b[18] = self.flags;
+        b[19] = 0;
+        b[20..24].copy_from_slice(&self.wi.to_le_bytes());
+        b[24..28].copy_from_slice(&self.n.to_le_bytes());
+        b[28..32].copy_from_slice(&self.object.to_le_bytes());
+        b
+    }
+
+    /// The photon of a record, or `None` for one no map holds (non-finite
+    /// position, an axis beyond z, unknown flag bits): queries index a
+    /// position by the axis bits, so these are checked, whatever the checksum.
+    pub fn from_le_bytes(b: &[u8; 32]) -> Option<Photon> {
+        let u32_at = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
+        let u16_at = |i: usize| u16::from_le_bytes([b[i], b[i + 1]]);
+        let p = Vec3::new(
+            f32::from_bits(u32_at(0)),
+            f32::from_bits(u32_at(4)),
+            f32::from_bits(u32_at(8)),
+        );
+        let flags = b[18];
+        if !p.is_finite() || flags & AXIS_MASK > 2 || flags & !(AXIS_MASK | DIRECT) != 0 || b[19] != 0 {
+            return None;
+        }
+        Some(Photon {
+            p,
+            power: [u16_at(12), u16_at(14), u16_at(16)],
+            flags,
+            _pad: 0,
+            wi: u32_at(20),
+            n: u32_at(24),
+            object: u32_at(28),
+        })
+    }
+
     fn axis(&self) -> usize {
         (self.flags & AXIS_MASK) as usize
     }
@@ -196,6 +240,12 @@ impl PhotonMap {
     /// rayon pool; the result does not depend on the number of threads).
     pub fn build(mut photons: Vec<Photon>, unit: f32) -> PhotonMap {
         balance(&mut photons);
+        PhotonMap { photons, unit }
+    }
+
+    /// A map from photons already in kd-tree order (as `photons()` gives
+    /// them), e.g. read back from a file.
+    pub fn from_balanced(photons: Vec<Photon>, unit: f32) -> PhotonMap {
         PhotonMap { photons, unit }
     }
 

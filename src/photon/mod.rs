@@ -5,6 +5,7 @@
 //! (`estimate`; the integrator is `integrator::photon`).
 
 pub mod estimate;
+pub mod file;
 pub mod map;
 pub mod trace;
 
@@ -61,6 +62,10 @@ pub struct PhotonStats {
     pub bytes: usize,
     pub trace_seconds: f64,
     pub build_seconds: f64,
+    /// Reading the map from a file (`--load-photons`) instead of tracing it.
+    pub load_seconds: f64,
+    /// Writing the map to a file (`--save-photons`).
+    pub save_seconds: f64,
 }
 
 impl PhotonSettings {
@@ -134,6 +139,7 @@ pub fn build_map(scene: &Scene, settings: &PhotonSettings, seed: u64) -> (Photon
         bytes: map.bytes(),
         trace_seconds,
         build_seconds: start.elapsed().as_secs_f64(),
+        ..PhotonStats::default()
     };
     (map, stats)
 }

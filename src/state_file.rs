@@ -1,0 +1,453 @@
+//! Binary files that carry render state between runs and machines: photon
+//! maps (`photon::file`) and checkpoints (`integrator::checkpoint`).
+//!
+//! Both share one layout, all numbers little-endian:
+//!
+//! ```text
+//! magic        8 bytes, names the kind of file
+//! version      u32, the layout version of that kind
+//! fingerprint  u64, FNV-1a 64 of the scene's canonical bytes (see `scene_fingerprint`)
+//! key          u32 length + UTF-8 text: the settings that determine the contents,
+//!              canonical ("photons=200000 max_bounces=5 ..."), compared verbatim
+//! header crc   u32, CRC-32 (IEEE) of every byte above
+//! body         kind-specific
+//! body crc     u32, CRC-32 of the body
+//! ```
+//!
+//! The header has its own checksum so that a file made for another scene or
+//! other settings is refused before its (possibly large) body is read, and a
+//! corrupt header is not mistaken for a mismatch. Anything after the body crc
+//! is an error too. The fingerprint is FNV-1a 64 (Fowler, Noll, Vo; offset
+//! basis 0xcbf29ce484222325, prime 0x100000001b3) because it is tiny, stable
+//! and fully specified; it detects accidents, not forgeries.
+
+use crate::error::{Error, Result};
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Vec3;
+use crate::scene::SceneDesc;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// Longest key text a reader accepts.
+const MAX_KEY: u32 = 1 << 16;
+
+/// FNV-1a 64 over bytes fed in order.
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv64(u64);
+
+impl Default for Fnv64 {
+    fn default() -> Self {
+        Fnv64(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv64 {
+    pub fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ x as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    pub fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    pub fn f32(&mut self, v: f32) {
+        self.u32(v.to_bits());
+    }
+
+    pub fn vec3(&mut self, v: Vec3) {
+        self.f32(v.x);
+        self.f32(v.y);
+        self.f32(v.z);
+    }
+
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// Fingerprint of what a scene is made of: materials, triangles (with their
+/// vertex normals, so `--smooth` counts), spheres and lights, in description
+/// order, as raw f32 bits. With `camera`, the camera and image size too (a
+/// checkpoint's pixels depend on them; a photon map's photons do not). The
+/// scene's name and its recommended settings are left out: settings that
+/// matter are in the file's key.
+pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
+    let mut h = Fnv64::default();
+    h.u32(desc.materials.len() as u32);
+    for (_, m) in &desc.materials {
+        match *m {
+            Material::Diffuse { albedo } => {
+                h.u32(0);
+                h.vec3(albedo);
+            }
+            Material::Emissive { albedo, le } => {
+                h.u32(1);
+                h.vec3(albedo);
+                h.vec3(le);
+            }
+            Material::Mirror { reflectance } => {
+                h.u32(2);
+                h.vec3(reflectance);
+            }
+            Material::Glass { ior } => {
+                h.u32(3);
+                h.f32(ior);
+            }
+        }
+    }
+    h.u32(desc.triangles.len() as u32);
+    for t in &desc.triangles {
+        t.vertices.iter().for_each(|&v| h.vec3(v));
+        match t.normals {
+            Some(ns) => {
+                h.u32(1);
+                ns.iter().for_each(|&v| h.vec3(v));
+            }
+            None => h.u32(0),
+        }
+        h.u32(t.material);
+    }
+    h.u32(desc.spheres.len() as u32);
+    for s in &desc.spheres {
+        h.vec3(s.sphere.centre);
+        h.f32(s.sphere.radius);
+        h.u32(s.material);
+    }
+    h.u32(desc.lights.len() as u32);
+    for l in &desc.lights {
+        match *l {
+            Light::Sphere { sphere, power } => {
+                h.u32(0);
+                h.vec3(sphere.centre);
+                h.f32(sphere.radius);
+                h.vec3(power);
+            }
+            Light::Point { position, power } => {
+                h.u32(1);
+                h.vec3(position);
+                h.vec3(power);
+            }
+        }
+    }
+    if camera {
+        let c = &desc.camera;
+        h.vec3(c.position);
+        h.vec3(c.look_at);
+        h.vec3(c.up);
+        h.f32(c.fov_y_deg);
+        h.u32(c.width);
+        h.u32(c.height);
+    }
+    h.finish()
+}
+
+/// What a file must be to be accepted: its kind, layout version, scene
+/// fingerprint and settings key.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Header {
+    /// The kind of file, e.g. "photon map".
+    pub kind: &'static str,
+    pub magic: [u8; 8],
+    pub version: u32,
+    pub fingerprint: u64,
+    pub key: String,
+}
+
+/// Writes a state file to a temporary file beside `path` and renames it into
+/// place once complete (so a crash leaves the old file or none, never half
+/// of one). `body` writes the body through the [`Writer`].
+pub fn write(path: &Path, header: &Header, body: impl FnOnce(&mut Writer) -> std::io::Result<()>) -> Result<()> {
+    crate::image_io::write_atomic(path, |tmp| {
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = std::fs::File::create(tmp).map_err(io)?;
+        let mut w = Writer {
+            out: BufWriter::with_capacity(1 << 20, file),
+            crc: crc32fast::Hasher::new(),
+        };
+        (|| {
+            w.bytes(&header.magic)?;
+            w.u32(header.version)?;
+            w.u64(header.fingerprint)?;
+            w.u32(header.key.len() as u32)?;
+            w.bytes(header.key.as_bytes())?;
+            w.end_section()?;
+            body(&mut w)?;
+            w.end_section()?;
+            let file = w.out.into_inner().map_err(|e| e.into_error())?;
+            file.sync_all()
+        })()
+        .map_err(io)
+    })
+}
+
+/// Writes little-endian numbers and keeps the running CRC-32.
+pub struct Writer {
+    out: BufWriter<std::fs::File>,
+    crc: crc32fast::Hasher,
+}
+
+impl Writer {
+    pub fn bytes(&mut self, b: &[u8]) -> std::io::Result<()> {
+        self.crc.update(b);
+        self.out.write_all(b)
+    }
+
+    pub fn u32(&mut self, v: u32) -> std::io::Result<()> {
+        self.bytes(&v.to_le_bytes())
+    }
+
+    pub fn u64(&mut self, v: u64) -> std::io::Result<()> {
+        self.bytes(&v.to_le_bytes())
+    }
+
+    pub fn f32(&mut self, v: f32) -> std::io::Result<()> {
+        self.bytes(&v.to_le_bytes())
+    }
+
+    /// A short name: u8 length + ASCII.
+    pub fn tag(&mut self, t: &str) -> std::io::Result<()> {
+        debug_assert!(t.len() < 256);
+        self.bytes(&[t.len() as u8])?;
+        self.bytes(t.as_bytes())
+    }
+
+    /// Writes the CRC-32 of the section so far (uncounted) and starts the next.
+    fn end_section(&mut self) -> std::io::Result<()> {
+        let crc = std::mem::take(&mut self.crc).finalize();
+        self.out.write_all(&crc.to_le_bytes())
+    }
+}
+
+/// Reads a state file written by [`write`]: checks its header against
+/// `expected` (magic, version, then checksum, then fingerprint and key), runs
+/// `body` over the body, and checks the body's checksum and the end of file.
+/// Every failure names the file and says what is wrong with it.
+pub fn read<T>(path: &Path, expected: &Header, body: impl FnOnce(&mut Reader) -> Result<T>) -> Result<T> {
+    let file = std::fs::File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let mut r = Reader {
+        path: path.to_path_buf(),
+        kind: expected.kind,
+        input: BufReader::with_capacity(1 << 20, file),
+        crc: crc32fast::Hasher::new(),
+        offset: 0,
+        len,
+    };
+    let mut magic = [0u8; 8];
+    if len < 8 || r.fill(&mut magic).is_err() || magic != expected.magic {
+        return Err(r.error(format!("not a {} file", expected.kind)));
+    }
+    let version = r.u32()?;
+    if version != expected.version {
+        return Err(r.error(format!(
+            "{} format version {version}, but this build reads version {} (a file of another build, or corrupt)",
+            expected.kind, expected.version
+        )));
+    }
+    let fingerprint = r.u64()?;
+    let key_len = r.u32()?;
+    if key_len > MAX_KEY {
+        return Err(r.error(format!("corrupt {} header (key of {key_len} bytes)", expected.kind)));
+    }
+    let key = r.vec(key_len as usize)?;
+    r.check_section("header")?;
+    let key = String::from_utf8_lossy(&key).into_owned();
+    if fingerprint != expected.fingerprint {
+        return Err(r.error(format!(
+            "{} made for a different scene (fingerprint {fingerprint:016x}, this scene's is {:016x})",
+            expected.kind, expected.fingerprint
+        )));
+    }
+    if key != expected.key {
+        return Err(r.error(format!(
+            "{} made with other settings ({key}), not with these ({})",
+            expected.kind, expected.key
+        )));
+    }
+    let value = body(&mut r)?;
+    r.check_section("body")?;
+    let mut extra = [0u8; 1];
+    if r.input.read(&mut extra).map_err(|e| r.io(e))? != 0 {
+        return Err(r.error(format!(
+            "trailing bytes after the {} at byte {}",
+            expected.kind, r.offset
+        )));
+    }
+    Ok(value)
+}
+
+/// Reads little-endian numbers, keeps the running CRC-32, and knows the file
+/// length so that declared counts are checked before anything is allocated.
+pub struct Reader {
+    path: PathBuf,
+    kind: &'static str,
+    input: BufReader<std::fs::File>,
+    crc: crc32fast::Hasher,
+    offset: u64,
+    len: u64,
+}
+
+impl Reader {
+    /// An error naming the file.
+    pub fn error(&self, message: String) -> Error {
+        Error::Parse {
+            path: self.path.clone(),
+            message,
+        }
+    }
+
+    fn io(&self, source: std::io::Error) -> Error {
+        Error::Io {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    pub fn fill(&mut self, buf: &mut [u8]) -> Result<()> {
+        match self.input.read_exact(buf) {
+            Ok(()) => {
+                self.crc.update(buf);
+                self.offset += buf.len() as u64;
+                Ok(())
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => Err(self.truncated(buf.len() as u64)),
+            Err(e) => Err(self.io(e)),
+        }
+    }
+
+    fn truncated(&self, want: u64) -> Error {
+        self.error(format!(
+            "truncated {}: ends at byte {}, needs at least {}",
+            self.kind,
+            self.len,
+            self.offset + want
+        ))
+    }
+
+    /// Checks that `n` more bytes (plus the closing checksum) fit in the file
+    /// before allocating for them.
+    pub fn expect(&self, n: u64) -> Result<()> {
+        match self.offset.checked_add(n).and_then(|e| e.checked_add(4)) {
+            Some(end) if end <= self.len => Ok(()),
+            _ => Err(self.truncated(n.saturating_add(4))),
+        }
+    }
+
+    fn vec(&mut self, n: usize) -> Result<Vec<u8>> {
+        self.expect(n as u64)?;
+        let mut v = vec![0u8; n];
+        self.fill(&mut v)?;
+        Ok(v)
+    }
+
+    pub fn u8(&mut self) -> Result<u8> {
+        let mut b = [0u8; 1];
+        self.fill(&mut b)?;
+        Ok(b[0])
+    }
+
+    pub fn u32(&mut self) -> Result<u32> {
+        let mut b = [0u8; 4];
+        self.fill(&mut b)?;
+        Ok(u32::from_le_bytes(b))
+    }
+
+    pub fn u64(&mut self) -> Result<u64> {
+        let mut b = [0u8; 8];
+        self.fill(&mut b)?;
+        Ok(u64::from_le_bytes(b))
+    }
+
+    pub fn f32(&mut self) -> Result<f32> {
+        Ok(f32::from_bits(self.u32()?))
+    }
+
+    pub fn tag(&mut self) -> Result<String> {
+        let n = self.u8()?;
+        Ok(String::from_utf8_lossy(&self.vec(n as usize)?).into_owned())
+    }
+
+    /// Reads `count` records of `SIZE` bytes each through `decode`, in
+    /// blocks, after checking that the file holds them.
+    pub fn records<T, const SIZE: usize>(
+        &mut self,
+        count: u64,
+        mut decode: impl FnMut(&[u8; SIZE]) -> Result<T>,
+    ) -> Result<Vec<T>> {
+        self.expect(count.saturating_mul(SIZE as u64))?;
+        let mut out = Vec::with_capacity(count as usize);
+        let mut block = vec![0u8; SIZE * 4096];
+        let mut left = count as usize;
+        while left > 0 {
+            let n = left.min(4096);
+            self.fill(&mut block[..n * SIZE])?;
+            for rec in block[..n * SIZE].chunks_exact(SIZE) {
+                let rec: &[u8; SIZE] = rec.try_into().map_err(|_| self.error("record size".into()))?;
+                out.push(decode(rec)?);
+            }
+            left -= n;
+        }
+        Ok(out)
+    }
+
+    fn check_section(&mut self, what: &str) -> Result<()> {
+        let computed = std::mem::take(&mut self.crc).finalize();
+        let mut b = [0u8; 4];
+        match self.input.read_exact(&mut b) {
+            Ok(()) => self.offset += 4,
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Err(self.truncated(4)),
+            Err(e) => return Err(self.io(e)),
+        }
+        let stored = u32::from_le_bytes(b);
+        if stored != computed {
+            return Err(self.error(format!(
+                "corrupt {}: {what} checksum mismatch (stored {stored:08x}, computed {computed:08x})",
+                self.kind
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fnv1a_matches_the_published_test_vectors() {
+        for (text, want) in [
+            ("", 0xcbf2_9ce4_8422_2325u64),
+            ("a", 0xaf63_dc4c_8601_ec8c),
+            ("foobar", 0x8594_4171_f739_67e8),
+        ] {
+            let mut h = Fnv64::default();
+            h.bytes(text.as_bytes());
+            assert_eq!(h.finish(), want, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn scene_fingerprint_sees_geometry_lights_and_camera_only_when_asked() {
+        let a = crate::scene::builtin::cornell();
+        let mut b = a.clone();
+        b.camera.width += 1;
+        b.name = "other".into();
+        assert_eq!(scene_fingerprint(&a, false), scene_fingerprint(&b, false));
+        assert_ne!(scene_fingerprint(&a, true), scene_fingerprint(&b, true));
+        let mut c = a.clone();
+        c.triangles[3].vertices[1].y += 1e-6;
+        assert_ne!(scene_fingerprint(&a, false), scene_fingerprint(&c, false));
+        let mut d = a.clone();
+        d.set_light_radius(0.0);
+        assert_ne!(scene_fingerprint(&a, false), scene_fingerprint(&d, false));
+    }
+}

@@ -1,0 +1,275 @@
+//! Work carried between runs, through the binary: a photon map traced once
+//! and loaded by other renders, and progressive renders stopped (by a
+//! hidden option or SIGINT) and resumed; each gives the image of a single
+//! uninterrupted run, byte for byte, and damaged or mismatched files are
+//! refused with one line naming the file and exit status 2.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn ok(args: &[&str], dir: &Path) -> Output {
+    let o = run(args, dir);
+    assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// Runs, expects exit status 2 with one line naming `file` and containing `needle`.
+fn refused(args: &[&str], dir: &Path, file: &str, needle: &str) {
+    let o = run(args, dir);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(file) && err.contains(needle), "{args:?}: {err}");
+}
+
+fn read(dir: &Path, name: &str) -> Vec<u8> {
+    std::fs::read(dir.join(name)).unwrap()
+}
+
+const PHOTON: [&str; 9] = [
+    "--quiet",
+    "--integrator",
+    "photon",
+    "--width",
+    "40",
+    "--height",
+    "32",
+    "--photons",
+    "5000",
+];
+
+fn photon<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a = PHOTON.to_vec();
+    a.extend_from_slice(extra);
+    a
+}
+
+#[test]
+fn a_saved_photon_map_renders_the_traced_image_and_bad_maps_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    ok(&photon(&["-o", "traced.pfm", "--save-photons", "map.phm"]), d);
+    // `photons` traces and saves only, at any image size: the same file.
+    let only = [
+        "photons",
+        "--quiet",
+        "--photons",
+        "5000",
+        "--width",
+        "8",
+        "--save-photons",
+        "only.phm",
+    ];
+    ok(&only, d);
+    assert_eq!(read(d, "map.phm"), read(d, "only.phm"));
+    assert!(!d.join("render.png").exists());
+    // Loaded by workers rendering at other gather settings or in parts.
+    ok(&photon(&["-o", "loaded.pfm", "--load-photons", "map.phm"]), d);
+    assert!(
+        read(d, "traced.pfm") == read(d, "loaded.pfm"),
+        "loaded map renders differently"
+    );
+    ok(
+        &photon(&["-o", "wide.pfm", "--gather-radius", "0.2", "--load-photons", "map.phm"]),
+        d,
+    );
+    ok(&photon(&["-o", "wide-traced.pfm", "--gather-radius", "0.2"]), d);
+    assert!(read(d, "wide.pfm") == read(d, "wide-traced.pfm"));
+
+    let map = read(d, "map.phm");
+    let mut flipped = map.clone();
+    flipped[map.len() / 2] ^= 0x01;
+    std::fs::write(d.join("flipped.phm"), &flipped).unwrap();
+    std::fs::write(d.join("short.phm"), &map[..map.len() - 100]).unwrap();
+    let bad = |file: &str, extra: &[&str], needle: &str| {
+        let mut a = photon(&["-o", "bad.pfm", "--load-photons", file]);
+        a.extend_from_slice(extra);
+        refused(&a, d, file, needle);
+        assert!(!d.join("bad.pfm").exists());
+    };
+    bad("flipped.phm", &[], "checksum");
+    bad("short.phm", &[], "truncated");
+    bad("map.phm", &["--max-bounces", "3"], "photons=5000 max_bounces=10");
+    bad("map.phm", &["--seed", "1"], "other settings");
+    bad("map.phm", &["--light-radius", "0.2"], "different scene");
+    bad("render.pfm", &[], "no such file");
+    refused(&["photons", "--quiet"], d, "--save-photons", "FILE");
+    refused(
+        &["--integrator", "path", "--quiet", "--load-photons", "map.phm"],
+        d,
+        "--load-photons",
+        "photon integrator",
+    );
+    // Nothing left behind but the files written on purpose.
+    let mut names: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "flipped.phm",
+            "loaded.pfm",
+            "map.phm",
+            "only.phm",
+            "short.phm",
+            "traced.pfm",
+            "wide-traced.pfm",
+            "wide.pfm"
+        ]
+    );
+}
+
+const PATH: [&str; 10] = [
+    "--quiet",
+    "--integrator",
+    "path",
+    "--width",
+    "48",
+    "--height",
+    "32",
+    "--spp",
+    "24",
+    "--checkpoint-every",
+];
+
+#[test]
+fn a_stopped_path_render_resumes_to_the_uninterrupted_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fn path<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        let mut a = PATH.to_vec();
+        a.push("0");
+        a.extend_from_slice(extra);
+        a
+    }
+    ok(&path(&["-o", "whole.pfm"]), d);
+    let stopped = run(
+        &path(&["-o", "r.exr", "--checkpoint", "r.ckpt", "--stop-after-passes", "7"]),
+        d,
+    );
+    assert_eq!(stopped.status.code(), Some(130));
+    // The partial image holds the passes done, and says so.
+    let (_, _, attrs) = raytracer::image_io::read_exr_in_frame(&d.join("r.partial.exr")).unwrap();
+    assert!(
+        attrs.iter().any(|(k, v)| k == "raytracer.passes" && v == "7/24"),
+        "{attrs:?}"
+    );
+    // Resumed on another thread count, from and to the same checkpoint file.
+    let mut a = path(&[
+        "-o",
+        "r.exr",
+        "--checkpoint",
+        "r.ckpt",
+        "--resume",
+        "r.ckpt",
+        "--threads",
+        "1",
+    ]);
+    a.extend_from_slice(&["--stop-after-passes", "9"]);
+    assert_eq!(run(&a, d).status.code(), Some(130));
+    ok(&path(&["-o", "r.pfm", "--resume", "r.ckpt"]), d);
+    assert!(read(d, "whole.pfm") == read(d, "r.pfm"), "resumed render differs");
+
+    let ckpt = read(d, "r.ckpt");
+    let mut flipped = ckpt.clone();
+    flipped[ckpt.len() - 1000] ^= 0x40;
+    std::fs::write(d.join("flipped.ckpt"), &flipped).unwrap();
+    refused(
+        &path(&["-o", "x.exr", "--resume", "flipped.ckpt"]),
+        d,
+        "flipped.ckpt",
+        "checksum",
+    );
+    refused(
+        &path(&["-o", "x.exr", "--resume", "r.ckpt", "--seed", "2"]),
+        d,
+        "r.ckpt",
+        "other settings",
+    );
+    refused(
+        &path(&["-o", "x.exr", "--resume", "r.ckpt", "--light-radius", "0.2"]),
+        d,
+        "r.ckpt",
+        "different scene",
+    );
+    refused(
+        &["--quiet", "-o", "x.exr", "--checkpoint", "c.ckpt"],
+        d,
+        "--checkpoint",
+        "progressive",
+    );
+    refused(
+        &[
+            "--quiet",
+            "--integrator",
+            "path",
+            "--checkpoint-every",
+            "nan",
+            "-o",
+            "x.exr",
+        ],
+        d,
+        "--checkpoint-every",
+        "minutes",
+    );
+    assert!(!d.join("x.exr").exists());
+}
+
+#[test]
+fn sigint_writes_a_checkpoint_that_resumes_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // About 10 s of work on one thread, in passes of 4 samples.
+    let args = [
+        "--quiet",
+        "--integrator",
+        "path",
+        "--width",
+        "160",
+        "--height",
+        "160",
+        "--spp",
+        "256",
+        "--threads",
+        "1",
+        "-o",
+        "s.pfm",
+        "--checkpoint",
+        "s.ckpt",
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raytracer"))
+        .args(args)
+        .current_dir(d)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1000));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    let mut names: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["s.ckpt", "s.partial.pfm"]);
+    // Resuming and stopping at once gives back the interrupted state exactly.
+    let partial = read(d, "s.partial.pfm");
+    let mut again = args.to_vec();
+    again.extend_from_slice(&["--resume", "s.ckpt", "--stop-after-passes", "0"]);
+    assert_eq!(run(&again, d).status.code(), Some(130));
+    assert!(partial == read(d, "s.partial.pfm"), "resumed state differs");
+}
