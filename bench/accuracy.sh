@@ -51,6 +51,9 @@ run() {
 REF=$(reference cornell)
 echo "cornell ${SIZE}x${SIZE} against the ${REF_SPP}-spp path-traced reference"
 run "$REF" photon-default
+run "$REF" no-precompute --precompute-irradiance false
+run "$REF" 200k-r0.1-no-precompute --photons 200000 --gather-radius 0.1 --precompute-irradiance false
+run "$REF" 200k-r0.1 --photons 200000 --gather-radius 0.1
 run "$REF" direct --integrator direct
 run "$REF" path-64spp --integrator path --spp 64
 run "$REF" path-256spp --integrator path --spp 256
@@ -58,9 +61,9 @@ for f in none normal report; do
     run "$REF" "filter-$f" --gather-filter "$f"
 done
 run "$REF" max-bounces-5 --max-bounces 5
-run "$REF" photons-100k --photons 100000
-run "$REF" photons-800k --photons 800000
-run "$REF" knn-100 --gather-k 100
+run "$REF" photons-400k-r0.07 --photons 400000 --gather-radius 0.07
+run "$REF" photons-2m-r0.05 --photons 2000000 --gather-radius 0.05
+run "$REF" knn-100 --gather-k 100 --precompute-irradiance false
 run "$REF" cone-filter --cone-filter
 run "$REF" final-gather-16 --final-gather 16 --ssaa 2 --photons 100000
 # The reference's own noise: a path-traced image's relMSE falls as 1/spp.

@@ -165,6 +165,10 @@ pub struct RenderArgs {
     /// Final-gather rays per shading point; 0 reads the photon map at the visible point [default: the scene's, else 0].
     #[arg(long, value_name = "N")]
     pub final_gather: Option<u32>,
+    /// Estimate photon irradiance once at every 4th photon and read the nearest estimate at each shading point
+    /// (Christensen 1999): much faster with wide gathers [default: the scene's, else false; true for cornell-final].
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    pub precompute_irradiance: Option<bool>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -432,6 +436,10 @@ fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings
             .final_gather
             .or(preset.final_gather)
             .unwrap_or(default.final_gather),
+        precompute_irradiance: args
+            .precompute_irradiance
+            .or(preset.precompute_irradiance)
+            .unwrap_or(default.precompute_irradiance),
     };
     settings.validate()?;
     Ok(settings)

@@ -182,6 +182,9 @@ fn report_photons(p: &raytracer::photon::PhotonStats, files: &integrator::StateF
             }
         ),
     }
+    if p.precompute_seconds > 0.0 {
+        eprintln!("photons: irradiance precomputed in {:.2} s", p.precompute_seconds);
+    }
 }
 
 /// `photons`: trace the photon map and save it, render nothing.

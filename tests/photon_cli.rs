@@ -75,7 +75,7 @@ fn cornell_is_photon_mapped_with_its_preset_by_default() {
     let o = raytracer(&["--width", "8", "--height", "8"], &dir.path().join("x.png"));
     assert!(o.status.success());
     let (text, diag) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    assert!(diag.contains("photons: 200000 emitted"), "{diag}");
+    assert!(diag.contains("photons: 1000000 emitted"), "{diag}");
     assert!(text.contains("Photon"), "{text}");
     // Command-line options override the preset.
     let o = raytracer(

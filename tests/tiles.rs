@@ -145,6 +145,9 @@ fn sigint_leaves_a_valid_partial_exr_and_no_temporary_files() {
             "8",
             "--threads",
             "1",
+            // Few photons: the interruption should land among the tiles.
+            "--photons",
+            "20000",
         ])
         .current_dir(dir.path())
         .spawn()

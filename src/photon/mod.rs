@@ -34,6 +34,9 @@ pub struct PhotonSettings {
     pub gather: Gather,
     /// Final-gather rays per shading point (0: read the map at the visible point).
     pub final_gather: u32,
+    /// Estimate irradiance once at every few photons and look the nearest up
+    /// (`estimate::PrecomputedIrradiance`) instead of gathering at each sample.
+    pub precompute_irradiance: bool,
 }
 
 impl Default for PhotonSettings {
@@ -50,6 +53,7 @@ impl Default for PhotonSettings {
                 filter: GatherFilter::None,
             },
             final_gather: 0,
+            precompute_irradiance: false,
         }
     }
 }
@@ -66,6 +70,8 @@ pub struct PhotonStats {
     pub load_seconds: f64,
     /// Writing the map to a file (`--save-photons`).
     pub save_seconds: f64,
+    /// Estimating the precomputed irradiance (`--precompute-irradiance`).
+    pub precompute_seconds: f64,
 }
 
 impl PhotonSettings {

@@ -163,13 +163,15 @@ pub fn cornell() -> SceneDesc {
     add_block(&mut d, &TALL_BLOCK, tall);
     d.lights.push(cornell_light());
     // Photon mapping by default, with the settings measured best for time and
-    // error against the path tracer (BENCHMARKS.md): 200k photons, up to
-    // 10 hits each (5 loses 1% of the light), radius 0.1, no gather filter (in
-    // this box of right angles it only darkens the corners).
+    // error against the path tracer (BENCHMARKS.md): a million photons, up to
+    // 10 hits each (5 loses 1% of the light), radius 0.06, no gather filter (in
+    // this box of right angles it only darkens the corners), irradiance
+    // precomputed at every 4th photon (3 times faster at the same error).
     d.settings.integrator = Some(crate::integrator::IntegratorKind::Photon);
-    d.settings.photons = Some(200_000);
+    d.settings.photons = Some(1_000_000);
     d.settings.max_bounces = Some(10);
-    d.settings.gather_radius = Some(0.1);
+    d.settings.gather_radius = Some(0.06);
+    d.settings.precompute_irradiance = Some(true);
     d
 }
 
@@ -287,6 +289,9 @@ pub fn cornell_final(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
         max_bounces: Some(5),
         gather_radius: Some(0.4),
         gather_filter: Some(crate::photon::GatherFilter::Report),
+        // Not the report's: a gather of radius 0.4 at each of 64 samples a pixel
+        // would cost an hour; the precomputed estimate gives the same picture.
+        precompute_irradiance: Some(true),
         ..SceneSettings::default()
     };
     Ok(d)

@@ -96,6 +96,7 @@ struct SettingsSpec {
     gather_k: Option<u32>,
     gather_filter: Option<GatherFilterSpec>,
     final_gather: Option<u32>,
+    precompute_irradiance: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -360,6 +361,7 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                 GatherFilterSpec::Report => GatherFilter::Report,
             }),
             final_gather: s.final_gather,
+            precompute_irradiance: s.precompute_irradiance,
         };
     }
 

@@ -92,6 +92,7 @@ pub struct SceneSettings {
     pub gather_k: Option<u32>,
     pub gather_filter: Option<crate::photon::GatherFilter>,
     pub final_gather: Option<u32>,
+    pub precompute_irradiance: Option<bool>,
 }
 
 /// Everything needed to build a scene, before any acceleration structure.
