@@ -70,3 +70,55 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
         "{px:?} vs {want:?}"
     );
 }
+
+#[test]
+fn path_tracer_sees_a_light_in_a_mirror() {
+    // The camera looks at a half-silvered mirror at 45 degrees that shows a
+    // sphere light: next-event estimation cannot reach a light through a
+    // delta BSDF, so the path tracer must count the light's Le right after the
+    // specular bounce, times the reflectance.
+    let power = 20.0;
+    let r = 0.5;
+    let mut d = SceneDesc {
+        name: "mirror-light".into(),
+        camera: CameraDesc {
+            position: Vec3::ZERO,
+            look_at: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 1.0,
+            width: 3,
+            height: 3,
+        },
+        materials: vec![],
+        triangles: vec![],
+        spheres: vec![],
+        lights: vec![Light::Sphere {
+            sphere: raytracer::geometry::Sphere {
+                centre: Vec3::new(3.0, 0.0, 2.0),
+                radius: r,
+            },
+            power: Vec3::splat(power),
+        }],
+        settings: SceneSettings::default(),
+    };
+    let reflectance = Vec3::new(0.5, 0.8, 1.0);
+    let mirror = d.material("mirror", Material::Mirror { reflectance });
+    let diag = Vec3::new(1.0, 0.0, 1.0).normalize() * 0.5;
+    quad(&mut d, Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.5, 0.0), diag, mirror);
+    let scene = Scene::build(d).unwrap();
+    let le = power / (PI * 4.0 * PI * r * r);
+    for integrator in [IntegratorKind::Path, IntegratorKind::Direct] {
+        let settings = RenderSettings {
+            ssaa: 2,
+            spp: 4,
+            integrator,
+            ..Default::default()
+        };
+        let px = render(&scene, &settings, &|| {}).unwrap().film.get(1, 1);
+        let want = reflectance * le;
+        assert!(
+            (px - want).abs().max_element() < 1e-3 * want.max_element(),
+            "{integrator:?}: {px:?} vs {want:?}"
+        );
+    }
+}
