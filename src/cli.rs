@@ -29,6 +29,8 @@ pub struct Cli {
     pub render: RenderArgs,
 }
 
+// Parsed once per run: the size of the render options in `View` costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Print statistics of a scene: triangles, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
@@ -152,6 +154,13 @@ pub struct RenderArgs {
     /// Final-gather rays per shading point; 0 reads the photon map at the visible point [default: the scene's, else 0].
     #[arg(long, value_name = "N")]
     pub final_gather: Option<u32>,
+    /// Photons wanted in the caustic map (paths light -> mirror/glass -> diffuse, shown directly); 0 leaves
+    /// caustics out [default: the scene's, else 100000].
+    #[arg(long, value_name = "N")]
+    pub caustic_photons: Option<u64>,
+    /// Gather radius of the caustic map [default: the scene's, else 0.025].
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    pub caustic_radius: Option<f32>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -339,6 +348,14 @@ fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings
             .final_gather
             .or(preset.final_gather)
             .unwrap_or(default.final_gather),
+        caustic_photons: args
+            .caustic_photons
+            .or(preset.caustic_photons)
+            .unwrap_or(default.caustic_photons),
+        caustic_radius: args
+            .caustic_radius
+            .or(preset.caustic_radius)
+            .unwrap_or(default.caustic_radius),
     };
     settings.validate()?;
     Ok(settings)

@@ -133,6 +133,12 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
                 p.trace_seconds,
                 p.build_seconds
             );
+            if p.caustic_stored > 0 {
+                eprintln!(
+                    "caustic map: {} photons emitted, {} stored",
+                    p.caustic_emitted, p.caustic_stored
+                );
+            }
         }
         println!(
             "{} {}x{}{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",

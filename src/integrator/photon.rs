@@ -1,8 +1,15 @@
-//! Photon mapping integrator: direct light by shadow rays, indirect light from
-//! the photon map (Jensen 2001, "Realistic Image Synthesis Using Photon
-//! Mapping", chapter 9).
+//! Photon mapping integrator: direct light by shadow rays, caustics from the
+//! caustic map, indirect light from the global photon map (Jensen 2001,
+//! "Realistic Image Synthesis Using Photon Mapping", chapter 9).
 //!
-//! At a camera ray's diffuse hit x:
+//! Camera rays go on through mirrors and glass (Fresnel picks reflection or
+//! refraction) to their first diffuse surface x, or a light. Light reaches x
+//! along disjoint kinds of paths, each counted by one estimate: light -> x by
+//! shadow rays (glass and mirrors block them); light -> specular+ -> x by the
+//! caustic map (`--caustic-photons`, gathered within `--caustic-radius`, no
+//! other photons in it; without it such paths are missing); paths with a
+//! diffuse bounce before x by the global map, read without its first-hit and
+//! caustic photons. At a camera ray's diffuse hit x:
 //! - without final gathering, L = Le + f E_direct(shadow rays) + f E_photons(x),
 //!   where the map holds only photons after their first bounce (indirect
 //!   light), or first hits too when `--shadow-samples 0` leaves direct light to
@@ -13,19 +20,22 @@
 //!   map, first-hit photons included: they are the direct light at y, i.e. the
 //!   one-bounce indirect light at x. A gather ray that reaches a light brings
 //!   nothing back, since shadow rays already counted that light (unless they are
-//!   off). So every path light -> ... -> y -> x -> camera is counted once, and
-//!   the only bias left is the blur of the density estimate one bounce away.
+//!   off), nor one that reaches it through mirrors or glass (the caustic map
+//!   did). Gather rays go through mirrors and glass to y. So every path
+//!   light -> ... -> y -> x -> camera is counted once, and the only bias left is
+//!   the blur of the density estimate one bounce away.
 //!
 //! Parameters (see `PhotonSettings`): `--photons`, `--max-bounces`,
 //! `--store-first-hit`, `--gather-radius`, `--gather-k`, `--cone-filter`,
-//! `--gather-filter`, `--final-gather`.
+//! `--gather-filter`, `--final-gather`, `--caustic-photons`, `--caustic-radius`.
 
-use super::direct::irradiance;
+use super::direct::{first_diffuse_hit, irradiance, MAX_SPECULAR_DEPTH};
 use super::{RadianceEstimator, RayStats};
+use crate::material::Transport;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::photon::estimate;
 use crate::photon::map::Neighbour;
-use crate::photon::{Gather, PhotonMap};
+use crate::photon::{Admit, Gather, PhotonMap};
 use crate::sampling::{cosine_hemisphere, hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
 use std::cell::RefCell;
@@ -34,6 +44,9 @@ pub struct PhotonMapping<'a> {
     /// `None` when no photons were traced: direct light only.
     pub map: Option<&'a PhotonMap>,
     pub gather: Gather,
+    /// `None` when there is none (no mirrors or glass, or `--caustic-photons 0`).
+    pub caustics: Option<&'a PhotonMap>,
+    pub caustic_radius: f32,
     pub shadow_samples: u32,
     pub final_gather: u32,
 }
@@ -43,15 +56,41 @@ thread_local! {
     static SCRATCH: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
 }
 
+/// Unit normal of a hit on the side `wo` faces.
+fn facing(hit: &Hit, wo: Vec3) -> Vec3 {
+    if hit.ng.dot(wo) < 0.0 {
+        -hit.ng
+    } else {
+        hit.ng
+    }
+}
+
 impl PhotonMapping<'_> {
-    /// Photon irradiance at a hit, on the side `wo` faces.
-    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, direct: bool) -> Vec3 {
-        let n = if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng };
-        SCRATCH.with(|s| estimate::irradiance(map, &self.gather, hit.p, n, direct, &mut s.borrow_mut()))
+    /// Global-map photon irradiance at a hit, on the side `wo` faces.
+    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, admit: Admit) -> Vec3 {
+        let n = facing(hit, wo);
+        SCRATCH.with(|s| estimate::irradiance(map, &self.gather, hit.p, n, admit, &mut s.borrow_mut()))
+    }
+
+    /// Caustic irradiance at a hit from the caustic map: a plain fixed-radius
+    /// estimate with its own, smaller radius.
+    fn caustic_irradiance(&self, hit: &Hit, wo: Vec3) -> Vec3 {
+        let Some(map) = self.caustics else {
+            return Vec3::ZERO;
+        };
+        let g = Gather {
+            radius: self.caustic_radius,
+            k: None,
+            cone: false,
+            filter: self.gather.filter,
+        };
+        let n = facing(hit, wo);
+        SCRATCH.with(|s| estimate::irradiance(map, &g, hit.p, n, Admit::ALL, &mut s.borrow_mut()))
     }
 
     /// Indirect irradiance at `hit` by final gathering: the mean radiance
-    /// brought back by cosine-distributed rays, times pi.
+    /// brought back by cosine-distributed rays, times pi. Gather rays go on
+    /// through mirrors and glass to a diffuse surface.
     fn final_gather(
         &self,
         scene: &Scene,
@@ -72,17 +111,33 @@ impl PhotonMapping<'_> {
                 continue;
             }
             stats.other_rays += 1;
-            let Some(y) = scene.intersect(&Ray::new(offset_origin(hit.p, ng, d), d), 0.0, f32::INFINITY) else {
-                continue;
-            };
-            if let Some(l) = y.light {
-                if self.shadow_samples == 0 {
-                    sum += scene.lights[l as usize].radiance();
+            let mut ray = Ray::new(offset_origin(hit.p, ng, d), d);
+            let mut beta = Vec3::ONE;
+            for depth in 0..=MAX_SPECULAR_DEPTH {
+                let Some(y) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
+                    break;
+                };
+                if let Some(l) = y.light {
+                    // Shadow rays counted this light, or the caustic map did
+                    // when it came through mirrors or glass.
+                    if self.shadow_samples == 0 && depth == 0 {
+                        sum += scene.lights[l as usize].radiance();
+                    }
+                    break;
                 }
-                continue;
+                let m = scene.material(y.material);
+                if m.is_specular() {
+                    let Some(s) = m.sample_specular(-ray.d, y.ng, rng.next_f32(), Transport::Radiance) else {
+                        break;
+                    };
+                    beta *= s.weight;
+                    stats.other_rays += 1;
+                    ray = Ray::new(offset_origin(y.p, y.ng, s.wi), s.wi);
+                    continue;
+                }
+                sum += beta * (m.le() + m.f() * self.photon_irradiance(map, &y, -ray.d, Admit::ALL));
+                break;
             }
-            let m = scene.material(y.material);
-            sum += m.le() + m.f() * self.photon_irradiance(map, &y, -d, true);
         }
         // E = integral L cos = pi * mean(L) under the pdf cos / pi.
         sum * (std::f32::consts::PI / n as f32)
@@ -91,27 +146,30 @@ impl PhotonMapping<'_> {
 
 impl RadianceEstimator for PhotonMapping<'_> {
     fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let Some(hit) = scene.intersect(ray, 0.0, f32::INFINITY) else {
+        let Some((hit, wo, beta)) = first_diffuse_hit(scene, *ray, rng, stats) else {
             return Vec3::ZERO;
         };
         if let Some(l) = hit.light {
-            return scene.lights[l as usize].radiance();
+            return beta * scene.lights[l as usize].radiance();
         }
         let m = scene.material(hit.material);
-        let wo = -ray.d;
-        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats);
+        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats) + self.caustic_irradiance(&hit, wo);
         if let Some(map) = self.map {
             e += if self.final_gather > 0 {
                 self.final_gather(scene, map, &hit, wo, rng, stats)
             } else {
-                self.photon_irradiance(map, &hit, wo, self.shadow_samples == 0)
+                let admit = Admit {
+                    direct: self.shadow_samples == 0,
+                    caustic: false,
+                };
+                self.photon_irradiance(map, &hit, wo, admit)
             };
         }
-        m.le() + m.f() * e
+        beta * (m.le() + m.f() * e)
     }
 }
 
-/// Traces the photon map (if any photons are asked for), then renders.
+/// Traces the photon maps (if any photons are asked for), then renders.
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
@@ -120,15 +178,30 @@ pub fn render(
     let mut ps = settings.photon;
     // Final gathering and photon-only direct light read first-hit photons.
     ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
-    let built = (ps.photons > 0).then(|| crate::photon::build_map(scene, &ps, settings.seed));
+    let mut built = (ps.photons > 0).then(|| crate::photon::build_map(scene, &ps, settings.seed));
+    let mut caustic_stats = crate::photon::PhotonStats::default();
+    let caustics = crate::photon::build_caustic_map(scene, &ps, settings.seed, &mut caustic_stats);
+    let stats = match built.as_mut() {
+        Some((_, s)) => {
+            s.trace_seconds += caustic_stats.trace_seconds;
+            s.build_seconds += caustic_stats.build_seconds;
+            s.bytes += caustic_stats.bytes;
+            s.caustic_emitted = caustic_stats.caustic_emitted;
+            s.caustic_stored = caustic_stats.caustic_stored;
+            Some(s.clone())
+        }
+        None => caustics.is_some().then_some(caustic_stats),
+    };
     let est = PhotonMapping {
         map: built.as_ref().map(|(m, _)| m),
         gather: ps.gather,
+        caustics: caustics.as_ref(),
+        caustic_radius: ps.caustic_radius,
         shadow_samples: settings.shadow_samples,
         final_gather: ps.final_gather,
     };
     let out = super::render_tiles(scene, settings, &est, on_tile);
-    (out, built.map(|(_, s)| s))
+    (out, stats)
 }
 
 #[cfg(test)]

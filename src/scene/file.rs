@@ -96,6 +96,8 @@ struct SettingsSpec {
     gather_k: Option<u32>,
     gather_filter: Option<GatherFilterSpec>,
     final_gather: Option<u32>,
+    caustic_photons: Option<u64>,
+    caustic_radius: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -334,6 +336,9 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
         if s.gather_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
             return Err(src.error(settings.span(), "settings: gather_radius must be a positive number"));
         }
+        if s.caustic_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
+            return Err(src.error(settings.span(), "settings: caustic_radius must be a positive number"));
+        }
         if s.gather_k == Some(0) {
             return Err(src.error(settings.span(), "settings: gather_k must be at least 1"));
         }
@@ -360,6 +365,8 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                 GatherFilterSpec::Report => GatherFilter::Report,
             }),
             final_gather: s.final_gather,
+            caustic_photons: s.caustic_photons,
+            caustic_radius: s.caustic_radius,
         };
     }
 
