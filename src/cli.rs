@@ -161,6 +161,15 @@ pub struct RenderArgs {
     /// Gather radius of the caustic map [default: the scene's, else 0.025].
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub caustic_radius: Option<f32>,
+    /// SPPM: camera and photon passes (--photons photons each; --gather-radius is the initial radius) [default: 64].
+    #[arg(long, value_name = "N")]
+    pub passes: Option<u32>,
+    /// SPPM: fraction of each pass's photons kept as the radius shrinks, in (0, 1] [default: 0.7].
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
+    pub alpha: Option<f32>,
+    /// SPPM: also write the image so far to --output every K passes.
+    #[arg(long, value_name = "K")]
+    pub write_every: Option<u32>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -263,8 +272,41 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
         spp,
         max_depth: args.max_depth,
         photon,
+        passes: args.passes.unwrap_or(64),
+        alpha: args.alpha.unwrap_or(0.7),
     };
+    check_sppm(args, &settings)?;
     Ok((loaded, settings))
+}
+
+/// SPPM options: refused with other integrators, and checked.
+fn check_sppm(args: &RenderArgs, s: &RenderSettings) -> Result<()> {
+    use raytracer::integrator::IntegratorKind::Sppm;
+    if s.integrator != Sppm {
+        for (name, given) in [
+            ("--passes", args.passes.is_some()),
+            ("--alpha", args.alpha.is_some()),
+            ("--write-every", args.write_every.is_some()),
+        ] {
+            if given {
+                bail!("{name}: only for --integrator sppm");
+            }
+        }
+        return Ok(());
+    }
+    if s.passes == 0 || s.passes > 1 << 20 {
+        bail!("--passes {}: must be between 1 and {}", s.passes, 1 << 20);
+    }
+    if !(s.alpha > 0.0 && s.alpha <= 1.0) {
+        bail!("--alpha {}: must be in (0, 1]", s.alpha);
+    }
+    if !s.photon.gather.radius.is_finite() || s.photon.gather.k.is_some() {
+        bail!("--integrator sppm: needs a finite --gather-radius (its initial radius), not --gather-k");
+    }
+    if args.write_every == Some(0) {
+        bail!("--write-every 0: must be at least 1");
+    }
+    Ok(())
 }
 
 fn parse_crop(text: &str, w: u32, h: u32) -> Result<PixelRect> {

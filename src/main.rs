@@ -112,7 +112,15 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     };
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     let _ = ctrlc::set_handler(|| integrator::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
-    let out = integrator::render(&scene, &settings, &|| bar.inc(1))?;
+    // SPPM with --write-every K: the image so far, every K passes, written atomically.
+    let window = integrator::frame_window(&scene, &settings)?;
+    let on_pass = |k: u32, film: &raytracer::Film| match args.write_every {
+        Some(every) if k.is_multiple_of(every) => {
+            raytracer::image_io::write_image_in_frame(film, &window, &[], &args.output, args.exposure)
+        }
+        _ => Ok(()),
+    };
+    let out = integrator::render_observed(&scene, &settings, &|| bar.inc(1), &on_pass)?;
     bar.finish_and_clear();
     if out.tiles_done < out.tiles_total {
         let path = partial_path(&args.output);

@@ -10,6 +10,7 @@ pub(crate) mod analytic;
 pub mod direct;
 pub mod path;
 pub mod photon;
+pub mod sppm;
 
 use crate::error::{Error, Result};
 use crate::film::{Film, Filter, FrameWindow, PixelRect};
@@ -38,6 +39,8 @@ pub enum IntegratorKind {
     Photon,
     /// Reference path tracer (unbiased, slow to converge).
     Path,
+    /// Stochastic progressive photon mapping (consistent; refines over --passes).
+    Sppm,
 }
 
 /// Settings common to every integrator.
@@ -60,6 +63,10 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
+    /// SPPM: camera and photon passes.
+    pub passes: u32,
+    /// SPPM: fraction of each pass's photons kept as the radius shrinks.
+    pub alpha: f32,
 }
 
 impl RenderSettings {
@@ -67,6 +74,7 @@ impl RenderSettings {
     pub fn samples_per_pixel(&self) -> u32 {
         match self.integrator {
             IntegratorKind::Path => self.spp,
+            IntegratorKind::Sppm => self.passes,
             _ => self.ssaa * self.ssaa,
         }
     }
@@ -85,6 +93,8 @@ impl Default for RenderSettings {
             spp: 64,
             max_depth: None,
             photon: PhotonSettings::default(),
+            passes: 64,
+            alpha: 0.7,
         }
     }
 }
@@ -144,14 +154,41 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 
 /// Renders the scene's full frame with the chosen integrator.
 pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sync)) -> Result<RenderOutput> {
+    render_observed(scene, settings, on_tile, &|_, _| Ok(()))
+}
+
+/// `render`, showing progressive integrators' (SPPM's) image after each pass
+/// k to `on_pass(k, film)`, which may stop the render with an error.
+pub fn render_observed(
+    scene: &Scene,
+    settings: &RenderSettings,
+    on_tile: &(dyn Fn() + Sync),
+    on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
+) -> Result<RenderOutput> {
     if settings.ssaa == 0 {
         return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
     }
     if settings.integrator == IntegratorKind::Path && settings.spp == 0 {
         return Err(Error::InvalidSetting("--spp must be at least 1".into()));
     }
-    if settings.integrator == IntegratorKind::Photon {
+    if matches!(settings.integrator, IntegratorKind::Photon | IntegratorKind::Sppm) {
         settings.photon.validate()?;
+    }
+    if settings.integrator == IntegratorKind::Sppm {
+        if settings.passes == 0 {
+            return Err(Error::InvalidSetting("--passes must be at least 1".into()));
+        }
+        if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
+            return Err(Error::InvalidSetting(format!(
+                "--alpha {}: must be in (0, 1]",
+                settings.alpha
+            )));
+        }
+        if !settings.photon.gather.radius.is_finite() {
+            return Err(Error::InvalidSetting(
+                "--gather-radius: SPPM needs a finite initial radius".into(),
+            ));
+        }
     }
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
@@ -160,16 +197,23 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
             let est = direct::DirectLighting {
                 shadow_samples: settings.shadow_samples,
             };
-            (render_tiles(scene, settings, &est, on_tile), None)
+            Ok((render_tiles(scene, settings, &est, on_tile), None))
         }
         IntegratorKind::Path => {
             let est = path::PathTracer {
                 max_depth: settings.max_depth,
             };
-            (render_tiles(scene, settings, &est, on_tile), None)
+            Ok((render_tiles(scene, settings, &est, on_tile), None))
         }
-        IntegratorKind::Photon => photon::render(scene, settings, on_tile),
-    })?;
+        IntegratorKind::Photon => Ok(photon::render(scene, settings, on_tile)),
+        IntegratorKind::Sppm => {
+            let total = tile_count(window.rect.width(), window.rect.height());
+            sppm::render(scene, settings, on_tile, on_pass).map(|(film, stats, passes, photons)| {
+                let done = total * passes as u64 / settings.passes as u64;
+                ((film, stats, done), Some(photons))
+            })
+        }
+    })??;
     Ok(RenderOutput {
         film,
         tiles_done,

@@ -17,8 +17,8 @@
 //! Stored photons are tagged by the path that brought them: direct (light ->
 //! here), caustic (light -> specular+ -> here) or indirect (a diffuse bounce
 //! before). The caustic map (`trace_caustics`) keeps only caustic photons, from
-//! its own emission; the global map keeps everything after the first diffuse
-//! hit, and first hits too when asked.
+//! its own emission; the global map keeps caustic and indirect photons, and
+//! direct ones too when asked.
 //!
 //! Photons are traced on every core in fixed chunks of consecutive indices;
 //! photon i draws from an RNG keyed by (seed, i) and chunks are concatenated in
@@ -185,7 +185,8 @@ fn trace_chunk(
                     break;
                 }
                 Keep::Global => {
-                    if !first || settings.store_first_hit {
+                    // Caustic first hits too: shadow rays cannot reach them.
+                    if !first || caustic || settings.store_first_hit {
                         let ph = Photon::new(hit.p, wi, ng, power, hit.object, first && !caustic);
                         photons.push(if caustic { ph.caustic() } else { ph });
                     }

@@ -106,6 +106,7 @@ enum IntegratorSpec {
     Direct,
     Photon,
     Path,
+    Sppm,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -354,6 +355,7 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                 IntegratorSpec::Direct => IntegratorKind::Direct,
                 IntegratorSpec::Photon => IntegratorKind::Photon,
                 IntegratorSpec::Path => IntegratorKind::Path,
+                IntegratorSpec::Sppm => IntegratorKind::Sppm,
             }),
             photons: s.photons,
             max_bounces: s.max_bounces,
