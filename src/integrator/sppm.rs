@@ -28,7 +28,7 @@
 //! Parameters: `--passes N` [64]; `--photons N` photons per pass [the scene's,
 //! else 200000]; `--alpha A` [0.7], the fraction of new photons kept;
 //! `--gather-radius R`, the initial radius [the scene's, else 0.1];
-//! `--max-bounces`, `--shadow-samples`; `--write-every K` writes the image
+//! `--max-bounces` [the scene's, else 16], `--shadow-samples`; `--write-every K` writes the image
 //! every K passes.
 
 use super::direct::{first_diffuse_hit, irradiance};
