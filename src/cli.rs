@@ -29,6 +29,8 @@ pub struct Cli {
     pub render: RenderArgs,
 }
 
+// Parsed once per run: the size of the render options in `View` costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Print statistics of a scene: triangles, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
@@ -131,7 +133,7 @@ pub struct RenderArgs {
     /// Pixel reconstruction filter.
     #[arg(long, value_enum, default_value_t = Filter::Box)]
     pub filter: Filter,
-    /// Light transport algorithm [default: the scene's: photon for cornell, else direct].
+    /// Light transport algorithm [default: the scene's: photon for cornell and cornell-specular, else direct].
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorKind>,
     /// Path tracer: samples per pixel (replaces --ssaa) [default: 64].
@@ -140,16 +142,19 @@ pub struct RenderArgs {
     /// Path tracer: most bounces, 1 = direct light only [default: no limit, Russian roulette ends paths].
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Photons emitted; 0 turns photon mapping off (direct light only) [default: the scene's, else 200000].
+    /// Photons emitted (SPPM: per pass); 0 turns photon mapping off (direct light only) [default: the scene's,
+    /// else 200000].
     #[arg(long, value_name = "N")]
     pub photons: Option<u64>,
-    /// Surface hits traced per photon, the first being its direct-light hit [default: the scene's, else 5].
+    /// Surface hits traced per photon, the first being its direct-light hit [default: the scene's, else 5; 16 for
+    /// SPPM].
     #[arg(long, value_name = "N")]
     pub max_bounces: Option<u32>,
     /// Store the photons' first hits (direct light) too; final gathering always does.
     #[arg(long)]
     pub store_first_hit: bool,
-    /// Photon gather radius; with --gather-k, the largest radius searched [default: the scene's, else 0.1; unbounded with --gather-k].
+    /// Photon gather radius (SPPM: the initial radius); with --gather-k, the largest radius searched [default: the
+    /// scene's, else 0.1; unbounded with --gather-k].
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub gather_radius: Option<f32>,
     /// Gather the K nearest photons (the radius is the distance to the K-th) instead of all within the radius.
@@ -169,6 +174,22 @@ pub struct RenderArgs {
     /// (Christensen 1999): much faster with wide gathers [default: the scene's, else false; true for cornell-final].
     #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
     pub precompute_irradiance: Option<bool>,
+    /// Photons wanted in the caustic map (paths light -> mirror/glass -> diffuse, shown directly); 0 leaves
+    /// caustics out [default: the scene's, else 100000].
+    #[arg(long, value_name = "N")]
+    pub caustic_photons: Option<u64>,
+    /// Gather radius of the caustic map [default: the scene's, else 0.025].
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    pub caustic_radius: Option<f32>,
+    /// SPPM: camera and photon passes (--photons photons each; --gather-radius is the initial radius) [default: 64].
+    #[arg(long, value_name = "N")]
+    pub passes: Option<u32>,
+    /// SPPM: fraction of each pass's photons kept as the radius shrinks, in (0, 1] [default: 0.7].
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
+    pub alpha: Option<f32>,
+    /// SPPM: also write the image so far to --output every K passes.
+    #[arg(long, value_name = "K")]
+    pub write_every: Option<u32>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -350,9 +371,42 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
         max_depth: args.max_depth,
         photon,
         files: Default::default(),
+        passes: args.passes.unwrap_or(64),
+        alpha: args.alpha.unwrap_or(0.7),
     };
+    check_sppm(args, &settings)?;
     settings.files = state_files(&args.files, &settings)?;
     Ok((loaded, settings))
+}
+
+/// SPPM options: refused with other integrators, and checked.
+fn check_sppm(args: &RenderArgs, s: &RenderSettings) -> Result<()> {
+    use raytracer::integrator::IntegratorKind::Sppm;
+    if s.integrator != Sppm {
+        for (name, given) in [
+            ("--passes", args.passes.is_some()),
+            ("--alpha", args.alpha.is_some()),
+            ("--write-every", args.write_every.is_some()),
+        ] {
+            if given {
+                bail!("{name}: only for --integrator sppm");
+            }
+        }
+        return Ok(());
+    }
+    if s.passes == 0 || s.passes > 1 << 20 {
+        bail!("--passes {}: must be between 1 and {}", s.passes, 1 << 20);
+    }
+    if !(s.alpha > 0.0 && s.alpha <= 1.0) {
+        bail!("--alpha {}: must be in (0, 1]", s.alpha);
+    }
+    if !s.photon.gather.radius.is_finite() || s.photon.gather.k.is_some() {
+        bail!("--integrator sppm: needs a finite --gather-radius (its initial radius), not --gather-k");
+    }
+    if args.write_every == Some(0) {
+        bail!("--write-every 0: must be at least 1");
+    }
+    Ok(())
 }
 
 fn parse_crop(text: &str, w: u32, h: u32) -> Result<PixelRect> {
@@ -404,6 +458,10 @@ pub fn parse_tile(text: &str, w: u32, h: u32, env: impl Fn(&str) -> Option<Strin
     Ok(PixelRect::band(index, count, w, h))
 }
 
+/// Surface hits per photon for SPPM unless given: Russian roulette, not this
+/// limit, should end nearly every path (a 0.75 albedo keeps 1% after 16 hits).
+const SPPM_MAX_BOUNCES: u32 = 16;
+
 /// Photon options over the scene's presets over the defaults, checked
 /// (including the memory the map may need) before any work starts.
 fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings> {
@@ -423,7 +481,14 @@ fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings
     });
     let settings = PhotonSettings {
         photons: args.photons.or(preset.photons).unwrap_or(default.photons),
-        max_bounces: args.max_bounces.or(preset.max_bounces).unwrap_or(default.max_bounces),
+        max_bounces: args.max_bounces.or(preset.max_bounces).unwrap_or(
+            // SPPM converges to the answer only if photon paths are not cut short.
+            if args.integrator.or(preset.integrator) == Some(IntegratorKind::Sppm) {
+                SPPM_MAX_BOUNCES
+            } else {
+                default.max_bounces
+            },
+        ),
         store_first_hit: args.store_first_hit,
         roulette: true,
         gather: Gather {
@@ -440,6 +505,14 @@ fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings
             .precompute_irradiance
             .or(preset.precompute_irradiance)
             .unwrap_or(default.precompute_irradiance),
+        caustic_photons: args
+            .caustic_photons
+            .or(preset.caustic_photons)
+            .unwrap_or(default.caustic_photons),
+        caustic_radius: args
+            .caustic_radius
+            .or(preset.caustic_radius)
+            .unwrap_or(default.caustic_radius),
     };
     settings.validate()?;
     Ok(settings)

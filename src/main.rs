@@ -113,7 +113,15 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     };
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     let _ = ctrlc::set_handler(|| integrator::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
-    let out = integrator::render(&scene, &settings, &|| bar.inc(1))?;
+    // SPPM with --write-every K: the image so far, every K passes, written atomically.
+    let window = integrator::frame_window(&scene, &settings)?;
+    let on_pass = |k: u32, film: &raytracer::Film| match args.write_every {
+        Some(every) if k.is_multiple_of(every) => {
+            raytracer::image_io::write_image_in_frame(film, &window, &[], &args.output, args.exposure)
+        }
+        _ => Ok(()),
+    };
+    let out = integrator::render_observed(&scene, &settings, &|| bar.inc(1), &on_pass)?;
     bar.finish_and_clear();
     if !out.is_complete() {
         let path = partial_path(&args.output);
@@ -182,6 +190,12 @@ fn report_photons(p: &raytracer::photon::PhotonStats, files: &integrator::StateF
             }
         ),
     }
+    if p.caustic_stored > 0 {
+        eprintln!(
+            "caustic map: {} photons emitted, {} stored",
+            p.caustic_emitted, p.caustic_stored
+        );
+    }
     if p.precompute_seconds > 0.0 {
         eprintln!("photons: irradiance precomputed in {:.2} s", p.precompute_seconds);
     }
@@ -198,9 +212,9 @@ fn photons(args: &cli::RenderArgs) -> Result<()> {
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;
     report_dropped(&scene, args.quiet);
-    let map = integrator::with_threads(settings.threads, || integrator::photon::global_map(&scene, &settings))??;
-    if let (Some((_, p)), false) = (&map, args.quiet) {
-        report_photons(p, &settings.files);
+    let maps = integrator::with_threads(settings.threads, || integrator::photon::photon_maps(&scene, &settings))??;
+    if !args.quiet {
+        report_photons(&maps.stats, &settings.files);
     }
     Ok(())
 }

@@ -97,7 +97,7 @@ fn a_saved_photon_map_renders_the_traced_image_and_bad_maps_are_refused() {
     };
     bad("flipped.phm", &[], "checksum");
     bad("short.phm", &[], "truncated");
-    bad("map.phm", &["--max-bounces", "3"], "photons=5000 max_bounces=10");
+    bad("map.phm", &["--max-bounces", "3"], "max_bounces=10");
     bad("map.phm", &["--seed", "1"], "other settings");
     bad("map.phm", &["--light-radius", "0.2"], "different scene");
     bad("render.pfm", &[], "no such file");
@@ -272,4 +272,45 @@ fn sigint_writes_a_checkpoint_that_resumes_where_it_stopped() {
     again.extend_from_slice(&["--resume", "s.ckpt", "--stop-after-passes", "0"]);
     assert_eq!(run(&again, d).status.code(), Some(130));
     assert!(partial == read(d, "s.partial.pfm"), "resumed state differs");
+}
+
+#[test]
+fn the_caustic_map_travels_with_the_global_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "--quiet",
+            "--scene",
+            "cornell-specular",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--ssaa",
+            "1",
+            "--photons",
+            "3000",
+        ];
+        a.extend_from_slice(extra);
+        if !extra.contains(&"--caustic-photons") {
+            a.extend_from_slice(&["--caustic-photons", "3000"]);
+        }
+        a
+    };
+    ok(&args(&["-o", "traced.pfm", "--save-photons", "map.phm"]), d);
+    ok(&args(&["-o", "loaded.pfm", "--load-photons", "map.phm"]), d);
+    assert!(
+        read(d, "traced.pfm") == read(d, "loaded.pfm"),
+        "loaded maps render differently"
+    );
+    // Without its caustic map the image differs, so the loaded one was used.
+    ok(&args(&["-o", "none.pfm", "--caustic-photons", "0"]), d);
+    assert!(read(d, "traced.pfm") != read(d, "none.pfm"));
+    refused(
+        &args(&["-o", "bad.pfm", "--caustic-photons", "100", "--load-photons", "map.phm"]),
+        d,
+        "map.phm",
+        "caustic_photons=3000",
+    );
 }

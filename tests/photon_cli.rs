@@ -30,6 +30,14 @@ fn bad_photon_options_are_refused_before_any_work() {
         (&["--integrator", "path", "--spp", "0"][..], "--spp"),
         (&["--final-gather", "1000000"][..], "--final-gather"),
         (&["--gather-filter", "sideways"][..], "--gather-filter"),
+        (&["--caustic-radius", "0"][..], "--caustic-radius"),
+        (&["--caustic-radius", "-0.1"][..], "--caustic-radius"),
+        (&["--passes", "8"][..], "--passes: only for --integrator sppm"),
+        (&["--integrator", "sppm", "--alpha", "0"][..], "--alpha"),
+        (&["--integrator", "sppm", "--alpha", "1.5"][..], "--alpha"),
+        (&["--integrator", "sppm", "--passes", "0"][..], "--passes"),
+        (&["--integrator", "sppm", "--write-every", "0"][..], "--write-every"),
+        (&["--integrator", "sppm", "--gather-k", "10"][..], "--gather-k"),
     ] {
         let o = raytracer(args, &out);
         let err = String::from_utf8_lossy(&o.stderr);

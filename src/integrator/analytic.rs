@@ -88,3 +88,27 @@ pub fn closed_box(albedo: f32, light: Light) -> Scene {
     d.lights.push(light);
     Scene::build(d).unwrap()
 }
+
+/// A white furnace (the inside of a unit sphere of an emissive Lambertian
+/// material, whose radiance is `le / (1 - albedo)` everywhere) with balls of
+/// other materials (centre, radius, material) in front of the camera. Lossless
+/// mirrors and glass leave the uniform radiance unchanged.
+pub fn furnace_with_balls(wall: Material, balls: &[(Vec3, f32, Material)], size: u32) -> Scene {
+    let mut d = empty(inside_camera(size));
+    let m = d.material("wall", wall);
+    d.spheres.push(SphereDesc {
+        sphere: Sphere {
+            centre: Vec3::ZERO,
+            radius: 1.0,
+        },
+        material: m,
+    });
+    for (i, &(centre, radius, material)) in balls.iter().enumerate() {
+        let m = d.material(&format!("ball{i}"), material);
+        d.spheres.push(SphereDesc {
+            sphere: Sphere { centre, radius },
+            material: m,
+        });
+    }
+    Scene::build(d).unwrap()
+}

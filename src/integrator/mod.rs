@@ -11,6 +11,7 @@ pub mod checkpoint;
 pub mod direct;
 pub mod path;
 pub mod photon;
+pub mod sppm;
 
 use crate::error::{Error, Result};
 use crate::film::{Film, Filter, FrameWindow, PixelRect};
@@ -41,6 +42,8 @@ pub enum IntegratorKind {
     Photon,
     /// Reference path tracer (unbiased, slow to converge).
     Path,
+    /// Stochastic progressive photon mapping (consistent; refines over --passes).
+    Sppm,
 }
 
 /// Settings common to every integrator.
@@ -65,6 +68,10 @@ pub struct RenderSettings {
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
     pub files: StateFiles,
+    /// SPPM: camera and photon passes.
+    pub passes: u32,
+    /// SPPM: fraction of each pass's photons kept as the radius shrinks.
+    pub alpha: f32,
 }
 
 /// Files that carry work between runs: photon maps and checkpoints of
@@ -90,6 +97,7 @@ impl RenderSettings {
     pub fn samples_per_pixel(&self) -> u32 {
         match self.integrator {
             IntegratorKind::Path => self.spp,
+            IntegratorKind::Sppm => self.passes,
             _ => self.ssaa * self.ssaa,
         }
     }
@@ -109,6 +117,8 @@ impl Default for RenderSettings {
             max_depth: None,
             photon: PhotonSettings::default(),
             files: StateFiles::default(),
+            passes: 64,
+            alpha: 0.7,
         }
     }
 }
@@ -178,14 +188,41 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 
 /// Renders the scene's full frame with the chosen integrator.
 pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sync)) -> Result<RenderOutput> {
+    render_observed(scene, settings, on_tile, &|_, _| Ok(()))
+}
+
+/// `render`, showing progressive integrators' (SPPM's) image after each pass
+/// k to `on_pass(k, film)`, which may stop the render with an error.
+pub fn render_observed(
+    scene: &Scene,
+    settings: &RenderSettings,
+    on_tile: &(dyn Fn() + Sync),
+    on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
+) -> Result<RenderOutput> {
     if settings.ssaa == 0 {
         return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
     }
     if settings.integrator == IntegratorKind::Path && settings.spp == 0 {
         return Err(Error::InvalidSetting("--spp must be at least 1".into()));
     }
-    if settings.integrator == IntegratorKind::Photon {
+    if matches!(settings.integrator, IntegratorKind::Photon | IntegratorKind::Sppm) {
         settings.photon.validate()?;
+    }
+    if settings.integrator == IntegratorKind::Sppm {
+        if settings.passes == 0 {
+            return Err(Error::InvalidSetting("--passes must be at least 1".into()));
+        }
+        if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
+            return Err(Error::InvalidSetting(format!(
+                "--alpha {}: must be in (0, 1]",
+                settings.alpha
+            )));
+        }
+        if !settings.photon.gather.radius.is_finite() {
+            return Err(Error::InvalidSetting(
+                "--gather-radius: SPPM needs a finite initial radius".into(),
+            ));
+        }
     }
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
@@ -208,6 +245,11 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
             IntegratorKind::Photon => {
                 let ((film, stats, done), photons) = photon::render(scene, settings, on_tile)?;
                 (film, stats, done, photons, None)
+            }
+            IntegratorKind::Sppm => {
+                let (film, stats, passes, photons) = sppm::render(scene, settings, on_tile, on_pass)?;
+                let done = tiles_total * passes as u64 / settings.passes as u64;
+                (film, stats, done, Some(photons), None)
             }
         })
     })??;

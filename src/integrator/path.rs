@@ -1,14 +1,20 @@
 //! Reference path tracer: the unbiased estimate the photon mapper is measured
 //! against.
 //!
-//! pbrt-v4's `PathIntegrator` (13.4) reduced to diffuse surfaces: at every
-//! vertex, next-event estimation to the lights (one shadow ray per light,
-//! `direct::irradiance`), then a cosine-distributed bounce (throughput *= albedo)
-//! and, from the third vertex on, Russian roulette with survival probability
-//! min(max throughput, 0.95). A light hit by a camera ray gives its Le; after a
-//! bounce only next-event estimation counts light from lights (one sphere light
-//! at a time, so no MIS is needed). Emissive surfaces are not sampled by shadow
-//! rays, so their Le counts wherever a path hits them.
+//! pbrt-v4's `PathIntegrator` (13.4) for Lambertian, mirror and glass
+//! surfaces: at every diffuse vertex, next-event estimation to the lights (one
+//! shadow ray per light, `direct::irradiance`), then a cosine-distributed
+//! bounce (throughput *= albedo). At a mirror or glass vertex the BSDF is a
+//! delta, so there is no next-event estimation (a shadow ray cannot hit the one
+//! direction it reflects); the specular direction is sampled (Fresnel chooses
+//! reflection or refraction) and the throughput takes the sample's weight. From
+//! the third vertex on, Russian roulette with survival probability
+//! min(max throughput, 0.95). A light hit by a camera ray, or right after a
+//! specular bounce, gives its Le (next-event estimation could not have sampled
+//! that path); after a diffuse bounce only next-event estimation counts light
+//! from lights (one sphere light at a time, so no MIS is needed). Emissive
+//! surfaces are not sampled by shadow rays, so their Le counts wherever a path
+//! hits them.
 //!
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
@@ -24,6 +30,7 @@ use super::checkpoint::{self, Buffer};
 use super::direct::irradiance;
 use super::{accumulate_tiles, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect};
+use crate::material::Transport;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::sampling::{cosine_hemisphere, Rng};
 use crate::scene::Scene;
@@ -49,9 +56,11 @@ impl RadianceEstimator for PathTracer {
         let mut beta = Vec3::ONE;
         let mut ray = *camera_ray;
         let mut depth = 0;
+        // Whether the last bounce was specular: then no shadow ray counted the light it may hit.
+        let mut specular = false;
         while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
             if let Some(li) = hit.light {
-                if depth == 0 {
+                if depth == 0 || specular {
                     l += beta * scene.lights[li as usize].radiance();
                 }
                 break;
@@ -62,18 +71,29 @@ impl RadianceEstimator for PathTracer {
             if self.max_depth.is_some_and(|d| depth >= d) {
                 break;
             }
-            // Next-event estimation.
             let wo = -ray.d;
-            l += beta * m.f() * irradiance(scene, &hit, wo, 1, rng, stats);
             depth += 1;
-            // Bounce: f cos / pdf = albedo for a cosine-distributed direction.
-            let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-            let (ng, ns) = (hit.ng * side, hit.ns * side);
-            let d = to_world(cosine_hemisphere(rng.next_2d()), ns);
-            if d.dot(ng) <= 0.0 {
-                break;
-            }
-            beta *= m.albedo();
+            let (origin, d) = if m.is_specular() {
+                let Some(s) = m.sample_specular(wo, hit.ng, rng.next_f32(), Transport::Radiance) else {
+                    break;
+                };
+                beta *= s.weight;
+                specular = true;
+                (offset_origin(hit.p, hit.ng, s.wi), s.wi)
+            } else {
+                // Next-event estimation.
+                l += beta * m.f() * irradiance(scene, &hit, wo, 1, rng, stats);
+                // Bounce: f cos / pdf = albedo for a cosine-distributed direction.
+                let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
+                let (ng, ns) = (hit.ng * side, hit.ns * side);
+                let d = to_world(cosine_hemisphere(rng.next_2d()), ns);
+                if d.dot(ng) <= 0.0 {
+                    break;
+                }
+                beta *= m.albedo();
+                specular = false;
+                (offset_origin(hit.p, ng, d), d)
+            };
             if depth >= ROULETTE_DEPTH {
                 let q = beta.max_element().min(MAX_SURVIVAL);
                 if rng.next_f32() >= q {
@@ -82,7 +102,7 @@ impl RadianceEstimator for PathTracer {
                 beta /= q;
             }
             stats.other_rays += 1;
-            ray = Ray::new(offset_origin(hit.p, ng, d), d);
+            ray = Ray::new(origin, d);
         }
         l
     }
@@ -263,6 +283,39 @@ mod tests {
                 (mean - expected).abs() / expected < tolerance,
                 "depth {d}: {mean} vs {expected}"
             );
+        }
+    }
+
+    #[test]
+    fn lossless_glass_and_mirror_vanish_in_a_white_furnace() {
+        // In uniform radiance a lossless mirror or glass ball changes nothing:
+        // refraction scales radiance by 1/eta^2 going in and eta^2 coming out.
+        // A missing factor, or light counted by both shadow rays and specular
+        // hits, shows in the pixels that see the balls.
+        use crate::integrator::analytic::furnace_with_balls;
+        let (a, le) = (0.5, Vec3::new(1.0, 0.5, 0.25));
+        let scene = furnace_with_balls(
+            Material::Emissive {
+                albedo: Vec3::splat(a),
+                le,
+            },
+            &[
+                (Vec3::new(-0.15, 0.0, 0.75), 0.15, Material::Glass { ior: 1.5 }),
+                (
+                    Vec3::new(0.15, 0.0, 0.75),
+                    0.12,
+                    Material::Mirror { reflectance: Vec3::ONE },
+                ),
+            ],
+            16,
+        );
+        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let expected = le / (1.0 - a);
+        // Each ball covers the middle columns of its half of the image.
+        for (x0, x1) in [(3, 7), (9, 13)] {
+            let mean = film.mean(x0, 6, x1, 10);
+            let err = ((mean - expected) / expected).abs().max_element();
+            assert!(err < 0.02, "columns {x0}..{x1}: {mean:?} vs {expected:?}");
         }
     }
 

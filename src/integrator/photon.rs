@@ -1,8 +1,15 @@
-//! Photon mapping integrator: direct light by shadow rays, indirect light from
-//! the photon map (Jensen 2001, "Realistic Image Synthesis Using Photon
-//! Mapping", chapter 9).
+//! Photon mapping integrator: direct light by shadow rays, caustics from the
+//! caustic map, indirect light from the global photon map (Jensen 2001,
+//! "Realistic Image Synthesis Using Photon Mapping", chapter 9).
 //!
-//! At a camera ray's diffuse hit x:
+//! Camera rays go on through mirrors and glass (Fresnel picks reflection or
+//! refraction) to their first diffuse surface x, or a light. Light reaches x
+//! along disjoint kinds of paths, each counted by one estimate: light -> x by
+//! shadow rays (glass and mirrors block them); light -> specular+ -> x by the
+//! caustic map (`--caustic-photons`, gathered within `--caustic-radius`, no
+//! other photons in it; without it such paths are missing); paths with a
+//! diffuse bounce before x by the global map, read without its first-hit and
+//! caustic photons. At a camera ray's diffuse hit x:
 //! - without final gathering, L = Le + f E_direct(shadow rays) + f E_photons(x),
 //!   where the map holds only photons after their first bounce (indirect
 //!   light), or first hits too when `--shadow-samples 0` leaves direct light to
@@ -13,21 +20,24 @@
 //!   map, first-hit photons included: they are the direct light at y, i.e. the
 //!   one-bounce indirect light at x. A gather ray that reaches a light brings
 //!   nothing back, since shadow rays already counted that light (unless they are
-//!   off). So every path light -> ... -> y -> x -> camera is counted once, and
-//!   the only bias left is the blur of the density estimate one bounce away.
+//!   off), nor one that reaches it through mirrors or glass (the caustic map
+//!   did). Gather rays go through mirrors and glass to y. So every path
+//!   light -> ... -> y -> x -> camera is counted once, and the only bias left is
+//!   the blur of the density estimate one bounce away.
 //!
 //! Parameters (see `PhotonSettings`): `--photons`, `--max-bounces`,
 //! `--store-first-hit`, `--gather-radius`, `--gather-k`, `--cone-filter`,
-//! `--gather-filter`, `--final-gather`.
+//! `--gather-filter`, `--final-gather`, `--caustic-photons`, `--caustic-radius`.
 
-use super::direct::irradiance;
+use super::direct::{first_diffuse_hit, irradiance, MAX_SPECULAR_DEPTH};
 use super::{RadianceEstimator, RayStats};
 use crate::error::Result;
+use crate::material::Transport;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::photon::estimate::{self, PrecomputedIrradiance};
 use crate::photon::file;
 use crate::photon::map::Neighbour;
-use crate::photon::{Gather, PhotonMap, PhotonSettings, PhotonStats};
+use crate::photon::{Admit, Gather, PhotonMap, PhotonSettings, PhotonStats};
 use crate::sampling::{cosine_hemisphere, hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
 use std::cell::RefCell;
@@ -36,6 +46,9 @@ pub struct PhotonMapping<'a> {
     /// `None` when no photons were traced: direct light only.
     pub map: Option<&'a PhotonMap>,
     pub gather: Gather,
+    /// `None` when there is none (no mirrors or glass, or `--caustic-photons 0`).
+    pub caustics: Option<&'a PhotonMap>,
+    pub caustic_radius: f32,
     pub shadow_samples: u32,
     pub final_gather: u32,
     /// Irradiance precomputed at the map's photons, read instead of gathering.
@@ -47,18 +60,45 @@ thread_local! {
     static SCRATCH: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
 }
 
+/// Unit normal of a hit on the side `wo` faces.
+fn facing(hit: &Hit, wo: Vec3) -> Vec3 {
+    if hit.ng.dot(wo) < 0.0 {
+        -hit.ng
+    } else {
+        hit.ng
+    }
+}
+
 impl PhotonMapping<'_> {
-    /// Photon irradiance at a hit, on the side `wo` faces.
-    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, direct: bool) -> Vec3 {
-        let n = if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng };
+    /// Global-map photon irradiance at a hit, on the side `wo` faces.
+    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, admit: Admit) -> Vec3 {
+        let n = facing(hit, wo);
         SCRATCH.with(|s| match self.precomputed {
+            // Built with the admission this integrator reads the map with.
             Some(pre) => pre.lookup(hit.p, n, &mut s.borrow_mut()),
-            None => estimate::irradiance(map, &self.gather, hit.p, n, direct, &mut s.borrow_mut()),
+            None => estimate::irradiance(map, &self.gather, hit.p, n, admit, &mut s.borrow_mut()),
         })
     }
 
+    /// Caustic irradiance at a hit from the caustic map: a plain fixed-radius
+    /// estimate with its own, smaller radius.
+    fn caustic_irradiance(&self, hit: &Hit, wo: Vec3) -> Vec3 {
+        let Some(map) = self.caustics else {
+            return Vec3::ZERO;
+        };
+        let g = Gather {
+            radius: self.caustic_radius,
+            k: None,
+            cone: false,
+            filter: self.gather.filter,
+        };
+        let n = facing(hit, wo);
+        SCRATCH.with(|s| estimate::irradiance(map, &g, hit.p, n, Admit::ALL, &mut s.borrow_mut()))
+    }
+
     /// Indirect irradiance at `hit` by final gathering: the mean radiance
-    /// brought back by cosine-distributed rays, times pi.
+    /// brought back by cosine-distributed rays, times pi. Gather rays go on
+    /// through mirrors and glass to a diffuse surface.
     fn final_gather(
         &self,
         scene: &Scene,
@@ -79,17 +119,33 @@ impl PhotonMapping<'_> {
                 continue;
             }
             stats.other_rays += 1;
-            let Some(y) = scene.intersect(&Ray::new(offset_origin(hit.p, ng, d), d), 0.0, f32::INFINITY) else {
-                continue;
-            };
-            if let Some(l) = y.light {
-                if self.shadow_samples == 0 {
-                    sum += scene.lights[l as usize].radiance();
+            let mut ray = Ray::new(offset_origin(hit.p, ng, d), d);
+            let mut beta = Vec3::ONE;
+            for depth in 0..=MAX_SPECULAR_DEPTH {
+                let Some(y) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
+                    break;
+                };
+                if let Some(l) = y.light {
+                    // Shadow rays counted this light, or the caustic map did
+                    // when it came through mirrors or glass.
+                    if self.shadow_samples == 0 && depth == 0 {
+                        sum += scene.lights[l as usize].radiance();
+                    }
+                    break;
                 }
-                continue;
+                let m = scene.material(y.material);
+                if m.is_specular() {
+                    let Some(s) = m.sample_specular(-ray.d, y.ng, rng.next_f32(), Transport::Radiance) else {
+                        break;
+                    };
+                    beta *= s.weight;
+                    stats.other_rays += 1;
+                    ray = Ray::new(offset_origin(y.p, y.ng, s.wi), s.wi);
+                    continue;
+                }
+                sum += beta * (m.le() + m.f() * self.photon_irradiance(map, &y, -ray.d, Admit::ALL));
+                break;
             }
-            let m = scene.material(y.material);
-            sum += m.le() + m.f() * self.photon_irradiance(map, &y, -d, true);
         }
         // E = integral L cos = pi * mean(L) under the pdf cos / pi.
         sum * (std::f32::consts::PI / n as f32)
@@ -98,27 +154,30 @@ impl PhotonMapping<'_> {
 
 impl RadianceEstimator for PhotonMapping<'_> {
     fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let Some(hit) = scene.intersect(ray, 0.0, f32::INFINITY) else {
+        let Some((hit, wo, beta)) = first_diffuse_hit(scene, *ray, rng, stats) else {
             return Vec3::ZERO;
         };
         if let Some(l) = hit.light {
-            return scene.lights[l as usize].radiance();
+            return beta * scene.lights[l as usize].radiance();
         }
         let m = scene.material(hit.material);
-        let wo = -ray.d;
-        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats);
+        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats) + self.caustic_irradiance(&hit, wo);
         if let Some(map) = self.map {
             e += if self.final_gather > 0 {
                 self.final_gather(scene, map, &hit, wo, rng, stats)
             } else {
-                self.photon_irradiance(map, &hit, wo, self.shadow_samples == 0)
+                let admit = Admit {
+                    direct: self.shadow_samples == 0,
+                    caustic: false,
+                };
+                self.photon_irradiance(map, &hit, wo, admit)
             };
         }
-        m.le() + m.f() * e
+        beta * (m.le() + m.f() * e)
     }
 }
 
-/// The photon settings that decide the map: final gathering and photon-only
+/// The photon settings that decide the maps: final gathering and photon-only
 /// direct light read first-hit photons, so these store them.
 pub fn map_settings(settings: &super::RenderSettings) -> PhotonSettings {
     let mut ps = settings.photon;
@@ -126,74 +185,134 @@ pub fn map_settings(settings: &super::RenderSettings) -> PhotonSettings {
     ps
 }
 
-/// The global photon map: read from `--load-photons`, or traced (and written
-/// to `--save-photons` if asked); `None` when no photons are asked for.
-pub fn global_map(scene: &Scene, settings: &super::RenderSettings) -> Result<Option<(PhotonMap, PhotonStats)>> {
-    let ps = map_settings(settings);
-    if ps.photons == 0 {
-        return Ok(None);
+/// Which stored photons the global map is read with: everything under final
+/// gathering (the gather rays' hits see every path); else not the caustic
+/// photons (the caustic map has them) nor the direct ones (shadow rays).
+pub fn global_admit(settings: &super::RenderSettings) -> Admit {
+    if settings.photon.final_gather > 0 {
+        Admit::ALL
+    } else {
+        Admit {
+            direct: settings.shadow_samples == 0,
+            caustic: false,
+        }
     }
+}
+
+/// The photon maps of a render: global and caustic, each `None` when not
+/// asked for (or, for the caustic map, when the scene has no mirror or glass).
+pub struct PhotonMaps {
+    pub global: Option<PhotonMap>,
+    pub caustic: Option<PhotonMap>,
+    pub stats: PhotonStats,
+}
+
+/// Tags of the maps in photon map files.
+const GLOBAL: &str = "global";
+const CAUSTIC: &str = "caustic";
+
+/// The photon maps: read from `--load-photons`, or traced (and written to
+/// `--save-photons` if asked).
+pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<PhotonMaps> {
+    let ps = map_settings(settings);
     let header = file::header(scene, file::key(&ps, settings.seed));
     if let Some(path) = &settings.files.load_photons {
         let start = std::time::Instant::now();
         let mut maps = file::load(path, &header)?;
-        let global = file::take(&mut maps, GLOBAL, path)?;
-        let stats = PhotonStats {
-            emitted: global.emitted,
-            stored: global.map.len(),
-            bytes: global.map.bytes(),
-            load_seconds: start.elapsed().as_secs_f64(),
-            ..PhotonStats::default()
+        let mut stats = PhotonStats::default();
+        let global = if ps.photons > 0 {
+            let g = file::take(&mut maps, GLOBAL, path)?;
+            (stats.emitted, stats.stored, stats.bytes) = (g.emitted, g.map.len(), g.map.bytes());
+            Some(g.map)
+        } else {
+            None
         };
-        return Ok(Some((global.map, stats)));
+        // The key includes the caustic count, so a file without a caustic map
+        // is one traced for a scene that has no mirror or glass.
+        let caustic = file::take(&mut maps, CAUSTIC, path).ok().map(|c| {
+            (stats.caustic_emitted, stats.caustic_stored) = (c.emitted, c.map.len());
+            stats.bytes += c.map.bytes();
+            c.map
+        });
+        stats.load_seconds = start.elapsed().as_secs_f64();
+        return Ok(PhotonMaps { global, caustic, stats });
     }
-    let (map, mut stats) = crate::photon::build_map(scene, &ps, settings.seed);
+    let (global, mut stats) = match ps.photons {
+        0 => (None, PhotonStats::default()),
+        _ => {
+            let (m, s) = crate::photon::build_map(scene, &ps, settings.seed);
+            (Some(m), s)
+        }
+    };
+    let caustic = crate::photon::build_caustic_map(scene, &ps, settings.seed, &mut stats);
     if let Some(path) = &settings.files.save_photons {
         let start = std::time::Instant::now();
-        let stored = file::StoredMap {
-            tag: GLOBAL.into(),
-            emitted: stats.emitted,
-            map,
-        };
-        file::save(path, &header, std::slice::from_ref(&stored))?;
+        let mut stored = vec![];
+        if let Some(map) = global {
+            let emitted = stats.emitted;
+            stored.push(file::StoredMap {
+                tag: GLOBAL.into(),
+                emitted,
+                map,
+            });
+        }
+        if let Some(map) = caustic {
+            let emitted = stats.caustic_emitted;
+            stored.push(file::StoredMap {
+                tag: CAUSTIC.into(),
+                emitted,
+                map,
+            });
+        }
+        file::save(path, &header, &stored)?;
         stats.save_seconds = start.elapsed().as_secs_f64();
-        return Ok(Some((stored.map, stats)));
+        let mut global = None;
+        let mut caustic = None;
+        for m in stored {
+            if m.tag == GLOBAL {
+                global = Some(m.map);
+            } else {
+                caustic = Some(m.map);
+            }
+        }
+        return Ok(PhotonMaps { global, caustic, stats });
     }
-    Ok(Some((map, stats)))
+    Ok(PhotonMaps { global, caustic, stats })
 }
 
-/// Tag of the global map in photon map files.
-const GLOBAL: &str = "global";
-
-/// Gets the photon map (if any photons are asked for), then renders.
+/// Gets the photon maps (if any photons are asked for), then renders.
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
     on_tile: &(dyn Fn() + Sync),
 ) -> Result<((crate::Film, RayStats, u64), Option<PhotonStats>)> {
     let ps = map_settings(settings);
-    let mut built = global_map(scene, settings)?;
-    let precomputed = match &mut built {
-        Some((map, stats)) if ps.precompute_irradiance => {
+    let PhotonMaps {
+        global,
+        caustic,
+        mut stats,
+    } = photon_maps(scene, settings)?;
+    let precomputed = match &global {
+        Some(map) if ps.precompute_irradiance => {
             let start = std::time::Instant::now();
-            // Sites see first hits where `photon_irradiance` would: under final
-            // gathering, or when the map carries the direct light.
-            let direct = ps.final_gather > 0 || settings.shadow_samples == 0;
-            let pre = PrecomputedIrradiance::build(map, &ps.gather, direct);
+            let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings));
             stats.precompute_seconds = start.elapsed().as_secs_f64();
             Some(pre)
         }
         _ => None,
     };
     let est = PhotonMapping {
-        map: built.as_ref().map(|(m, _)| m),
+        map: global.as_ref(),
         gather: ps.gather,
+        caustics: caustic.as_ref(),
+        caustic_radius: ps.caustic_radius,
         shadow_samples: settings.shadow_samples,
         final_gather: ps.final_gather,
         precomputed: precomputed.as_ref(),
     };
     let out = super::render_tiles(scene, settings, &est, on_tile);
-    Ok((out, built.map(|(_, s)| s)))
+    let any = global.is_some() || caustic.is_some();
+    Ok((out, any.then_some(stats)))
 }
 
 #[cfg(test)]

@@ -52,15 +52,38 @@ pub struct Gather {
     pub filter: GatherFilter,
 }
 
+/// Which photons that reached a surface with no diffuse bounce before it a
+/// gather may use; photons after a diffuse bounce (indirect light) always count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Admit {
+    /// First hits straight from a light (direct light).
+    pub direct: bool,
+    /// First diffuse hits after mirrors or glass only (caustics).
+    pub caustic: bool,
+}
+
+impl Admit {
+    pub const ALL: Admit = Admit {
+        direct: true,
+        caustic: true,
+    };
+    pub const INDIRECT: Admit = Admit {
+        direct: false,
+        caustic: false,
+    };
+
+    pub fn accepts(&self, ph: &Photon) -> bool {
+        (self.direct || !ph.is_direct()) && (self.caustic || !ph.is_caustic())
+    }
+}
+
 /// Photon irradiance at `p` on the side whose unit normal is `n`: the sum of
 /// (filter-weighted) photon powers over the disc area. Multiply by a Lambertian
-/// BRDF for reflected radiance. `direct` admits first-hit photons.
-pub fn irradiance(map: &PhotonMap, g: &Gather, p: Vec3, n: Vec3, direct: bool, scratch: &mut Vec<Neighbour>) -> Vec3 {
+/// BRDF for reflected radiance. `admit` says which light-path kinds count.
+pub fn irradiance(map: &PhotonMap, g: &Gather, p: Vec3, n: Vec3, admit: Admit, scratch: &mut Vec<Neighbour>) -> Vec3 {
     let min_cos = g.filter.min_cos();
     let accept = |ph: &Photon| {
-        (direct || !ph.is_direct())
-            && ph.arrived_from(n)
-            && (g.filter == GatherFilter::None || ph.normal().dot(n) > min_cos)
+        admit.accepts(ph) && ph.arrived_from(n) && (g.filter == GatherFilter::None || ph.normal().dot(n) > min_cos)
     };
     let weight = |d2: f32, r: f32| {
         if g.cone {
@@ -122,8 +145,8 @@ pub struct PrecomputedIrradiance {
 impl PrecomputedIrradiance {
     /// Estimates the irradiance at every `PRECOMPUTE_STRIDE`-th photon of
     /// `map`, with the photon's surface normal (in parallel; the result does
-    /// not depend on the thread count). `direct` as for [`irradiance`].
-    pub fn build(map: &PhotonMap, g: &Gather, direct: bool) -> PrecomputedIrradiance {
+    /// not depend on the thread count). `admit` as for [`irradiance`].
+    pub fn build(map: &PhotonMap, g: &Gather, admit: Admit) -> PrecomputedIrradiance {
         use rayon::prelude::*;
         let photons = map.photons();
         let sites: Vec<Photon> = (0..photons.len())
@@ -132,7 +155,7 @@ impl PrecomputedIrradiance {
             .map_init(Vec::new, |scratch, i| {
                 let ph = &photons[i];
                 let n = ph.normal();
-                let e = irradiance(map, g, ph.p, n, direct, scratch);
+                let e = irradiance(map, g, ph.p, n, admit, scratch);
                 Photon::new(ph.p, ph.wi(), n, e, ph.object, ph.is_direct())
             })
             .collect();

@@ -49,8 +49,8 @@ pub struct StoredMap {
 /// are the effective ones (first hits stored when final gathering needs them).
 pub fn key(settings: &PhotonSettings, seed: u64) -> String {
     format!(
-        "photons={} max_bounces={} store_first_hit={} roulette={} seed={seed} tracer={TRACER_VERSION}",
-        settings.photons, settings.max_bounces, settings.store_first_hit, settings.roulette
+        "photons={} caustic_photons={} max_bounces={} store_first_hit={} roulette={} seed={seed} tracer={TRACER_VERSION}",
+        settings.photons, settings.caustic_photons, settings.max_bounces, settings.store_first_hit, settings.roulette
     )
 }
 

@@ -33,6 +33,7 @@ const STACK: usize = 64;
 
 const AXIS_MASK: u8 = 0b11;
 const DIRECT: u8 = 0b100;
+const CAUSTIC: u8 = 0b1000;
 
 /// One stored photon: where it landed, what it carried, where it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,7 +42,8 @@ pub struct Photon {
     pub p: Vec3,
     /// f16 bits of power / map unit.
     power: [u16; 3],
-    /// Bits 0-1: split axis of the kd-tree node; bit 2: a first-hit (direct) photon.
+    /// Bits 0-1: split axis of the kd-tree node; bit 2: a first-hit (direct)
+    /// photon; bit 3: a caustic photon (first diffuse hit after specular ones).
     flags: u8,
     _pad: u8,
     /// Octahedral code of the unit direction the photon came from.
@@ -126,7 +128,7 @@ impl Photon {
             f32::from_bits(u32_at(8)),
         );
         let flags = b[18];
-        if !p.is_finite() || flags & AXIS_MASK > 2 || flags & !(AXIS_MASK | DIRECT) != 0 || b[19] != 0 {
+        if !p.is_finite() || flags & AXIS_MASK > 2 || flags & !(AXIS_MASK | DIRECT | CAUSTIC) != 0 || b[19] != 0 {
             return None;
         }
         Some(Photon {
@@ -138,6 +140,18 @@ impl Photon {
             n: u32_at(24),
             object: u32_at(28),
         })
+    }
+
+    /// Marks the photon as a caustic one: it reached its first diffuse surface
+    /// through mirrors or glass only (a path light -> specular+ -> here).
+    pub fn caustic(mut self) -> Photon {
+        self.flags |= CAUSTIC;
+        self
+    }
+
+    /// Whether the photon came from the light through specular surfaces only.
+    pub fn is_caustic(&self) -> bool {
+        self.flags & CAUSTIC != 0
     }
 
     fn axis(&self) -> usize {
@@ -551,7 +565,9 @@ mod tests {
         let p = Photon::new(Vec3::ONE, Vec3::Y, -Vec3::Z, Vec3::new(1.0, 0.2, 1e-3), 7, true);
         let e = (p.power() - Vec3::new(1.0, 0.2, 1e-3)) / Vec3::new(1.0, 0.2, 1e-3);
         assert!(e.abs().max_element() < 1e-3, "{:?}", p.power());
-        assert!(p.is_direct() && p.object == 7);
+        assert!(p.is_direct() && !p.is_caustic() && p.object == 7);
+        let c = p.caustic();
+        assert!(c.is_caustic() && c.is_direct() && c.power() == p.power());
         assert!((p.wi() - Vec3::Y).length() < 1e-6 && (p.normal() + Vec3::Z).length() < 1e-6);
     }
 

@@ -9,7 +9,7 @@ pub mod file;
 pub mod map;
 pub mod trace;
 
-pub use estimate::{Gather, GatherFilter};
+pub use estimate::{Admit, Gather, GatherFilter};
 pub use map::{Photon, PhotonMap};
 
 use crate::error::{Error, Result};
@@ -37,6 +37,11 @@ pub struct PhotonSettings {
     /// Estimate irradiance once at every few photons and look the nearest up
     /// (`estimate::PrecomputedIrradiance`) instead of gathering at each sample.
     pub precompute_irradiance: bool,
+    /// Photons wanted in the caustic map (light -> mirror/glass+ -> diffuse);
+    /// 0: no caustic map, so such paths are not rendered at all.
+    pub caustic_photons: u64,
+    /// Gather radius of the caustic map.
+    pub caustic_radius: f32,
 }
 
 impl Default for PhotonSettings {
@@ -54,6 +59,8 @@ impl Default for PhotonSettings {
             },
             final_gather: 0,
             precompute_irradiance: false,
+            caustic_photons: 100_000,
+            caustic_radius: 0.025,
         }
     }
 }
@@ -72,6 +79,9 @@ pub struct PhotonStats {
     pub save_seconds: f64,
     /// Estimating the precomputed irradiance (`--precompute-irradiance`).
     pub precompute_seconds: f64,
+    /// The caustic map: photons emitted and stored (zero without one).
+    pub caustic_emitted: u64,
+    pub caustic_stored: usize,
 }
 
 impl PhotonSettings {
@@ -91,6 +101,10 @@ impl PhotonSettings {
         if self.max_bounces == 0 || self.max_bounces > 100 {
             return bad(format!("--max-bounces {}: must be between 1 and 100", self.max_bounces));
         }
+        let cr = self.caustic_radius;
+        if !(cr.is_finite() && cr > 0.0) {
+            return bad(format!("--caustic-radius {cr}: must be a finite number > 0"));
+        }
         if self.final_gather > 65_536 {
             return bad(format!("--final-gather {}: at most 65536", self.final_gather));
         }
@@ -105,6 +119,17 @@ impl PhotonSettings {
                 self.max_bounces,
                 std::mem::size_of::<Photon>(),
                 available as f64 / (1u64 << 30) as f64
+            ));
+        }
+        // The caustic pass stores about as many photons as asked for, plus at most one round.
+        let caustic =
+            (self.caustic_photons as u128 + trace::CAUSTIC_ROUND as u128) * std::mem::size_of::<Photon>() as u128;
+        if self.caustic_photons > 0 && need + caustic > available as u128 {
+            return bad(format!(
+                "--caustic-photons {}: the caustic map needs up to {:.1} GiB, more than the {:.1} GiB left",
+                self.caustic_photons,
+                caustic as f64 / (1u64 << 30) as f64,
+                (available as u128 - need) as f64 / (1u64 << 30) as f64
             ));
         }
         // Queries index photons with u32 (unreachable under the memory cap).
@@ -148,4 +173,27 @@ pub fn build_map(scene: &Scene, settings: &PhotonSettings, seed: u64) -> (Photon
         ..PhotonStats::default()
     };
     (map, stats)
+}
+
+/// Traces the caustic map (`None` when the scene has no caustics to trace)
+/// and adds what it did to `stats`.
+pub fn build_caustic_map(
+    scene: &Scene,
+    settings: &PhotonSettings,
+    seed: u64,
+    stats: &mut PhotonStats,
+) -> Option<PhotonMap> {
+    let start = std::time::Instant::now();
+    let traced = trace::trace_caustics(scene, settings, seed);
+    stats.trace_seconds += start.elapsed().as_secs_f64();
+    if traced.photons.is_empty() {
+        return None;
+    }
+    let start = std::time::Instant::now();
+    stats.caustic_emitted = traced.emitted;
+    stats.caustic_stored = traced.photons.len();
+    let map = PhotonMap::build(traced.photons, traced.unit);
+    stats.bytes += map.bytes();
+    stats.build_seconds += start.elapsed().as_secs_f64();
+    Some(map)
 }

@@ -97,6 +97,8 @@ struct SettingsSpec {
     gather_filter: Option<GatherFilterSpec>,
     final_gather: Option<u32>,
     precompute_irradiance: Option<bool>,
+    caustic_photons: Option<u64>,
+    caustic_radius: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -105,6 +107,7 @@ enum IntegratorSpec {
     Direct,
     Photon,
     Path,
+    Sppm,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -335,6 +338,9 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
         if s.gather_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
             return Err(src.error(settings.span(), "settings: gather_radius must be a positive number"));
         }
+        if s.caustic_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
+            return Err(src.error(settings.span(), "settings: caustic_radius must be a positive number"));
+        }
         if s.gather_k == Some(0) {
             return Err(src.error(settings.span(), "settings: gather_k must be at least 1"));
         }
@@ -350,6 +356,7 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                 IntegratorSpec::Direct => IntegratorKind::Direct,
                 IntegratorSpec::Photon => IntegratorKind::Photon,
                 IntegratorSpec::Path => IntegratorKind::Path,
+                IntegratorSpec::Sppm => IntegratorKind::Sppm,
             }),
             photons: s.photons,
             max_bounces: s.max_bounces,
@@ -362,6 +369,8 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
             }),
             final_gather: s.final_gather,
             precompute_irradiance: s.precompute_irradiance,
+            caustic_photons: s.caustic_photons,
+            caustic_radius: s.caustic_radius,
         };
     }
 

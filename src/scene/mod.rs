@@ -93,6 +93,8 @@ pub struct SceneSettings {
     pub gather_filter: Option<crate::photon::GatherFilter>,
     pub final_gather: Option<u32>,
     pub precompute_irradiance: Option<bool>,
+    pub caustic_photons: Option<u64>,
+    pub caustic_radius: Option<f32>,
 }
 
 /// Everything needed to build a scene, before any acceleration structure.

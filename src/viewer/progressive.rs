@@ -77,9 +77,11 @@ impl ViewIntegrator for DirectView {
 /// The view integrator for the render settings' integrator.
 pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
     match settings.integrator {
-        // The preview does not yet trace photons: photon and path renders are
-        // previewed with their direct light.
-        IntegratorKind::Direct | IntegratorKind::Photon | IntegratorKind::Path => Box::new(DirectView::new(settings)),
+        // The preview does not yet trace photons: photon, path and SPPM renders
+        // are previewed with their direct light.
+        IntegratorKind::Direct | IntegratorKind::Photon | IntegratorKind::Path | IntegratorKind::Sppm => {
+            Box::new(DirectView::new(settings))
+        }
     }
 }
 
