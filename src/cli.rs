@@ -92,8 +92,8 @@ pub struct ViewArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Built-in scene (cornell, cornell-bunny, cornell-final) or a TOML scene file (a path ending in .toml,
-    /// or any existing file that is not a built-in name).
+    /// Built-in scene (cornell, cornell-bunny, cornell-final, cornell-specular) or a TOML scene file
+    /// (a path ending in .toml, or any existing file that is not a built-in name).
     #[arg(long, default_value = "cornell", value_name = "NAME|FILE")]
     pub scene: String,
     /// Mesh file (.obj or .ply): the Stanford bunny for cornell-bunny and cornell-final, or a replacement for the
@@ -133,7 +133,7 @@ pub struct RenderArgs {
     /// Pixel reconstruction filter.
     #[arg(long, value_enum, default_value_t = Filter::Box)]
     pub filter: Filter,
-    /// Light transport algorithm [default: the scene's: photon for cornell and cornell-specular, else direct].
+    /// Light transport algorithm [default: the scene's: photon for every built-in scene, else direct].
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorKind>,
     /// Path tracer: samples per pixel (replaces --ssaa) [default: 64].

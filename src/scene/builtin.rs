@@ -162,17 +162,25 @@ pub fn cornell() -> SceneDesc {
     let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
     add_block(&mut d, &TALL_BLOCK, tall);
     d.lights.push(cornell_light());
-    // Photon mapping by default, with the settings measured best for time and
-    // error against the path tracer (BENCHMARKS.md): a million photons, up to
-    // 10 hits each (5 loses 1% of the light), radius 0.06, no gather filter (in
-    // this box of right angles it only darkens the corners), irradiance
-    // precomputed at every 4th photon (3 times faster at the same error).
-    d.settings.integrator = Some(crate::integrator::IntegratorKind::Photon);
-    d.settings.photons = Some(1_000_000);
-    d.settings.max_bounces = Some(10);
-    d.settings.gather_radius = Some(0.06);
-    d.settings.precompute_irradiance = Some(true);
+    d.settings = cornell_photon_preset();
     d
+}
+
+/// Photon mapping by default in `cornell` and `cornell-bunny`, with the
+/// settings measured best for time and error against the path tracer
+/// (BENCHMARKS.md): a million photons, up to 10 hits each (5 loses 1% of the
+/// light), radius 0.06, no gather filter (in this box of right angles it only
+/// darkens the corners), irradiance precomputed at every 4th photon (3 times
+/// faster at the same error).
+fn cornell_photon_preset() -> SceneSettings {
+    SceneSettings {
+        integrator: Some(crate::integrator::IntegratorKind::Photon),
+        photons: Some(1_000_000),
+        max_bounces: Some(10),
+        gather_radius: Some(0.06),
+        precompute_irradiance: Some(true),
+        ..SceneSettings::default()
+    }
 }
 
 /// Scene `cornell-specular`: `cornell` with the tall block a perfect mirror,
@@ -248,6 +256,7 @@ pub fn cornell_bunny(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
     let m = d.material("bunny", Material::diffuse(0.75, 0.75, 0.75));
     bunny.add_to_scene(&mut d, &bunny_transform(), Some(m), smooth)?;
     d.lights.push(cornell_light());
+    d.settings = cornell_photon_preset();
     Ok(d)
 }
 
