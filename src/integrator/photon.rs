@@ -111,15 +111,21 @@ impl RadianceEstimator for PhotonMapping<'_> {
     }
 }
 
+/// The photon settings the map is traced with: final gathering and
+/// photon-only direct light read first-hit photons, so those are stored.
+pub fn map_settings(settings: &super::RenderSettings) -> crate::photon::PhotonSettings {
+    let mut ps = settings.photon;
+    ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
+    ps
+}
+
 /// Traces the photon map (if any photons are asked for), then renders.
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
     on_tile: &(dyn Fn() + Sync),
 ) -> ((crate::Film, RayStats, u64), Option<crate::photon::PhotonStats>) {
-    let mut ps = settings.photon;
-    // Final gathering and photon-only direct light read first-hit photons.
-    ps.store_first_hit |= ps.final_gather > 0 || settings.shadow_samples == 0;
+    let ps = map_settings(settings);
     let built = (ps.photons > 0).then(|| crate::photon::build_map(scene, &ps, settings.seed));
     let est = PhotonMapping {
         map: built.as_ref().map(|(m, _)| m),
