@@ -4,14 +4,14 @@
 //! line. MTL files are checked before `tobj` reads them (it panics on a `Kd`
 //! with fewer than three numbers).
 
-use super::{Mesh, MeshPart};
+use super::{FileSource, Mesh, MeshPart};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use std::cell::RefCell;
 use std::io::Cursor;
 use std::path::Path;
 
-pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result<Mesh> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -24,7 +24,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let warnings: RefCell<Vec<String>> = RefCell::new(vec![]);
     let loaded = tobj::load_obj_buf(&mut Cursor::new(bytes), &opts, |name| {
         let mtl_path = dir.join(name);
-        let text = match std::fs::read(&mtl_path) {
+        let text = match files.read(&mtl_path) {
             Ok(t) => t,
             Err(e) => {
                 warnings.borrow_mut().push(format!(
