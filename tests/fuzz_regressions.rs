@@ -205,3 +205,17 @@ element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_head
     .unwrap_err();
     assert!(e.starts_with("t.ply:7:") && e.contains("first at line 3"), "{e}");
 }
+
+#[test]
+fn a_device_named_as_material_library_is_not_read() {
+    // `mtllib /dev/zero` would be read until memory runs out.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("dev.obj");
+    std::fs::write(&p, "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let m = raytracer::scene::mesh::load_mesh(&p).unwrap();
+    assert!(
+        m.warnings.len() == 1 && m.warnings[0].contains("not a regular file"),
+        "{:?}",
+        m.warnings
+    );
+}

@@ -56,8 +56,21 @@ pub trait FileSource {
 pub struct Disk;
 
 impl FileSource for Disk {
+    /// Reads regular files only: a device such as /dev/zero named as a
+    /// material library would otherwise be read until memory runs out.
     fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
-        std::fs::read(path)
+        use std::io::Read;
+        let mut file = std::fs::File::open(path)?;
+        let meta = file.metadata()?;
+        if !meta.is_file() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file",
+            ));
+        }
+        let mut bytes = Vec::with_capacity(meta.len().min(1 << 30) as usize);
+        file.read_to_end(&mut bytes)?;
+        Ok(bytes)
     }
 }
 
