@@ -219,3 +219,20 @@ fn a_device_named_as_material_library_is_not_read() {
         m.warnings
     );
 }
+
+#[test]
+fn obj_relative_index_before_the_first_normal_is_refused_before_tobj() {
+    // Found by the obj target: `1//-11` with one normal made tobj's index
+    // arithmetic overflow (a panic with overflow checks, a wrapped index without).
+    let (_, bytes) = &crashers("obj")
+        .into_iter()
+        .find(|(p, _)| p.ends_with("relative-index-out-of-range.obj"))
+        .unwrap();
+    let e = obj(bytes).unwrap_err();
+    assert!(e.starts_with("t.obj:12:") && e.contains("normal index -11"), "{e}");
+    for face in ["f 1 2 -4", "f 1/-2 2/1 3/1", "f 1//-2 2//1 3//1"] {
+        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n{face}\n");
+        let e = obj(text.as_bytes()).unwrap_err();
+        assert!(e.starts_with("t.obj:6:") && e.contains("out of range"), "{face}: {e}");
+    }
+}
