@@ -3,10 +3,12 @@
 //! The main thread owns the window (minifb, X11): it reads keys at 60 Hz,
 //! turns movement keys into a new pose through the controller, and shows the
 //! newest finished image. A render thread owns the scene and a rayon pool:
-//! it applies the newest pose, renders a low-resolution image, then adds
-//! sample passes until the full sample count. A move sets an atomic cancel
-//! flag that the passes check per tile row, so the work in flight stops at
-//! once and the new pose starts.
+//! it applies the newest pose, renders a low-resolution direct-light image,
+//! traces the photon map again if the light moved (the photon integrator),
+//! then adds sample passes until the full sample count. A move sets an atomic
+//! cancel flag that the passes check per tile row and the photon trace per
+//! chunk, so the work in flight stops at once and the new pose starts; a
+//! camera move keeps the photons traced so far.
 
 use super::controller::{Controller, Key, Pose};
 use super::progressive::{low_res_pass, view_integrator, Progressive, LOW_RES_BLOCK};
