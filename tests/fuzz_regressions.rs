@@ -236,3 +236,19 @@ fn obj_relative_index_before_the_first_normal_is_refused_before_tobj() {
         assert!(e.starts_with("t.obj:6:") && e.contains("out of range"), "{face}: {e}");
     }
 }
+
+#[test]
+fn obj_line_element_with_a_bad_index_is_refused_before_tobj() {
+    // Found by the obj target: tobj reads an `l` line of four indices as a
+    // quad, and `-21` with five texture coordinates overflowed it as above.
+    let (_, bytes) = &crashers("obj")
+        .into_iter()
+        .find(|(p, _)| p.ends_with("line-element-index-out-of-range.obj"))
+        .unwrap();
+    assert!(obj(bytes).is_err());
+    let e = obj(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nl 1/1 2/-3 3/1 1/1\n").unwrap_err();
+    assert!(
+        e.starts_with("t.obj:5:") && e.contains("texture coordinate index -3"),
+        "{e}"
+    );
+}

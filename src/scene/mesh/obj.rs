@@ -24,7 +24,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result
     let warnings: RefCell<Vec<String>> = RefCell::new(vec![]);
     // tobj's index arithmetic overflows (a panic, or in release a wrapped
     // index) on relative indices reaching before the first vertex, so face
-    // indices are checked before it sees them; the error is the file's first
+    // and line indices are checked before it sees them; the error is the file's first
     // problem, which may come before the bad face.
     if scan(bytes, true).is_some() {
         return Err(locate(path, bytes, "a face index is out of range"));
@@ -157,12 +157,14 @@ fn scan(bytes: &[u8], faces_only: bool) -> Option<(usize, String)> {
                 Some("v") => nv += 1,
                 Some("vt") => nvt += 1,
                 Some("vn") => nvn += 1,
-                Some("f") => {}
+                // tobj reads `l` lines as faces too (two indices are a line,
+                // but four a quad), whatever `ignore_lines` says.
+                Some("f" | "l") => {}
                 _ => continue,
             }
         }
         match keyword {
-            _ if faces_only && keyword != Some("f") => {}
+            _ if faces_only && !matches!(keyword, Some("f" | "l")) => {}
             Some("v") => {
                 let p = match numbers(&mut words, 3, "vertex") {
                     Ok(p) => p,
