@@ -10,10 +10,7 @@ use raytracer::scene::{LoadOptions, LoadedScene};
 use raytracer::SceneDesc;
 use std::path::PathBuf;
 
-/// Largest image side we accept; beyond it the film alone would not fit.
-const MAX_SIDE: u32 = 32_768;
-/// Largest pixel count: 2^28 pixels is 3 GiB of float RGB film.
-const MAX_PIXELS: u64 = 1 << 28;
+use raytracer::limits::{MAX_PIXELS, MAX_SIDE};
 
 #[derive(Parser, Debug)]
 #[command(

@@ -3,6 +3,28 @@
 
 use crate::error::{Error, Result};
 
+/// Largest image side we accept; beyond it the film alone would not fit.
+pub const MAX_SIDE: u32 = 32_768;
+/// Largest pixel count: 2^28 pixels is 3 GiB of float RGB film.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Refuses an image size outside [`MAX_SIDE`] and [`MAX_PIXELS`], with a
+/// message naming the offending dimension (the caller adds where it came from).
+pub fn check_resolution(width: u32, height: u32) -> std::result::Result<(), String> {
+    for (name, v) in [("width", width), ("height", height)] {
+        if v == 0 || v > MAX_SIDE {
+            return Err(format!("{name} {v} must be between 1 and {MAX_SIDE}"));
+        }
+    }
+    let pixels = width as u64 * height as u64;
+    if pixels > MAX_PIXELS {
+        return Err(format!(
+            "{width}x{height} is {pixels} pixels, more than the limit of {MAX_PIXELS}"
+        ));
+    }
+    Ok(())
+}
+
 /// Memory the system says is available (Linux `MemAvailable`), if known.
 pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;

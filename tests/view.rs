@@ -218,7 +218,9 @@ fn view_under_xvfb_saves_and_follows_the_light() {
 
     s.wait_done(0);
     let first = s.save(1);
-    // Refined to the end, the window holds the offline render exactly.
+    // Refined to the end, the window holds the offline render exactly: the
+    // default scene renders with photon mapping, so the preview's photon map
+    // must be the offline one, photon for photon.
     let offline = Command::new(env!("CARGO_BIN_EXE_raytracer"))
         .args(["-q", "-o", "offline.exr"])
         .args(SIZE_AND_SAMPLES)

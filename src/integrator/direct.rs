@@ -7,6 +7,7 @@ use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::{hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
 
+#[derive(Clone, Copy, Debug)]
 pub struct DirectLighting {
     pub shadow_samples: u32,
 }

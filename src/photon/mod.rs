@@ -161,11 +161,16 @@ pub fn available_memory() -> Option<u64> {
 pub fn build_map(scene: &Scene, settings: &PhotonSettings, seed: u64) -> (PhotonMap, PhotonStats) {
     let start = std::time::Instant::now();
     let traced = trace::trace(scene, settings, seed);
-    let trace_seconds = start.elapsed().as_secs_f64();
+    map_from_trace(traced, start.elapsed().as_secs_f64())
+}
+
+/// Balances traced photons into a map; `trace_seconds` is what tracing took.
+pub fn map_from_trace(traced: trace::PhotonTrace, trace_seconds: f64) -> (PhotonMap, PhotonStats) {
     let start = std::time::Instant::now();
+    let emitted = traced.emitted;
     let map = PhotonMap::build(traced.photons, traced.unit);
     let stats = PhotonStats {
-        emitted: traced.emitted,
+        emitted,
         stored: map.len(),
         bytes: map.bytes(),
         trace_seconds,

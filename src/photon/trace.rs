@@ -231,27 +231,93 @@ fn gather_chunks(out: &mut PhotonTrace, chunks: Vec<Chunk>) {
 /// Traces `settings.photons` photons from the scene's lights into the global map.
 /// Photons are reflected and refracted by mirrors and glass, never stored there.
 pub fn trace(scene: &Scene, settings: &PhotonSettings, seed: u64) -> PhotonTrace {
-    let n = settings.photons;
-    let mut out = PhotonTrace {
-        photons: vec![],
-        unit: 1.0,
-        emitted: n,
-        power_per_hit: vec![[0.0; 3]; settings.max_bounces as usize],
-        rays: 0,
-    };
-    let Some(em) = Emitter::new(scene, n) else {
-        return out;
-    };
-    out.unit = em.unit;
-    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-            trace_chunk(scene, settings, &em, seed, PHOTON_STREAM, Keep::Global, range)
-        })
-        .collect();
-    gather_chunks(&mut out, chunks);
-    out
+    let mut t = ResumableTrace::new(scene, settings, seed);
+    t.run(scene, &|| false);
+    t.finish()
+}
+
+/// A global-map trace that can stop between chunks and carry on later with
+/// the same result: chunk c depends only on (seed, c), so the chunks done
+/// before a stop are kept and only the rest are traced on the next run. The
+/// preview window stops tracing when the camera moves and picks up where it
+/// stopped. The scene's lights and geometry must not change in between.
+pub struct ResumableTrace {
+    settings: PhotonSettings,
+    seed: u64,
+    /// `None` when nothing is emitted (no photons asked for, or no light).
+    emitter: Option<Emitter>,
+    chunks: Vec<Option<Chunk>>,
+}
+
+impl ResumableTrace {
+    pub fn new(scene: &Scene, settings: &PhotonSettings, seed: u64) -> Self {
+        let emitter = Emitter::new(scene, settings.photons);
+        let chunks = match emitter {
+            Some(_) => settings.photons.div_ceil(CHUNK) as usize,
+            None => 0,
+        };
+        ResumableTrace {
+            settings: *settings,
+            seed,
+            emitter,
+            chunks: vec![None; chunks],
+        }
+    }
+
+    /// Traces the chunks not yet done, in parallel; `stop` is asked before
+    /// each chunk. Returns true when every chunk is done.
+    pub fn run(&mut self, scene: &Scene, stop: &(dyn Fn() -> bool + Sync)) -> bool {
+        let this = &*self;
+        let Some(em) = &this.emitter else {
+            return true;
+        };
+        let n = this.settings.photons;
+        let todo: Vec<usize> = (0..this.chunks.len()).filter(|&c| this.chunks[c].is_none()).collect();
+        let done: Vec<(usize, Option<Chunk>)> = todo
+            .into_par_iter()
+            .map(|c| {
+                let range = c as u64 * CHUNK..((c as u64 + 1) * CHUNK).min(n);
+                let chunk = (!stop())
+                    .then(|| trace_chunk(scene, &this.settings, em, this.seed, PHOTON_STREAM, Keep::Global, range));
+                (c, chunk)
+            })
+            .collect();
+        for (c, chunk) in done {
+            self.chunks[c] = chunk;
+        }
+        self.is_complete()
+    }
+
+    pub fn is_complete(&self) -> bool {
+        self.chunks.iter().all(Option::is_some)
+    }
+
+    /// Fraction of the photons traced so far.
+    pub fn progress(&self) -> f32 {
+        if self.chunks.is_empty() {
+            return 1.0;
+        }
+        self.chunks.iter().filter(|c| c.is_some()).count() as f32 / self.chunks.len() as f32
+    }
+
+    /// The trace, with the chunks concatenated in chunk order (the same map
+    /// for any thread count). Panics if a chunk is missing (see `run`).
+    pub fn finish(self) -> PhotonTrace {
+        let mut out = PhotonTrace {
+            photons: vec![],
+            unit: self.emitter.as_ref().map_or(1.0, |e| e.unit),
+            emitted: self.settings.photons,
+            power_per_hit: vec![[0.0; 3]; self.settings.max_bounces as usize],
+            rays: 0,
+        };
+        let chunks: Vec<Chunk> = self
+            .chunks
+            .into_iter()
+            .map(|c| c.expect("ResumableTrace::finish before every chunk was traced"))
+            .collect();
+        gather_chunks(&mut out, chunks);
+        out
+    }
 }
 
 /// Photons emitted per round of the caustic pass.
@@ -438,5 +504,27 @@ mod tests {
         let yield_ = one.photons.len() as f64 / one.emitted as f64;
         let share = caustic as f64 / (caustic + direct) as f64;
         assert!((share - yield_).abs() < 0.2 * yield_, "{share} vs {yield_}");
+    }
+
+    #[test]
+    fn a_stopped_trace_resumes_to_the_same_photons() {
+        let scene = crate::Scene::build(crate::scene::builtin::cornell()).unwrap();
+        let s = settings(9 * CHUNK + 100, 5, true);
+        let whole = trace(&scene, &s, 5);
+        let mut t = ResumableTrace::new(&scene, &s, 5);
+        // Stop after four chunks have started; which four depends on the threads.
+        let started = std::sync::atomic::AtomicUsize::new(0);
+        let stop = || started.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= 4;
+        assert!(!with_threads(Some(2), || t.run(&scene, &stop)).unwrap());
+        assert!((t.progress() - 0.4).abs() < 1e-6, "{}", t.progress());
+        assert!(!t.run(&scene, &|| true));
+        assert!(t.run(&scene, &|| false));
+        let resumed = t.finish();
+        assert_eq!(resumed.photons, whole.photons);
+        assert_eq!(resumed.power_per_hit, whole.power_per_hit);
+        assert_eq!(
+            (resumed.unit, resumed.emitted, resumed.rays),
+            (whole.unit, whole.emitted, whole.rays)
+        );
     }
 }

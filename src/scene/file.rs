@@ -10,7 +10,7 @@
 //! enum, because a tagged enum is buffered before it is read and its errors
 //! lose their line.
 
-use super::mesh::load_mesh_timed;
+use super::mesh::{load_mesh_timed_from, Disk, FileSource};
 use super::transform::{Fit, Transform};
 use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SceneSettings, SphereDesc, TriangleDesc};
 use crate::error::{Error, Result};
@@ -284,6 +284,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
 /// Parses the text of a scene file; `path` names it in errors and anchors
 /// the relative paths of meshes.
 pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene> {
+    parse_with(path, text, opts, &Disk)
+}
+
+/// Parses a scene file's text, reading its meshes through `files`.
+pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileSource) -> Result<LoadedScene> {
     let src = Source { path, text };
     let file: SceneFile = toml::from_str(text).map_err(|e| {
         let message = e.message().trim().replace('\n', "; ");
@@ -312,6 +317,9 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
             format!("camera fov_y {} must be in (0, 180) degrees", camera.fov_y_deg),
         ));
     }
+    // An absurd size is refused here, at its line, before anything is sized by it.
+    crate::limits::check_resolution(camera.width, camera.height)
+        .map_err(|m| src.error(cam_span.clone(), format!("camera {m}")))?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -542,7 +550,8 @@ pub fn parse(path: &Path, text: &str, opts: &LoadOptions) -> Result<LoadedScene>
                     translate: s.translate.map_or(Vec3::ZERO, |t| t.0),
                 };
                 transform.validate().map_err(err)?;
-                let (mesh, report) = load_mesh_timed(&mesh_path).map_err(|e| missing_mesh(&src, span.clone(), e))?;
+                let (mesh, report) =
+                    load_mesh_timed_from(&mesh_path, files).map_err(|e| missing_mesh(&src, span.clone(), e))?;
                 let smooth = s.smooth.unwrap_or(false) || opts.smooth;
                 mesh.add_to_scene(&mut desc, &transform, mat, smooth)?;
                 meshes.push(report);

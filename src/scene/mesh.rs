@@ -45,27 +45,80 @@ pub struct Mesh {
     pub warnings: Vec<String>,
 }
 
+/// Where meshes and their material libraries are read from: the file system,
+/// or a fixed set of in-memory files (fuzzing and tests parse scenes without
+/// letting a scene's paths reach arbitrary files).
+pub trait FileSource {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
+}
+
+/// The file system.
+pub struct Disk;
+
+impl FileSource for Disk {
+    /// Reads regular files only: a device such as /dev/zero named as a
+    /// material library would otherwise be read until memory runs out.
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        use std::io::Read;
+        let mut file = std::fs::File::open(path)?;
+        let meta = file.metadata()?;
+        if !meta.is_file() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file",
+            ));
+        }
+        let mut bytes = Vec::with_capacity(meta.len().min(1 << 30) as usize);
+        file.read_to_end(&mut bytes)?;
+        Ok(bytes)
+    }
+}
+
+/// The mesh file formats we read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    Obj,
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format a file's extension names (.obj or .ply, any case).
+    pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            _ => None,
+        }
+    }
+}
+
 /// Reads a mesh, choosing the format by the file's extension (.obj or .ply).
 pub fn load_mesh(path: &Path) -> Result<Mesh> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    let bytes = || {
-        std::fs::read(path).map_err(|e| Error::Io {
+    load_mesh_from(path, &Disk)
+}
+
+/// Reads a mesh (and an OBJ's material libraries) through `files`.
+pub fn load_mesh_from(path: &Path, files: &dyn FileSource) -> Result<Mesh> {
+    let Some(format) = MeshFormat::from_path(path) else {
+        return Err(Error::Parse {
             path: path.to_path_buf(),
-            source: e,
-        })
+            message: "unknown mesh format (use a .obj or .ply file)".into(),
+        });
     };
-    let mesh = match ext.as_deref() {
-        Some("obj") => obj::parse(path, &bytes()?)?,
-        Some("ply") => ply::parse(path, &bytes()?)?,
-        _ => {
-            return Err(Error::Parse {
-                path: path.to_path_buf(),
-                message: "unknown mesh format (use a .obj or .ply file)".into(),
-            })
-        }
+    let bytes = files.read(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    parse_mesh(path, &bytes, format, files)
+}
+
+/// Parses a mesh from its bytes; `path` names it in errors, and an OBJ's
+/// material libraries are read through `files` relative to it.
+pub fn parse_mesh(path: &Path, bytes: &[u8], format: MeshFormat, files: &dyn FileSource) -> Result<Mesh> {
+    let mesh = match format {
+        MeshFormat::Obj => obj::parse(path, bytes, files)?,
+        MeshFormat::Ply => ply::parse(path, bytes)?,
     };
     if mesh.triangles.is_empty() {
         return Err(Error::Parse {
@@ -78,8 +131,13 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
 
 /// Reads a mesh and reports how long it took.
 pub fn load_mesh_timed(path: &Path) -> Result<(Mesh, MeshReport)> {
+    load_mesh_timed_from(path, &Disk)
+}
+
+/// Reads a mesh through `files` and reports how long it took.
+pub fn load_mesh_timed_from(path: &Path, files: &dyn FileSource) -> Result<(Mesh, MeshReport)> {
     let start = std::time::Instant::now();
-    let mesh = load_mesh(path)?;
+    let mesh = load_mesh_from(path, files)?;
     let report = MeshReport::new(&mesh, start.elapsed().as_secs_f64());
     Ok((mesh, report))
 }

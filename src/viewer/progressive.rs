@@ -11,13 +11,20 @@
 //! tracers (e.g. pbrt-v4's and Mitsuba's interactive viewers).
 //!
 //! What renders is a [`ViewIntegrator`]: besides the per-ray estimators it
-//! has a hook, [`ViewIntegrator::light_moved`], run before the first pass and
-//! again only when the light moves, where an integrator that caches light
-//! transport (a photon map) traces it again.
-
+//! has the light transport it caches. [`PhotonView`] traces the photon map
+//! the offline render traces (same settings, same seed) once per light
+//! position: [`ViewIntegrator::light_moved`] forgets it, and
+//! [`ViewIntegrator::prepare`] traces it, stopping when a move cancels it and
+//! keeping the photon chunks already traced, so a camera move costs no
+//! photons at all.
+//!
 use crate::film::Film;
+use crate::integrator::photon::{global_admit, map_settings, PhotonMapping};
 use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstimator, RayStats, RenderSettings};
 use crate::math::Vec3;
+use crate::photon::estimate::{Admit, PrecomputedIrradiance};
+use crate::photon::trace::ResumableTrace;
+use crate::photon::{build_caustic_map, map_from_trace, PhotonMap, PhotonSettings, PhotonStats};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -29,16 +36,26 @@ pub const LOW_RES_BLOCK: u32 = 4;
 
 /// An integrator as the preview window drives it.
 pub trait ViewIntegrator: Send {
-    /// Runs before the first pass and whenever the light has moved (never for
-    /// camera moves): the place to trace photons again. Returns false when
-    /// `cancel` stopped it, and is then called again for the next pose.
-    fn light_moved(&mut self, scene: &Scene, settings: &RenderSettings, cancel: &AtomicBool) -> bool;
+    /// The scene's lights moved: forget light transport traced for the old
+    /// positions. Camera moves never call it.
+    fn light_moved(&mut self);
 
-    /// The estimator whose samples accumulate into the image.
-    fn estimator(&self) -> &dyn RadianceEstimator;
+    /// Brings the cached light transport up to date with the scene's lights
+    /// before the accumulation passes. Returns false when `cancel` stopped
+    /// it; the work done so far is kept, and the next call carries on.
+    fn prepare(&mut self, scene: &Scene, settings: &RenderSettings, cancel: &AtomicBool) -> bool;
 
-    /// A cheap estimator for the first low-resolution pass.
+    /// The estimator whose samples accumulate into the image (after `prepare`).
+    fn estimator(&self) -> Box<dyn RadianceEstimator + '_>;
+
+    /// A cheap estimator (direct light) for the first low-resolution pass,
+    /// which needs no `prepare`.
     fn low_res_estimator(&self) -> &dyn RadianceEstimator;
+
+    /// What `prepare` still has to do, for the title bar (None when nothing).
+    fn pending(&self) -> Option<String> {
+        None
+    }
 }
 
 /// Direct lighting: nothing to trace when the light moves.
@@ -61,12 +78,14 @@ impl DirectView {
 }
 
 impl ViewIntegrator for DirectView {
-    fn light_moved(&mut self, _scene: &Scene, _settings: &RenderSettings, _cancel: &AtomicBool) -> bool {
+    fn light_moved(&mut self) {}
+
+    fn prepare(&mut self, _scene: &Scene, _settings: &RenderSettings, _cancel: &AtomicBool) -> bool {
         true
     }
 
-    fn estimator(&self) -> &dyn RadianceEstimator {
-        &self.full
+    fn estimator(&self) -> Box<dyn RadianceEstimator + '_> {
+        Box::new(self.full)
     }
 
     fn low_res_estimator(&self) -> &dyn RadianceEstimator {
@@ -74,14 +93,124 @@ impl ViewIntegrator for DirectView {
     }
 }
 
+/// Photon mapping: direct light by shadow rays plus indirect light from a
+/// photon map traced for the current light positions.
+pub struct PhotonView {
+    photon: PhotonSettings,
+    seed: u64,
+    shadow_samples: u32,
+    quick: direct::DirectLighting,
+    /// The trace in progress, when the map is not there yet.
+    trace: Option<ResumableTrace>,
+    /// Time spent on the trace in progress, over its runs.
+    trace_seconds: f64,
+    /// The map for the current lights; `None` until traced (and always when
+    /// no photons are asked for, which renders direct light as offline).
+    map: Option<PhotonMap>,
+    /// The caustic map and the precomputed irradiance, when the settings ask
+    /// for them: made after the global map, as the offline render does.
+    caustic: Option<PhotonMap>,
+    precomputed: Option<PrecomputedIrradiance>,
+    admit: Admit,
+    ready: bool,
+}
+
+impl PhotonView {
+    pub fn new(settings: &RenderSettings) -> Self {
+        PhotonView {
+            photon: map_settings(settings),
+            seed: settings.seed,
+            shadow_samples: settings.shadow_samples,
+            quick: direct::DirectLighting {
+                shadow_samples: settings.shadow_samples.min(1),
+            },
+            trace: None,
+            trace_seconds: 0.0,
+            map: None,
+            caustic: None,
+            precomputed: None,
+            admit: global_admit(settings),
+            ready: false,
+        }
+    }
+
+    /// The photon map for the current lights, once `prepare` has finished.
+    pub fn map(&self) -> Option<&PhotonMap> {
+        self.map.as_ref()
+    }
+}
+
+impl ViewIntegrator for PhotonView {
+    fn light_moved(&mut self) {
+        self.trace = None;
+        self.trace_seconds = 0.0;
+        self.map = None;
+        self.caustic = None;
+        self.precomputed = None;
+        self.ready = false;
+    }
+
+    fn prepare(&mut self, scene: &Scene, _settings: &RenderSettings, cancel: &AtomicBool) -> bool {
+        if self.ready {
+            return true;
+        }
+        if self.photon.photons > 0 {
+            // The same trace as the offline render's `build_map`, in resumable chunks.
+            let start = std::time::Instant::now();
+            let trace = self
+                .trace
+                .get_or_insert_with(|| ResumableTrace::new(scene, &self.photon, self.seed));
+            let complete = trace.run(scene, &|| cancel.load(Ordering::Relaxed));
+            self.trace_seconds += start.elapsed().as_secs_f64();
+            if !complete {
+                return false;
+            }
+            let traced = self.trace.take().map(ResumableTrace::finish);
+            self.map = traced.map(|t| map_from_trace(t, self.trace_seconds).0);
+        }
+        // Neither is cancellable; both take a fraction of the global trace's time.
+        self.caustic = build_caustic_map(scene, &self.photon, self.seed, &mut PhotonStats::default());
+        self.precomputed = match &self.map {
+            Some(map) if self.photon.precompute_irradiance => {
+                Some(PrecomputedIrradiance::build(map, &self.photon.gather, self.admit))
+            }
+            _ => None,
+        };
+        self.ready = true;
+        true
+    }
+
+    fn estimator(&self) -> Box<dyn RadianceEstimator + '_> {
+        Box::new(PhotonMapping {
+            map: self.map.as_ref(),
+            gather: self.photon.gather,
+            caustics: self.caustic.as_ref(),
+            caustic_radius: self.photon.caustic_radius,
+            shadow_samples: self.shadow_samples,
+            final_gather: self.photon.final_gather,
+            precomputed: self.precomputed.as_ref(),
+        })
+    }
+
+    fn low_res_estimator(&self) -> &dyn RadianceEstimator {
+        &self.quick
+    }
+
+    fn pending(&self) -> Option<String> {
+        match &self.trace {
+            Some(t) if !self.ready => Some(format!("tracing photons {:.0}%", 100.0 * t.progress())),
+            None if !self.ready && self.photon.photons > 0 => Some("tracing photons".into()),
+            _ => None,
+        }
+    }
+}
+
 /// The view integrator for the render settings' integrator.
 pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
     match settings.integrator {
-        // The preview does not yet trace photons: photon, path and SPPM renders
-        // are previewed with their direct light.
-        IntegratorKind::Direct | IntegratorKind::Photon | IntegratorKind::Path | IntegratorKind::Sppm => {
-            Box::new(DirectView::new(settings))
-        }
+        IntegratorKind::Photon => Box::new(PhotonView::new(settings)),
+        // The path tracer's and SPPM's previews show their direct light only.
+        IntegratorKind::Direct | IntegratorKind::Path | IntegratorKind::Sppm => Box::new(DirectView::new(settings)),
     }
 }
 
@@ -276,7 +405,7 @@ mod tests {
         let never = AtomicBool::new(false);
         let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
         let mut passes = 0;
-        while p.run_pass(&scene, &s, view.estimator(), &never) {
+        while p.run_pass(&scene, &s, view.estimator().as_ref(), &never) {
             passes += 1;
             if !p.is_complete() {
                 // Part way, the image is a different (noisier) estimate.
@@ -296,14 +425,14 @@ mod tests {
         let view = view_integrator(&s);
         let (never, cancelled) = (AtomicBool::new(false), AtomicBool::new(true));
         let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
-        assert!(p.run_pass(&scene, &s, view.estimator(), &never));
+        assert!(p.run_pass(&scene, &s, view.estimator().as_ref(), &never));
         let before = p.film();
-        assert!(!p.run_pass(&scene, &s, view.estimator(), &cancelled));
+        assert!(!p.run_pass(&scene, &s, view.estimator().as_ref(), &cancelled));
         assert_eq!(p.samples(), 1);
         assert_eq!(p.film(), before);
         assert!(low_res_pass(&scene, &s, view.low_res_estimator(), 4, &cancelled).is_none());
         // Refinement carries on to the offline image after the cancel.
-        while p.run_pass(&scene, &s, view.estimator(), &never) {}
+        while p.run_pass(&scene, &s, view.estimator().as_ref(), &never) {}
         assert_eq!(p.film(), integrator::render(&scene, &s, &|| {}).unwrap().film);
     }
 
@@ -314,8 +443,8 @@ mod tests {
         let view = view_integrator(&s);
         let never = AtomicBool::new(false);
         let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
-        p.run_pass(&scene, &s, view.estimator(), &never);
-        p.run_pass(&scene, &s, view.estimator(), &never);
+        p.run_pass(&scene, &s, view.estimator().as_ref(), &never);
+        p.run_pass(&scene, &s, view.estimator().as_ref(), &never);
         p.reset();
         assert_eq!(p.samples(), 0);
         assert_eq!(p.next_pass(), Some(0..1));
@@ -344,5 +473,75 @@ mod tests {
         let shown = |f: &Film| f.pixels.iter().map(|p| p.min(Vec3::ONE)).sum::<Vec3>() / f.pixels.len() as f32;
         let (a, b) = (shown(&f), shown(&full));
         assert!((a - b).length() < 0.15 * b.length(), "{a:?} vs {b:?}");
+    }
+
+    fn photon_settings() -> RenderSettings {
+        let mut s = RenderSettings {
+            ssaa: 2,
+            integrator: IntegratorKind::Photon,
+            ..settings()
+        };
+        s.photon.photons = 20_000;
+        s
+    }
+
+    #[test]
+    fn photon_passes_equal_the_offline_photon_render_bit_for_bit() {
+        let scene = small_cornell();
+        let s = photon_settings();
+        let offline = integrator::render(&scene, &s, &|| {}).unwrap();
+        let (never, cancelled) = (AtomicBool::new(false), AtomicBool::new(true));
+        let mut view = view_integrator(&s);
+        // A cancelled trace leaves the map to the next call.
+        assert!(!view.prepare(&scene, &s, &cancelled));
+        assert!(view.pending().is_some());
+        assert!(view.prepare(&scene, &s, &never));
+        assert!(view.pending().is_none());
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
+        while p.run_pass(&scene, &s, view.estimator().as_ref(), &never) {}
+        assert_eq!(p.samples(), 4);
+        assert_eq!(p.film(), offline.film);
+        assert_eq!(p.stats, offline.stats);
+        // The photons add indirect light to what the direct preview shows.
+        let direct = RenderSettings {
+            integrator: IntegratorKind::Direct,
+            ..s.clone()
+        };
+        let direct = integrator::render(&scene, &direct, &|| {}).unwrap().film;
+        let mean = |f: &Film| f.pixels.iter().map(|p| p.min(Vec3::ONE)).sum::<Vec3>() / f.pixels.len() as f32;
+        assert!(mean(&p.film()).length() > 1.1 * mean(&direct).length());
+    }
+
+    #[test]
+    fn photons_are_traced_again_only_when_the_light_moves() {
+        let mut scene = small_cornell();
+        let s = photon_settings();
+        let never = AtomicBool::new(false);
+        let mut view = PhotonView::new(&s);
+        assert!(view.prepare(&scene, &s, &never));
+        let first = view.map().unwrap().clone();
+        // A camera move: prepare keeps the map.
+        scene.camera = crate::camera::Camera::new(
+            scene.camera.position + Vec3::new(0.1, 0.0, 0.0),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+            40.0,
+            scene.camera.width,
+            scene.camera.height,
+        )
+        .unwrap();
+        assert!(view.prepare(&scene, &s, &never));
+        assert_eq!(view.map(), Some(&first));
+        // A light move: the map is forgotten and traced for the new position,
+        // as the offline render of the moved scene traces it.
+        let moved = scene.lights[0].position() + Vec3::new(0.2, 0.0, 0.0);
+        scene.move_light(0, moved);
+        view.light_moved();
+        assert!(view.map().is_none());
+        assert!(view.prepare(&scene, &s, &never));
+        let second = view.map().unwrap();
+        assert_ne!(second, &first);
+        let offline = crate::photon::build_map(&scene, &map_settings(&s), s.seed).0;
+        assert_eq!(second, &offline);
     }
 }

@@ -3,10 +3,12 @@
 //! The main thread owns the window (minifb, X11): it reads keys at 60 Hz,
 //! turns movement keys into a new pose through the controller, and shows the
 //! newest finished image. A render thread owns the scene and a rayon pool:
-//! it applies the newest pose, renders a low-resolution image, then adds
-//! sample passes until the full sample count. A move sets an atomic cancel
-//! flag that the passes check per tile row, so the work in flight stops at
-//! once and the new pose starts.
+//! it applies the newest pose, renders a low-resolution direct-light image,
+//! traces the photon map again if the light moved (the photon integrator),
+//! then adds sample passes until the full sample count. A move sets an atomic
+//! cancel flag that the passes check per tile row and the photon trace per
+//! chunk, so the work in flight stops at once and the new pose starts; a
+//! camera move keeps the photons traced so far.
 
 use super::controller::{Controller, Key, Pose};
 use super::progressive::{low_res_pass, view_integrator, Progressive, LOW_RES_BLOCK};
@@ -33,6 +35,8 @@ struct Frame {
     /// Samples per pixel in it; 0 for the low-resolution image.
     samples: u32,
     target: u32,
+    /// Work still to do before refinement starts (tracing photons).
+    pending: Option<String>,
 }
 
 /// What the two threads share, behind one lock.
@@ -230,7 +234,10 @@ fn title_text(scene: &str, frame: Option<&Frame>, help: bool) -> String {
     }
     let status = match frame {
         None => "starting".to_string(),
-        Some(f) if f.samples == 0 => format!("pose {} | low-res preview", f.pose_id),
+        Some(f) if f.samples == 0 => match &f.pending {
+            Some(p) => format!("pose {} | low-res preview, {p}", f.pose_id),
+            None => format!("pose {} | low-res preview", f.pose_id),
+        },
         Some(f) if f.samples >= f.target => format!("pose {} | {}/{} spp, done", f.pose_id, f.samples, f.target),
         Some(f) => format!("pose {} | {}/{} spp", f.pose_id, f.samples, f.target),
     };
@@ -260,16 +267,18 @@ fn save(film: &Arc<Film>, options: &ViewOptions, n: u32) -> std::thread::JoinHan
     })
 }
 
-/// The render thread: applies the newest pose, then refines until done or
-/// until the pose changes again; sleeps while there is nothing to do.
+/// The render thread: applies the newest pose, shows a low-resolution
+/// direct-light image, brings the integrator's light transport (the photon
+/// map) up to date if the light moved, then refines until done or until the
+/// pose changes again; sleeps while there is nothing to do.
 fn render_loop(mut scene: Scene, settings: &RenderSettings, controller: &Controller, shared: &Shared) -> Result<()> {
     let home_camera = scene.camera.clone();
     let light_home: Vec<_> = scene.lights.iter().map(|l| l.position()).collect();
     let mut integrator = view_integrator(settings);
     let mut acc = Progressive::new(scene.camera.width, scene.camera.height, settings);
     let mut applied: Option<u64> = None;
-    // The light offset the integrator's light transport was last traced for.
-    let mut traced: Option<crate::math::Vec3> = None;
+    // The light offset the scene's lights were last placed at.
+    let mut lights_at: Option<crate::math::Vec3> = None;
     loop {
         let (pose, pose_id) = {
             let mut st = shared.lock();
@@ -298,15 +307,14 @@ fn render_loop(mut scene: Scene, settings: &RenderSettings, controller: &Control
             if let Some(cam) = camera {
                 scene.camera = cam;
             }
-            // Light transport is traced again only when the light moved.
-            if traced != Some(pose.light_offset) {
+            // Light transport is traced again only when the light moved; a
+            // camera move keeps the map (or the part of it traced so far).
+            if lights_at != Some(pose.light_offset) {
                 for (i, home) in light_home.iter().enumerate() {
                     scene.move_light(i, *home + pose.light_offset);
                 }
-                if !integrator.light_moved(&scene, settings, cancel) {
-                    continue;
-                }
-                traced = Some(pose.light_offset);
+                integrator.light_moved();
+                lights_at = Some(pose.light_offset);
             }
             acc.reset();
             applied = Some(pose_id);
@@ -319,14 +327,19 @@ fn render_loop(mut scene: Scene, settings: &RenderSettings, controller: &Control
                 pose_id,
                 samples: 0,
                 target: acc.target(),
+                pending: integrator.pending(),
             });
         }
-        if acc.run_pass(&scene, settings, integrator.estimator(), cancel) {
+        if !integrator.prepare(&scene, settings, cancel) {
+            continue;
+        }
+        if acc.run_pass(&scene, settings, integrator.estimator().as_ref(), cancel) {
             shared.publish(Frame {
                 film: Arc::new(acc.film()),
                 pose_id,
                 samples: acc.samples(),
                 target: acc.target(),
+                pending: None,
             });
         }
     }

@@ -4,14 +4,14 @@
 //! line. MTL files are checked before `tobj` reads them (it panics on a `Kd`
 //! with fewer than three numbers).
 
-use super::{Mesh, MeshPart};
+use super::{FileSource, Mesh, MeshPart};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use std::cell::RefCell;
 use std::io::Cursor;
 use std::path::Path;
 
-pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result<Mesh> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -22,9 +22,16 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     // The loader closure cannot return our error, so it leaves it here.
     let mtl_error: RefCell<Option<Error>> = RefCell::new(None);
     let warnings: RefCell<Vec<String>> = RefCell::new(vec![]);
+    // tobj's index arithmetic overflows (a panic, or in release a wrapped
+    // index) on relative indices reaching before the first vertex, so face
+    // and line indices are checked before it sees them; the error is the file's first
+    // problem, which may come before the bad face.
+    if scan(bytes, true).is_some() {
+        return Err(locate(path, bytes, "a face index is out of range"));
+    }
     let loaded = tobj::load_obj_buf(&mut Cursor::new(bytes), &opts, |name| {
         let mtl_path = dir.join(name);
-        let text = match std::fs::read(&mtl_path) {
+        let text = match files.read(&mtl_path) {
             Ok(t) => t,
             Err(e) => {
                 warnings.borrow_mut().push(format!(
@@ -127,15 +134,37 @@ fn numbers<'a>(
 /// Scans an OBJ file for the first line `tobj` would refuse or that holds a
 /// non-finite number; returns its (1-based) number and what is wrong.
 pub(super) fn diagnose(bytes: &[u8]) -> Option<(usize, String)> {
+    scan(bytes, false)
+}
+
+/// `diagnose`, or with `faces_only` just the face indices: vertex lines are
+/// only counted (tobj refuses malformed ones itself, at no risk).
+fn scan(bytes: &[u8], faces_only: bool) -> Option<(usize, String)> {
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = i + 1;
         let Ok(text) = std::str::from_utf8(raw) else {
+            if faces_only {
+                continue;
+            }
             return Some((line, "not valid UTF-8 text".into()));
         };
         let mut words = text.split_whitespace();
         let fail = |m: String| Some((line, m));
-        match words.next() {
+        let keyword = words.next();
+        if faces_only {
+            match keyword {
+                Some("v") => nv += 1,
+                Some("vt") => nvt += 1,
+                Some("vn") => nvn += 1,
+                // tobj reads `l` lines as faces too (two indices are a line,
+                // but four a quad), whatever `ignore_lines` says.
+                Some("f" | "l") => {}
+                _ => continue,
+            }
+        }
+        match keyword {
+            _ if faces_only && !matches!(keyword, Some("f" | "l")) => {}
             Some("v") => {
                 let p = match numbers(&mut words, 3, "vertex") {
                     Ok(p) => p,

@@ -155,6 +155,17 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
                 let count = count
                     .parse::<u64>()
                     .map_err(|_| err(line, format!("bad element count '{count}'")))?;
+                // A second vertex list would leave indices and normals meaning
+                // different lists; nothing writes one, so it is an error.
+                if let Some(first) = elements
+                    .iter()
+                    .find(|e| e.name == *name && matches!(*name, "vertex" | "face"))
+                {
+                    return Err(err(
+                        line,
+                        format!("element '{name}' is declared twice (first at line {})", first.line),
+                    ));
+                }
                 elements.push(Element {
                     name: name.to_string(),
                     count,
