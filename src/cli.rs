@@ -220,8 +220,8 @@ pub struct StateFileArgs {
     /// --max-bounces and --seed) instead of tracing it.
     #[arg(long, value_name = "FILE")]
     pub load_photons: Option<PathBuf>,
-    /// Path tracer: save the render's state to FILE between passes, every --checkpoint-every minutes and when
-    /// interrupted; --resume FILE continues it.
+    /// Progressive renders (--integrator path or sppm): save the render's state to FILE between passes, every
+    /// --checkpoint-every minutes and when interrupted; --resume FILE continues it.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
     /// Minutes between checkpoints (fractions allowed).
@@ -247,10 +247,10 @@ fn state_files(args: &StateFileArgs, settings: &RenderSettings) -> Result<StateF
             bail!("{name}: only the photon integrator with --photons > 0 has a photon map");
         }
     }
-    let progressive = settings.integrator == IntegratorKind::Path;
+    let progressive = matches!(settings.integrator, IntegratorKind::Path | IntegratorKind::Sppm);
     for (name, given) in [("--checkpoint", &args.checkpoint), ("--resume", &args.resume)] {
         if given.is_some() && !progressive {
-            bail!("{name}: only progressive renders (--integrator path) have checkpoints");
+            bail!("{name}: only progressive renders (--integrator path or sppm) have checkpoints");
         }
     }
     let minutes = args.checkpoint_every;

@@ -226,6 +226,89 @@ fn a_stopped_path_render_resumes_to_the_uninterrupted_image() {
 }
 
 #[test]
+fn a_stopped_sppm_render_resumes_to_the_uninterrupted_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fn sppm<'a>(passes: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+        let mut a = vec![
+            "--quiet",
+            "--integrator",
+            "sppm",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--photons",
+            "3000",
+            "--passes",
+            passes,
+            "--checkpoint-every",
+            "0",
+        ];
+        a.extend_from_slice(extra);
+        a
+    }
+    ok(&sppm("6", &["-o", "whole.pfm"]), d);
+    // What --write-every writes after pass 4 of 6 is a 4-pass render.
+    ok(&sppm("4", &["-o", "four.pfm"]), d);
+    let stopped = run(
+        &sppm(
+            "6",
+            &["-o", "r.pfm", "--checkpoint", "r.ckpt", "--stop-after-passes", "2"],
+        ),
+        d,
+    );
+    assert_eq!(stopped.status.code(), Some(130));
+    assert!(d.join("r.partial.pfm").exists() && !d.join("r.pfm").exists());
+    // Resumed on one thread, writing the image every 4 passes: pass 4 is
+    // counted from the start of the render, not of this run.
+    let resumed = run(
+        &sppm(
+            "6",
+            &[
+                "-o",
+                "r.pfm",
+                "--checkpoint",
+                "r.ckpt",
+                "--resume",
+                "r.ckpt",
+                "--threads",
+                "1",
+                "--write-every",
+                "4",
+                "--stop-after-passes",
+                "3",
+            ],
+        ),
+        d,
+    );
+    assert_eq!(resumed.status.code(), Some(130));
+    assert!(read(d, "four.pfm") == read(d, "r.pfm"), "image after pass 4 differs");
+    ok(&sppm("6", &["-o", "r.pfm", "--resume", "r.ckpt", "--threads", "2"]), d);
+    assert!(read(d, "whole.pfm") == read(d, "r.pfm"), "resumed render differs");
+    for (option, value) in [
+        ("--alpha", "0.5"),
+        ("--gather-radius", "0.2"),
+        ("--max-bounces", "8"),
+        ("--seed", "3"),
+    ] {
+        refused(
+            &sppm("6", &["-o", "x.pfm", "--resume", "r.ckpt", option, value]),
+            d,
+            "r.ckpt",
+            "other settings",
+        );
+    }
+    refused(
+        &sppm("7", &["-o", "x.pfm", "--resume", "r.ckpt"]),
+        d,
+        "r.ckpt",
+        "other settings",
+    );
+    assert!(!d.join("x.pfm").exists());
+}
+
+#[test]
 fn sigint_writes_a_checkpoint_that_resumes_where_it_stopped() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -8,11 +8,11 @@
 //! (leaving its state as it was when a pass is interrupted), and exposes the
 //! state as named numeric buffers. [`run`] drives any of them: passes,
 //! interruption, the checkpoint timer and the files. The path tracer
-//! (`path::Progressive`) keeps one buffer, the per-pixel sample sums; an
-//! SPPM integrator would keep its per-pixel radius^2, photon count N, flux
-//! tau and direct-light sums as buffers (its visible points are recomputed
-//! each pass, so they need no saving), with pass k's photons keyed by k so
-//! that a resumed pass k traces what the uninterrupted one would have.
+//! (`path::Progressive`) keeps one buffer, the per-pixel sample sums; SPPM
+//! (`sppm::Progressive`) keeps its per-pixel direct-light sums, radius,
+//! photon count N and flux tau (its visible points are recomputed each pass,
+//! so they need no saving), with pass k's photons keyed by k so that a
+//! resumed pass k traces what the uninterrupted one would have.
 //!
 //! A checkpoint is a `state_file` (header with the scene's fingerprint,
 //! camera included, and the integrator's key, each part checksummed) whose

@@ -247,9 +247,8 @@ pub fn render_observed(
                 (film, stats, done, photons, None)
             }
             IntegratorKind::Sppm => {
-                let (film, stats, passes, photons) = sppm::render(scene, settings, on_tile, on_pass)?;
-                let done = tiles_total * passes as u64 / settings.passes as u64;
-                (film, stats, done, Some(photons), None)
+                let (film, stats, done, photons) = sppm::render(scene, settings, on_tile, on_pass)?;
+                (film, stats, tiles_total, Some(photons), Some((done, settings.passes)))
             }
         })
     })??;

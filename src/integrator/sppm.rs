@@ -30,13 +30,19 @@
 //! `--gather-radius R`, the initial radius [the scene's, else 0.1];
 //! `--max-bounces` [the scene's, else 16], `--shadow-samples`; `--write-every K` writes the image
 //! every K passes.
+//!
+//! The render is progressive ([`Progressive`]): the per-pixel statistics are
+//! all that passes carry, so a render can be checkpointed between passes and
+//! resumed to the same image bit for bit (`integrator::checkpoint`). A pass
+//! interrupted part way leaves them as they were before it.
 
+use super::checkpoint::{self, Buffer};
 use super::direct::{first_diffuse_hit, irradiance};
 use super::{RayStats, RenderSettings, INTERRUPTED};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::film::{Film, PixelRect};
 use crate::math::Vec3;
-use crate::photon::{Admit, PhotonMap, PhotonStats};
+use crate::photon::{Admit, PhotonMap, PhotonSettings, PhotonStats};
 use crate::sampling::{mix64, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -84,54 +90,138 @@ pub fn render(
     on_progress: &(dyn Fn() + Sync),
     on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
 ) -> Result<(Film, RayStats, u32, PhotonStats)> {
-    let cam = &scene.camera;
-    let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
-    let (rw, rh) = (rect.width(), rect.height());
-    let passes = settings.passes;
-    let alpha = settings.alpha;
-    let r0 = settings.photon.gather.radius;
-    let mut pixels = vec![
-        PixelState {
+    let mut state = Progressive::new(scene, settings, on_pass);
+    let (done, _) = checkpoint::run(scene, settings, &mut state, on_progress)?;
+    state.finish(done)
+}
+
+/// SPPM's render in passes: the per-pixel statistics carried from pass to
+/// pass. Visible points and photon maps live for one pass only, so the
+/// pixels are all a checkpoint needs.
+pub struct Progressive<'a> {
+    settings: &'a RenderSettings,
+    on_pass: &'a (dyn Fn(u32, &Film) -> Result<()> + Sync),
+    rect: PixelRect,
+    /// The photon settings SPPM traces with (no caustic map; first hits
+    /// stored when there are no shadow rays).
+    photon: PhotonSettings,
+    admit: Admit,
+    pixels: Vec<PixelState>,
+    stats: RayStats,
+    photon_stats: PhotonStats,
+    /// The error `on_pass` stopped the render with, returned by `finish`.
+    failed: Option<Error>,
+}
+
+impl<'a> Progressive<'a> {
+    pub fn new(
+        scene: &Scene,
+        settings: &'a RenderSettings,
+        on_pass: &'a (dyn Fn(u32, &Film) -> Result<()> + Sync),
+    ) -> Self {
+        let cam = &scene.camera;
+        let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
+        let mut photon = settings.photon;
+        photon.caustic_photons = 0;
+        // Without shadow rays the photons carry the direct light too.
+        photon.store_first_hit = settings.shadow_samples == 0;
+        let admit = Admit {
+            direct: settings.shadow_samples == 0,
+            caustic: true,
+        };
+        let pixel = PixelState {
             direct: Vec3::ZERO,
-            r: r0,
+            r: settings.photon.gather.radius,
             n: 0.0,
             tau: Vec3::ZERO,
         };
-        rw as usize * rh as usize
-    ];
-    let mut ps = settings.photon;
-    ps.caustic_photons = 0;
-    // Without shadow rays the photons carry the direct light too.
-    ps.store_first_hit = settings.shadow_samples == 0;
-    let admit = Admit {
-        direct: settings.shadow_samples == 0,
-        caustic: true,
-    };
-    let mut stats = RayStats::default();
-    let mut photon_stats = PhotonStats::default();
-    let ticks = super::tile_count(rw, rh);
-    let mut ticked = 0;
-    let mut done = 0;
-    for pass in 0..passes {
-        if INTERRUPTED.load(Ordering::Relaxed) {
-            break;
+        Progressive {
+            settings,
+            on_pass,
+            rect,
+            photon,
+            admit,
+            pixels: vec![pixel; rect.width() as usize * rect.height() as usize],
+            stats: RayStats::default(),
+            photon_stats: PhotonStats::default(),
+            failed: None,
         }
+    }
+
+    /// The image after `passes` passes, the rays and photons this run traced,
+    /// and the passes done; the error `on_pass` stopped the render with, if any.
+    pub fn finish(self, passes: u32) -> Result<(Film, RayStats, u32, PhotonStats)> {
+        if let Some(e) = self.failed {
+            return Err(e);
+        }
+        let film = self.image(passes.max(1));
+        Ok((film, self.stats, passes, self.photon_stats))
+    }
+
+    fn image(&self, passes: u32) -> Film {
+        image(
+            &self.pixels,
+            self.rect.width(),
+            self.rect.height(),
+            passes,
+            self.photon.photons,
+        )
+    }
+}
+
+impl checkpoint::Progressive for Progressive<'_> {
+    fn key(&self) -> String {
+        let s = self.settings;
+        let r = self.rect;
+        let ps = &self.photon;
+        format!(
+            "integrator=sppm passes={} alpha={:?} photons={} radius={:?} max_bounces={} roulette={} \
+             shadow_samples={} filter={:?} seed={} crop={},{},{},{}",
+            s.passes,
+            s.alpha,
+            ps.photons,
+            ps.gather.radius,
+            ps.max_bounces,
+            ps.roulette,
+            s.shadow_samples,
+            s.filter,
+            s.seed,
+            r.x0,
+            r.y0,
+            r.x1,
+            r.y1
+        )
+    }
+
+    fn total_passes(&self) -> u32 {
+        self.settings.passes
+    }
+
+    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: &(dyn Fn() + Sync)) -> bool {
+        let settings = self.settings;
+        let cam = &scene.camera;
+        let rect = self.rect;
+        let rw = rect.width();
         // Photon pass: its map is the same for any thread count.
         let start = std::time::Instant::now();
-        let traced = crate::photon::trace::trace(scene, &ps, pass_seed(settings.seed, pass));
-        photon_stats.trace_seconds += start.elapsed().as_secs_f64();
-        photon_stats.emitted += traced.emitted;
-        photon_stats.stored += traced.photons.len();
-        stats.other_rays += traced.rays;
+        let traced = crate::photon::trace::trace(scene, &self.photon, pass_seed(settings.seed, pass));
+        let trace_seconds = start.elapsed().as_secs_f64();
+        let (emitted, stored, photon_rays) = (traced.emitted, traced.photons.len(), traced.rays);
         let start = std::time::Instant::now();
         let map = PhotonMap::build(traced.photons, traced.unit);
-        photon_stats.bytes = photon_stats.bytes.max(map.bytes());
-        photon_stats.build_seconds += start.elapsed().as_secs_f64();
+        let build_seconds = start.elapsed().as_secs_f64();
+        // Rows finished before an interruption must not count: keep the pixels to go back to.
+        let before = self.pixels.clone();
+        let (admit, alpha) = (self.admit, settings.alpha);
         // Camera pass and update, one row of pixels per work item.
-        let row_stats: Vec<RayStats> = pixels
+        let row_stats: Option<Vec<RayStats>> = self
+            .pixels
             .par_chunks_mut(rw as usize)
             .enumerate()
             .map(|(row, states)| {
+                if INTERRUPTED.load(Ordering::Relaxed) {
+                    return None;
+                }
                 let mut st = RayStats::default();
                 let y = rect.y0 + row as u32;
                 for (i, px) in states.iter_mut().enumerate() {
@@ -145,29 +235,89 @@ pub fn render(
                         update(px, &vp, &map, admit, alpha);
                     }
                 }
-                st
+                Some(st)
             })
             .collect();
+        let Some(row_stats) = row_stats else {
+            self.pixels = before;
+            return false;
+        };
+        let done = pass + 1;
+        if let Err(e) = (self.on_pass)(done, &self.image(done)) {
+            // Stopped: the state goes back to before the pass, so that a
+            // checkpoint written now matches the passes it says are done.
+            self.pixels = before;
+            self.failed = Some(e);
+            return false;
+        }
         for s in row_stats {
-            stats.camera_rays += s.camera_rays;
-            stats.shadow_rays += s.shadow_rays;
-            stats.other_rays += s.other_rays;
+            self.stats.add(&s);
         }
-        done = pass + 1;
-        let target = ticks * done as u64 / passes as u64;
-        for _ in ticked..target {
-            on_progress();
+        self.stats.other_rays += photon_rays;
+        let ps = &mut self.photon_stats;
+        ps.trace_seconds += trace_seconds;
+        ps.build_seconds += build_seconds;
+        ps.emitted += emitted;
+        ps.stored += stored;
+        ps.bytes = ps.bytes.max(map.bytes());
+        // Progress in tiles of the frame, spread over the passes.
+        let ticks = super::tile_count(rw, rect.height());
+        let passes = settings.passes as u64;
+        for _ in ticks * pass as u64 / passes..ticks * done as u64 / passes {
+            on_tile();
         }
-        ticked = target;
-        on_pass(done, &image(&pixels, rw, rh, done, map_count(&ps)))?;
+        true
     }
-    let film = image(&pixels, rw, rh, done.max(1), map_count(&ps));
-    Ok((film, stats, done, photon_stats))
-}
 
-/// Photons emitted per pass.
-fn map_count(ps: &crate::photon::PhotonSettings) -> u64 {
-    ps.photons
+    fn save(&self) -> Vec<(String, Buffer)> {
+        let px = &self.pixels;
+        vec![
+            (
+                "direct".into(),
+                Buffer::F32(px.iter().flat_map(|p| p.direct.to_array()).collect()),
+            ),
+            ("radius".into(), Buffer::F32(px.iter().map(|p| p.r).collect())),
+            ("photons".into(), Buffer::F32(px.iter().map(|p| p.n).collect())),
+            (
+                "tau".into(),
+                Buffer::F32(px.iter().flat_map(|p| p.tau.to_array()).collect()),
+            ),
+        ]
+    }
+
+    fn restore(&mut self, buffers: Vec<(String, Buffer)>) -> std::result::Result<(), String> {
+        let n = self.pixels.len();
+        let expected = || {
+            format!(
+                "expected f32 buffers 'direct' ({}), 'radius', 'photons' ({n}), 'tau' ({})",
+                3 * n,
+                3 * n
+            )
+        };
+        let [(t0, Buffer::F32(direct)), (t1, Buffer::F32(r)), (t2, Buffer::F32(count)), (t3, Buffer::F32(tau))] =
+            &buffers[..]
+        else {
+            return Err(expected());
+        };
+        let tags_fit = [t0, t1, t2, t3]
+            .iter()
+            .zip(["direct", "radius", "photons", "tau"])
+            .all(|(t, w)| *t == w);
+        let lens_fit = direct.len() == 3 * n && r.len() == n && count.len() == n && tau.len() == 3 * n;
+        if !tags_fit || !lens_fit {
+            return Err(expected());
+        }
+        for (i, px) in self.pixels.iter_mut().enumerate() {
+            let (d, t) = (&direct[3 * i..3 * i + 3], &tau[3 * i..3 * i + 3]);
+            *px = PixelState {
+                direct: Vec3::new(d[0], d[1], d[2]),
+                r: r[i],
+                n: count[i],
+                tau: Vec3::new(t[0], t[1], t[2]),
+            };
+        }
+        Ok(())
+    }
 }
 
 /// Traces the pixel's camera ray to its visible point, adding the light it
