@@ -247,34 +247,23 @@ pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<Ph
     let caustic = crate::photon::build_caustic_map(scene, &ps, settings.seed, &mut stats);
     if let Some(path) = &settings.files.save_photons {
         let start = std::time::Instant::now();
-        let mut stored = vec![];
-        if let Some(map) = global {
-            let emitted = stats.emitted;
-            stored.push(file::StoredMap {
-                tag: GLOBAL.into(),
+        let mut stored: Vec<file::StoredMap> = [
+            (GLOBAL, stats.emitted, global),
+            (CAUSTIC, stats.caustic_emitted, caustic),
+        ]
+        .into_iter()
+        .filter_map(|(tag, emitted, map)| {
+            map.map(|map| file::StoredMap {
+                tag: tag.into(),
                 emitted,
                 map,
-            });
-        }
-        if let Some(map) = caustic {
-            let emitted = stats.caustic_emitted;
-            stored.push(file::StoredMap {
-                tag: CAUSTIC.into(),
-                emitted,
-                map,
-            });
-        }
+            })
+        })
+        .collect();
         file::save(path, &header, &stored)?;
         stats.save_seconds = start.elapsed().as_secs_f64();
-        let mut global = None;
-        let mut caustic = None;
-        for m in stored {
-            if m.tag == GLOBAL {
-                global = Some(m.map);
-            } else {
-                caustic = Some(m.map);
-            }
-        }
+        let global = file::take(&mut stored, GLOBAL, path).ok().map(|m| m.map);
+        let caustic = file::take(&mut stored, CAUSTIC, path).ok().map(|m| m.map);
         return Ok(PhotonMaps { global, caustic, stats });
     }
     Ok(PhotonMaps { global, caustic, stats })
