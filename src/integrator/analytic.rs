@@ -6,18 +6,10 @@ use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::Vec3;
-use crate::scene::{CameraDesc, Scene, SceneDesc, SceneSettings, SphereDesc, TriangleDesc};
+use crate::scene::{CameraDesc, Scene, SceneDesc, SphereDesc, TriangleDesc};
 
 fn empty(camera: CameraDesc) -> SceneDesc {
-    SceneDesc {
-        name: "analytic".into(),
-        camera,
-        materials: vec![],
-        triangles: vec![],
-        spheres: vec![],
-        lights: vec![],
-        settings: SceneSettings::default(),
-    }
+    SceneDesc::empty("analytic", camera)
 }
 
 /// A camera inside, off the centre, looking away from it at the wall.

@@ -132,15 +132,7 @@ pub fn cornell_camera(width: u32, height: u32) -> CameraDesc {
 }
 
 fn empty(name: &str, camera: CameraDesc) -> SceneDesc {
-    SceneDesc {
-        name: name.into(),
-        camera,
-        materials: vec![],
-        triangles: vec![],
-        spheres: vec![],
-        lights: vec![],
-        settings: SceneSettings::default(),
-    }
+    SceneDesc::empty(name, camera)
 }
 
 pub fn cornell_colours() -> RoomColours {

@@ -325,15 +325,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
-    let mut desc = SceneDesc {
-        name,
-        camera,
-        materials: vec![],
-        triangles: vec![],
-        spheres: vec![],
-        lights: vec![],
-        settings: SceneSettings::default(),
-    };
+    let mut desc = SceneDesc::empty(&name, camera);
     if let Some(settings) = &file.settings {
         let s = settings.get_ref();
         // The same bounds the command line enforces for --ssaa and --shadow-samples.

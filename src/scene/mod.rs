@@ -110,6 +110,19 @@ pub struct SceneDesc {
 }
 
 impl SceneDesc {
+    /// A scene with a camera and nothing else yet.
+    pub fn empty(name: &str, camera: CameraDesc) -> SceneDesc {
+        SceneDesc {
+            name: name.into(),
+            camera,
+            materials: vec![],
+            triangles: vec![],
+            spheres: vec![],
+            lights: vec![],
+            settings: SceneSettings::default(),
+        }
+    }
+
     /// Index of the named material, adding it if new.
     pub fn material(&mut self, name: &str, m: Material) -> u32 {
         if let Some(i) = self.materials.iter().position(|(n, _)| n == name) {
