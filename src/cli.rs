@@ -3,11 +3,10 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
-use raytracer::film::{Filter, PixelRect};
+use raytracer::film::PixelRect;
 use raytracer::integrator::{IntegratorKind, RenderSettings, StateFiles};
-use raytracer::photon::{Gather, GatherFilter, PhotonSettings};
 use raytracer::scene::{LoadOptions, LoadedScene};
-use raytracer::SceneDesc;
+use raytracer::settings::{Kind, Layer, Layers, Origin, SETTINGS};
 use std::path::PathBuf;
 
 use raytracer::limits::{MAX_PIXELS, MAX_SIDE};
@@ -115,84 +114,15 @@ pub struct RenderArgs {
     /// Image height in pixels [default: the scene's: 512 for cornell and cornell-bunny, 600 for cornell-final].
     #[arg(long)]
     pub height: Option<u32>,
-    /// Supersampling: NxN stratified, jittered camera samples per pixel [default: the scene's setting, else 4; 8 for
-    /// cornell-final].
-    #[arg(long, value_name = "N")]
-    pub ssaa: Option<u32>,
-    /// Shadow rays per light per shading point, stratified over the light [default: the scene's setting, else 4;
-    /// 400 for cornell-final].
-    #[arg(long, value_name = "N")]
-    pub shadow_samples: Option<u32>,
     /// Radius of the sphere light, overriding the scene's; 0 makes it a point light (hard shadows) [default: the
     /// scene's: 0.1 for cornell, 0.02 for cornell-final].
-    #[arg(long, value_name = "R")]
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub light_radius: Option<f32>,
-    /// Pixel reconstruction filter.
-    #[arg(long, value_enum, default_value_t = Filter::Box)]
-    pub filter: Filter,
-    /// Light transport algorithm [default: the scene's: photon for every built-in scene, else direct].
-    #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorKind>,
-    /// Path tracer: samples per pixel (replaces --ssaa) [default: 64].
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    /// Path tracer: most bounces, 1 = direct light only [default: no limit, Russian roulette ends paths].
-    #[arg(long, value_name = "N")]
-    pub max_depth: Option<u32>,
-    /// Photons emitted (SPPM: per pass); 0 turns photon mapping off (direct light only) [default: the scene's,
-    /// else 200000].
-    #[arg(long, value_name = "N")]
-    pub photons: Option<u64>,
-    /// Surface hits traced per photon, the first being its direct-light hit [default: the scene's, else 5; 16 for
-    /// SPPM].
-    #[arg(long, value_name = "N")]
-    pub max_bounces: Option<u32>,
-    /// Store the photons' first hits (direct light) too; final gathering always does.
-    #[arg(long)]
-    pub store_first_hit: bool,
-    /// Photon gather radius (SPPM: the initial radius); with --gather-k, the largest radius searched [default: the
-    /// scene's, else 0.1; unbounded with --gather-k].
-    #[arg(long, value_name = "R", allow_negative_numbers = true)]
-    pub gather_radius: Option<f32>,
-    /// Gather the K nearest photons (the radius is the distance to the K-th) instead of all within the radius.
-    #[arg(long, value_name = "K")]
-    pub gather_k: Option<u32>,
-    /// Weight gathered photons with Jensen's cone filter (k = 1.1), normalised.
-    #[arg(long)]
-    pub cone_filter: bool,
-    /// Photons a gather may use, by the cosine between their surface normal and the shaded one: none (any photon
-    /// arriving on the shaded side), normal (> 0.9), report (> 0.25) [default: the scene's, else none].
-    #[arg(long, value_enum)]
-    pub gather_filter: Option<GatherFilter>,
-    /// Final-gather rays per shading point; 0 reads the photon map at the visible point [default: the scene's, else 0].
-    #[arg(long, value_name = "N")]
-    pub final_gather: Option<u32>,
-    /// Estimate photon irradiance once at every 4th photon and read the nearest estimate at each shading point
-    /// (Christensen 1999): much faster with wide gathers [default: the scene's, else false; true for cornell-final].
-    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
-    pub precompute_irradiance: Option<bool>,
-    /// Photons wanted in the caustic map (paths light -> mirror/glass -> diffuse, shown directly); 0 leaves
-    /// caustics out [default: the scene's, else 100000].
-    #[arg(long, value_name = "N")]
-    pub caustic_photons: Option<u64>,
-    /// Gather radius of the caustic map [default: the scene's, else 0.025].
-    #[arg(long, value_name = "R", allow_negative_numbers = true)]
-    pub caustic_radius: Option<f32>,
-    /// SPPM: camera and photon passes (--photons photons each; --gather-radius is the initial radius) [default: 64].
-    #[arg(long, value_name = "N")]
-    pub passes: Option<u32>,
-    /// SPPM: fraction of each pass's photons kept as the radius shrinks, in (0, 1] [default: 0.7].
-    #[arg(long, value_name = "A", allow_negative_numbers = true)]
-    pub alpha: Option<f32>,
+    #[command(flatten)]
+    pub settings: SettingArgs,
     /// SPPM: also write the image so far to --output every K passes.
     #[arg(long, value_name = "K")]
     pub write_every: Option<u32>,
-    /// Worker threads [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Random seed; the same seed gives the same image on any thread count.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// Exposure in stops applied to PNG output (linear outputs hold radiance).
     #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -208,6 +138,73 @@ pub struct RenderArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub files: StateFileArgs,
+}
+
+/// The render settings of the library's table (`raytracer::settings`), one
+/// option each, with the table's doc and default: declared there, not here.
+#[derive(Debug, Clone, Default)]
+pub struct SettingArgs {
+    /// (setting, text) for each setting typed on the command line.
+    pub given: Vec<(&'static str, String)>,
+}
+
+impl SettingArgs {
+    /// Sets a setting as if typed (e.g. `photons` makes the integrator photon).
+    pub fn force(&mut self, name: &'static str, text: &str) {
+        self.given.retain(|(n, _)| *n != name);
+        self.given.push((name, text.to_string()));
+    }
+
+    /// The settings typed, checked against the table.
+    pub fn layer(&self) -> Result<Layer> {
+        let mut layer = Layer::default();
+        for (name, text) in &self.given {
+            layer.set_text(name, text, Origin::CommandLine)?;
+        }
+        Ok(layer)
+    }
+}
+
+impl clap::FromArgMatches for SettingArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> std::result::Result<Self, clap::Error> {
+        let mut s = SettingArgs::default();
+        s.update_from_arg_matches(m)?;
+        Ok(s)
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> std::result::Result<(), clap::Error> {
+        for spec in SETTINGS {
+            if let Some(text) = m.get_one::<String>(spec.name) {
+                self.force(spec.name, text);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl clap::Args for SettingArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        SETTINGS.iter().fold(cmd, |cmd, spec| {
+            let mut arg = clap::Arg::new(spec.name)
+                .long(spec.flag().trim_start_matches('-').to_string())
+                .help(format!("{} [default: {}]", spec.doc, spec.default.describe()))
+                .allow_negative_numbers(true)
+                .action(clap::ArgAction::Set);
+            arg = match spec.kind {
+                Kind::Count { .. } => arg.value_name("N"),
+                Kind::Real { .. } => arg.value_name("X"),
+                Kind::Flag => arg.value_name("BOOL").num_args(0..=1).default_missing_value("true"),
+                Kind::Choice(names) => arg
+                    .value_name("NAME")
+                    .value_parser(clap::builder::PossibleValuesParser::new(names)),
+            };
+            cmd.arg(arg)
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 /// Files that carry work between runs (photon maps, checkpoints).
@@ -234,25 +231,13 @@ pub struct StateFileArgs {
     /// Stop as if interrupted after this many passes (for tests).
     #[arg(long, value_name = "N", hide = true)]
     pub stop_after_passes: Option<u32>,
+    /// Stop as if interrupted once this many tiles are done (for tests).
+    #[arg(long, value_name = "N", hide = true)]
+    pub stop_after_tiles: Option<u64>,
 }
 
-/// Checks the state-file options against the integrator, before any work starts.
-fn state_files(args: &StateFileArgs, settings: &RenderSettings) -> Result<StateFiles> {
-    let photons = settings.integrator == IntegratorKind::Photon && settings.photon.photons > 0;
-    for (name, given) in [
-        ("--save-photons", &args.save_photons),
-        ("--load-photons", &args.load_photons),
-    ] {
-        if given.is_some() && !photons {
-            bail!("{name}: only the photon integrator with --photons > 0 has a photon map");
-        }
-    }
-    let progressive = matches!(settings.integrator, IntegratorKind::Path | IntegratorKind::Sppm);
-    for (name, given) in [("--checkpoint", &args.checkpoint), ("--resume", &args.resume)] {
-        if given.is_some() && !progressive {
-            bail!("{name}: only progressive renders (--integrator path or sppm) have checkpoints");
-        }
-    }
+/// Checks the state-file options (the library checks them against the integrator).
+fn state_files(args: &StateFileArgs) -> Result<StateFiles> {
     let minutes = args.checkpoint_every;
     let every = std::time::Duration::try_from_secs_f64(minutes * 60.0).map_err(|_| {
         anyhow::anyhow!("--checkpoint-every {minutes:?}: must be a number of minutes >= 0, at most a few centuries")
@@ -324,13 +309,8 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
         raytracer::limits::film_bytes(pixels),
         8 << 30,
     )?;
-    let ssaa = args.ssaa.or(desc.settings.ssaa).unwrap_or(4);
-    if ssaa == 0 || ssaa > 64 {
-        bail!("--ssaa {ssaa}: must be between 1 and 64");
-    }
-    let shadow_samples = args.shadow_samples.or(desc.settings.shadow_samples).unwrap_or(4);
-    if shadow_samples > 65_536 {
-        bail!("--shadow-samples {shadow_samples}: at most 65536");
+    if !args.exposure.is_finite() {
+        bail!("--exposure {}: must be a finite number", args.exposure);
     }
     if let Some(r) = args.light_radius {
         if !(r.is_finite() && r >= 0.0) {
@@ -338,72 +318,24 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
         }
         desc.set_light_radius(r);
     }
-    if let Some(t) = args.threads {
-        if t == 0 || t > 1024 {
-            bail!("--threads {t}: must be between 1 and 1024");
-        }
-    }
-    if !args.exposure.is_finite() {
-        bail!("--exposure {}: must be a finite number", args.exposure);
-    }
     let crop = match (&args.crop, &args.tile) {
         (Some(c), _) => Some(parse_crop(c, w, h)?),
         (None, Some(t)) => Some(parse_tile(t, w, h, |k| std::env::var(k).ok())?),
         (None, None) => None,
     };
-    let spp = args.spp.unwrap_or(64);
-    if spp == 0 || spp > 1 << 20 {
-        bail!("--spp {spp}: must be between 1 and {}", 1 << 20);
-    }
-    let photon = photon_settings(args, desc)?;
-    let mut settings = RenderSettings {
-        ssaa,
-        shadow_samples,
-        filter: args.filter,
-        seed: args.seed,
-        threads: args.threads,
-        integrator: args.integrator.or(desc.settings.integrator).unwrap_or_default(),
-        crop,
-        spp,
-        max_depth: args.max_depth,
-        photon,
-        files: Default::default(),
-        passes: args.passes.unwrap_or(64),
-        alpha: args.alpha.unwrap_or(0.7),
+    let layers = Layers {
+        command_line: &args.settings.layer()?,
+        scene_file: &desc.settings.scene_file,
+        preset: &desc.settings.preset,
     };
-    check_sppm(args, &settings)?;
-    settings.files = state_files(&args.files, &settings)?;
+    let mut settings = raytracer::settings::resolve(layers, state_files(&args.files)?)?;
+    settings.crop = crop;
+    match args.write_every {
+        Some(_) if settings.integrator != IntegratorKind::Sppm => bail!("--write-every: only for integrator sppm"),
+        Some(0) => bail!("--write-every 0: must be at least 1"),
+        _ => {}
+    }
     Ok((loaded, settings))
-}
-
-/// SPPM options: refused with other integrators, and checked.
-fn check_sppm(args: &RenderArgs, s: &RenderSettings) -> Result<()> {
-    use raytracer::integrator::IntegratorKind::Sppm;
-    if s.integrator != Sppm {
-        for (name, given) in [
-            ("--passes", args.passes.is_some()),
-            ("--alpha", args.alpha.is_some()),
-            ("--write-every", args.write_every.is_some()),
-        ] {
-            if given {
-                bail!("{name}: only for --integrator sppm");
-            }
-        }
-        return Ok(());
-    }
-    if s.passes == 0 || s.passes > 1 << 20 {
-        bail!("--passes {}: must be between 1 and {}", s.passes, 1 << 20);
-    }
-    if !(s.alpha > 0.0 && s.alpha <= 1.0) {
-        bail!("--alpha {}: must be in (0, 1]", s.alpha);
-    }
-    if !s.photon.gather.radius.is_finite() || s.photon.gather.k.is_some() {
-        bail!("--integrator sppm: needs a finite --gather-radius (its initial radius), not --gather-k");
-    }
-    if args.write_every == Some(0) {
-        bail!("--write-every 0: must be at least 1");
-    }
-    Ok(())
 }
 
 fn parse_crop(text: &str, w: u32, h: u32) -> Result<PixelRect> {
@@ -453,66 +385,6 @@ pub fn parse_tile(text: &str, w: u32, h: u32, env: impl Fn(&str) -> Option<Strin
         bail!("--tile {text}: need 0 <= I < N <= {h} (the image height)");
     }
     Ok(PixelRect::band(index, count, w, h))
-}
-
-/// Surface hits per photon for SPPM unless given: Russian roulette, not this
-/// limit, should end nearly every path (a 0.75 albedo keeps 1% after 16 hits).
-const SPPM_MAX_BOUNCES: u32 = 16;
-
-/// Photon options over the scene's presets over the defaults, checked
-/// (including the memory the map may need) before any work starts.
-fn photon_settings(args: &RenderArgs, desc: &SceneDesc) -> Result<PhotonSettings> {
-    let preset = &desc.settings;
-    let default = PhotonSettings::default();
-    let k = args.gather_k.or(preset.gather_k);
-    // A k given on the command line is not bounded by the scene's radius.
-    let scene_radius = if args.gather_k.is_some() {
-        None
-    } else {
-        preset.gather_radius
-    };
-    let radius = args.gather_radius.or(scene_radius).unwrap_or(if k.is_some() {
-        f32::INFINITY
-    } else {
-        default.gather.radius
-    });
-    let settings = PhotonSettings {
-        photons: args.photons.or(preset.photons).unwrap_or(default.photons),
-        max_bounces: args.max_bounces.or(preset.max_bounces).unwrap_or(
-            // SPPM converges to the answer only if photon paths are not cut short.
-            if args.integrator.or(preset.integrator) == Some(IntegratorKind::Sppm) {
-                SPPM_MAX_BOUNCES
-            } else {
-                default.max_bounces
-            },
-        ),
-        store_first_hit: args.store_first_hit,
-        roulette: true,
-        gather: Gather {
-            radius,
-            k,
-            cone: args.cone_filter,
-            filter: args.gather_filter.or(preset.gather_filter).unwrap_or_default(),
-        },
-        final_gather: args
-            .final_gather
-            .or(preset.final_gather)
-            .unwrap_or(default.final_gather),
-        precompute_irradiance: args
-            .precompute_irradiance
-            .or(preset.precompute_irradiance)
-            .unwrap_or(default.precompute_irradiance),
-        caustic_photons: args
-            .caustic_photons
-            .or(preset.caustic_photons)
-            .unwrap_or(default.caustic_photons),
-        caustic_radius: args
-            .caustic_radius
-            .or(preset.caustic_radius)
-            .unwrap_or(default.caustic_radius),
-    };
-    settings.validate()?;
-    Ok(settings)
 }
 
 #[cfg(test)]

@@ -7,6 +7,9 @@ use std::path::PathBuf;
 pub enum Error {
     #[error("{0}")]
     InvalidSetting(String),
+    /// A setting's value, with where it came from.
+    #[error(transparent)]
+    Setting(#[from] crate::settings::SettingError),
     #[error("unknown scene '{name}' (built-in scenes: {known}; or give a .toml scene file)")]
     UnknownScene { name: String, known: String },
     #[error("{path}: {message}")]

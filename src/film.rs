@@ -10,7 +10,7 @@ use crate::math::{Vec2, Vec3};
 use crate::sampling::sample_tent;
 
 /// Pixel reconstruction filter.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Filter {
     /// Average over the pixel's own area.
     #[default]
@@ -22,6 +22,20 @@ pub enum Filter {
 }
 
 impl Filter {
+    pub const ALL: [Filter; 3] = [Filter::Box, Filter::Tent, Filter::Gaussian];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::Box => "box",
+            Filter::Tent => "tent",
+            Filter::Gaussian => "gaussian",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name() == name)
+    }
+
     /// Offset from the pixel centre, in pixels, for a stratified sample `u` in [0,1)^2.
     pub fn sample(&self, u: Vec2) -> Vec2 {
         match self {

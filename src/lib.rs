@@ -18,6 +18,7 @@ pub mod metrics;
 pub mod photon;
 pub mod sampling;
 pub mod scene;
+pub mod settings;
 pub mod state_file;
 pub mod viewer;
 

@@ -112,7 +112,12 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
         ProgressBar::hidden()
     };
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
-    let _ = ctrlc::set_handler(|| integrator::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
+    let cancel = match args.files.stop_after_tiles {
+        Some(n) => integrator::CancelToken::after_tiles(n),
+        None => integrator::CancelToken::new(),
+    };
+    let on_signal = cancel.clone();
+    let _ = ctrlc::set_handler(move || on_signal.cancel());
     // SPPM with --write-every K: the image so far, every K passes, written atomically.
     let window = integrator::frame_window(&scene, &settings)?;
     let on_pass = |k: u32, film: &raytracer::Film| match args.write_every {
@@ -121,7 +126,8 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
         }
         _ => Ok(()),
     };
-    let out = integrator::render_observed(&scene, &settings, &|| bar.inc(1), &on_pass)?;
+    let tick = || bar.inc(1);
+    let out = integrator::render_observed(&scene, &settings, integrator::Progress::new(&tick, &cancel), &on_pass)?;
     bar.finish_and_clear();
     if !out.is_complete() {
         let path = partial_path(&args.output);
@@ -207,7 +213,7 @@ fn photons(args: &cli::RenderArgs) -> Result<()> {
         anyhow::bail!("photons: give --save-photons FILE, where the map goes");
     }
     let mut args = args.clone();
-    args.integrator = Some(integrator::IntegratorKind::Photon);
+    args.settings.force("integrator", "photon");
     let (loaded, settings) = cli::prepare_settings(&args)?;
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;

@@ -28,13 +28,12 @@
 //! It is written to a temporary file and renamed into place, so a crash
 //! while writing leaves the previous checkpoint.
 
-use super::{RenderSettings, INTERRUPTED};
+use super::RenderSettings;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::scene::Scene;
 use crate::state_file::{self, Header};
 use std::path::Path;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 const MAGIC: [u8; 8] = *b"RTCHECKP";
@@ -72,7 +71,7 @@ pub trait Progressive {
 
     /// Runs pass `pass` (from 0). Returns false if it was interrupted, having
     /// left the state as it was before the pass.
-    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: &(dyn Fn() + Sync)) -> bool;
+    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool;
 
     /// The state to save, as named buffers.
     fn save(&self) -> Vec<(String, Buffer)>;
@@ -90,7 +89,7 @@ pub fn run(
     scene: &Scene,
     settings: &RenderSettings,
     state: &mut dyn Progressive,
-    on_tile: &(dyn Fn() + Sync),
+    on_tile: super::Progress,
 ) -> Result<(u32, u32)> {
     let files = &settings.files;
     let header = Header {
@@ -119,7 +118,7 @@ pub fn run(
     let mut last_write = Instant::now();
     let mut this_run = 0;
     while done < total {
-        if INTERRUPTED.load(Ordering::SeqCst) || files.stop_after_passes.is_some_and(|k| this_run >= k) {
+        if on_tile.stopped() || files.stop_after_passes.is_some_and(|k| this_run >= k) {
             break;
         }
         if !state.run_pass(scene, done, on_tile) {

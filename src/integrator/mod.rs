@@ -14,112 +14,99 @@ pub mod photon;
 pub mod sppm;
 
 use crate::error::{Error, Result};
-use crate::film::{Film, Filter, FrameWindow, PixelRect};
+use crate::film::{Film, FrameWindow, PixelRect};
 use crate::math::{Ray, Vec2, Vec3};
-use crate::photon::{PhotonSettings, PhotonStats};
+use crate::photon::PhotonStats;
 use crate::sampling::{hammersley_shifted, stratified, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
 
-/// Set when the process is asked to stop (SIGINT/SIGTERM): tiles not yet
-/// started are skipped, and the render returns what it finished. Signals are
-/// process-wide, so the flag is too.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+pub use crate::settings::{IntegratorKind, RenderSettings, StateFiles};
 
 pub const TILE: u32 = 32;
 
-/// Which light transport algorithm renders the image.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum IntegratorKind {
-    /// Direct light only (shadow rays to the lights).
-    #[default]
-    Direct,
-    /// Direct light by shadow rays, indirect light from a photon map.
-    Photon,
-    /// Reference path tracer (unbiased, slow to converge).
-    Path,
-    /// Stochastic progressive photon mapping (consistent; refines over --passes).
-    Sppm,
+/// Asks a render to stop: tiles not yet started are skipped, progressive
+/// renders stop after the pass in flight (saving their checkpoint), and the
+/// render returns what it finished. The caller owns it: the binary trips it
+/// from its SIGINT/SIGTERM handler, an embedding program from wherever it
+/// likes, and tests after a fixed number of tiles, so that an interruption
+/// is as deterministic as the render.
+#[derive(Clone, Debug, Default)]
+pub struct CancelToken {
+    flag: Arc<AtomicBool>,
+    /// Tiles still to finish before the token trips by itself.
+    tiles_left: Option<Arc<AtomicU64>>,
 }
 
-/// Settings common to every integrator.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderSettings {
-    /// Camera samples per pixel per axis (ssaa^2 samples per pixel).
-    pub ssaa: u32,
-    /// Shadow rays per light per shading point.
-    pub shadow_samples: u32,
-    pub filter: Filter,
-    pub seed: u64,
-    /// Worker threads; `None` uses every core.
-    pub threads: Option<usize>,
-    pub integrator: IntegratorKind,
-    /// Render only this rectangle of the frame (`None`: the whole frame).
-    pub crop: Option<PixelRect>,
-    /// Samples per pixel of the path tracer (it ignores `ssaa`).
-    pub spp: u32,
-    /// Path tracer: most bounces (1 = direct light only); `None`: unlimited.
-    pub max_depth: Option<u32>,
-    /// Photon mapping settings.
-    pub photon: PhotonSettings,
-    /// Files that carry work between runs.
-    pub files: StateFiles,
-    /// SPPM: camera and photon passes.
-    pub passes: u32,
-    /// SPPM: fraction of each pass's photons kept as the radius shrinks.
-    pub alpha: f32,
-}
+impl CancelToken {
+    pub fn new() -> Self {
+        Self::default()
+    }
 
-/// Files that carry work between runs: photon maps and checkpoints of
-/// progressive renders. All off by default.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct StateFiles {
-    /// Write the traced photon map here (`--save-photons`).
-    pub save_photons: Option<PathBuf>,
-    /// Read the photon map from here instead of tracing it (`--load-photons`).
-    pub load_photons: Option<PathBuf>,
-    /// Write a progressive render's state here between passes, at most every
-    /// `checkpoint_every`, and when interrupted (`--checkpoint`).
-    pub checkpoint: Option<PathBuf>,
-    pub checkpoint_every: Duration,
-    /// Continue the progressive render saved here (`--resume`).
-    pub resume: Option<PathBuf>,
-    /// Stop as if interrupted after this many passes of this run (for tests).
-    pub stop_after_passes: Option<u32>,
-}
+    /// A token that trips once `tiles` tiles have been rendered.
+    pub fn after_tiles(tiles: u64) -> Self {
+        CancelToken {
+            flag: Arc::new(AtomicBool::new(tiles == 0)),
+            tiles_left: Some(Arc::new(AtomicU64::new(tiles))),
+        }
+    }
 
-impl RenderSettings {
-    /// Camera samples per pixel of the chosen integrator.
-    pub fn samples_per_pixel(&self) -> u32 {
-        match self.integrator {
-            IntegratorKind::Path => self.spp,
-            IntegratorKind::Sppm => self.passes,
-            _ => self.ssaa * self.ssaa,
+    pub fn cancel(&self) {
+        self.flag.store(true, Ordering::SeqCst);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.flag.load(Ordering::SeqCst)
+    }
+
+    fn tile_done(&self) {
+        if let Some(left) = &self.tiles_left {
+            let before = left.fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| n.checked_sub(1));
+            if before == Ok(1) {
+                self.cancel();
+            }
         }
     }
 }
 
-impl Default for RenderSettings {
-    fn default() -> Self {
-        RenderSettings {
-            ssaa: 4,
-            shadow_samples: 4,
-            filter: Filter::Box,
-            seed: 0,
-            threads: None,
-            integrator: IntegratorKind::Direct,
-            crop: None,
-            spp: 64,
-            max_depth: None,
-            photon: PhotonSettings::default(),
-            files: StateFiles::default(),
-            passes: 64,
-            alpha: 0.7,
+/// What a render reports as it goes and how it is stopped: `on_tile` is
+/// called once per finished tile (per pass for progressive renders), and the
+/// cancel token is checked before each tile and pass.
+#[derive(Clone, Copy)]
+pub struct Progress<'a> {
+    on_tile: &'a (dyn Fn() + Sync),
+    cancel: &'a CancelToken,
+}
+
+impl<'a> Progress<'a> {
+    pub fn new(on_tile: &'a (dyn Fn() + Sync), cancel: &'a CancelToken) -> Self {
+        Progress { on_tile, cancel }
+    }
+
+    /// Reports to `on_tile` and never stops.
+    pub fn reporting(on_tile: &'a (dyn Fn() + Sync)) -> Self {
+        static NEVER: std::sync::OnceLock<CancelToken> = std::sync::OnceLock::new();
+        Progress {
+            on_tile,
+            cancel: NEVER.get_or_init(CancelToken::new),
         }
+    }
+
+    /// Reports nothing and never stops.
+    pub fn silent() -> Progress<'static> {
+        Progress::reporting(&|| {})
+    }
+
+    pub(crate) fn tile_done(&self) {
+        (self.on_tile)();
+        self.cancel.tile_done();
+    }
+
+    pub(crate) fn stopped(&self) -> bool {
+        self.cancel.is_cancelled()
     }
 }
 
@@ -186,9 +173,9 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
     Ok(pool.install(f))
 }
 
-/// Renders the scene's full frame with the chosen integrator.
+/// Renders the scene's full frame (or the crop) with the chosen integrator.
 pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sync)) -> Result<RenderOutput> {
-    render_observed(scene, settings, on_tile, &|_, _| Ok(()))
+    render_observed(scene, settings, Progress::reporting(on_tile), &|_, _| Ok(()))
 }
 
 /// `render`, showing progressive integrators' (SPPM's) image after each pass
@@ -196,34 +183,10 @@ pub fn render(scene: &Scene, settings: &RenderSettings, on_tile: &(dyn Fn() + Sy
 pub fn render_observed(
     scene: &Scene,
     settings: &RenderSettings,
-    on_tile: &(dyn Fn() + Sync),
+    on_tile: Progress,
     on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
 ) -> Result<RenderOutput> {
-    if settings.ssaa == 0 {
-        return Err(Error::InvalidSetting("--ssaa must be at least 1".into()));
-    }
-    if settings.integrator == IntegratorKind::Path && settings.spp == 0 {
-        return Err(Error::InvalidSetting("--spp must be at least 1".into()));
-    }
-    if matches!(settings.integrator, IntegratorKind::Photon | IntegratorKind::Sppm) {
-        settings.photon.validate()?;
-    }
-    if settings.integrator == IntegratorKind::Sppm {
-        if settings.passes == 0 {
-            return Err(Error::InvalidSetting("--passes must be at least 1".into()));
-        }
-        if !(settings.alpha > 0.0 && settings.alpha <= 1.0) {
-            return Err(Error::InvalidSetting(format!(
-                "--alpha {}: must be in (0, 1]",
-                settings.alpha
-            )));
-        }
-        if !settings.photon.gather.radius.is_finite() {
-            return Err(Error::InvalidSetting(
-                "--gather-radius: SPPM needs a finite initial radius".into(),
-            ));
-        }
-    }
+    settings.validate()?;
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
     let tiles_total = tile_count(window.rect.width(), window.rect.height());
@@ -302,7 +265,7 @@ pub fn render_tiles(
     scene: &Scene,
     settings: &RenderSettings,
     est: &dyn RadianceEstimator,
-    on_tile: &(dyn Fn() + Sync),
+    on_tile: Progress,
 ) -> (Film, RayStats, u64) {
     let cam = &scene.camera;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
@@ -327,7 +290,7 @@ pub fn render_tiles(
 /// bits as one pass. `sums` holds one entry per pixel of the rectangle, rows
 /// from the top. `cancel` is checked before every row of a tile; when it is
 /// set, `sums` is left untouched and `None` returned. Tiles not started when
-/// [`INTERRUPTED`] is set are skipped; the count of tiles done says so.
+/// `on_tile`'s cancel token is set are skipped; the count of tiles done says so.
 pub fn accumulate_tiles(
     scene: &Scene,
     settings: &RenderSettings,
@@ -335,7 +298,7 @@ pub fn accumulate_tiles(
     samples: Range<u32>,
     sums: &mut [Vec3],
     cancel: &AtomicBool,
-    on_tile: &(dyn Fn() + Sync),
+    on_tile: Progress,
 ) -> Option<(RayStats, u64)> {
     let cam = &scene.camera;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
@@ -346,7 +309,7 @@ pub fn accumulate_tiles(
     let prior: &[Vec3] = sums;
     let tiles: Option<Vec<(u32, Vec<Vec3>, RayStats)>> = (0..ntiles)
         .into_par_iter()
-        .filter(|_| !INTERRUPTED.load(Ordering::Relaxed))
+        .filter(|_| !on_tile.stopped())
         .map(|t| {
             // Tile bounds relative to the rectangle.
             let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
@@ -364,7 +327,7 @@ pub fn accumulate_tiles(
                     out.push(sum);
                 }
             }
-            on_tile();
+            on_tile.tile_done();
             Some((t, out, stats))
         })
         .collect();

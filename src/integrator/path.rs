@@ -180,7 +180,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         Self::passes_for(self.settings.spp)
     }
 
-    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: &(dyn Fn() + Sync)) -> bool {
+    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool {
         let samples = self.samples_after(pass)..self.samples_after(pass + 1);
         // Tiles finished before an interruption must not count: keep the sums to go back to.
         let before = self.sums.clone();

@@ -273,7 +273,7 @@ pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<Ph
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
-    on_tile: &(dyn Fn() + Sync),
+    on_tile: super::Progress,
 ) -> Result<((crate::Film, RayStats, u64), Option<PhotonStats>)> {
     let ps = map_settings(settings);
     let PhotonMaps {

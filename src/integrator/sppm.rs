@@ -38,7 +38,7 @@
 
 use super::checkpoint::{self, Buffer};
 use super::direct::{first_diffuse_hit, irradiance};
-use super::{RayStats, RenderSettings, INTERRUPTED};
+use super::{RayStats, RenderSettings};
 use crate::error::{Error, Result};
 use crate::film::{Film, PixelRect};
 use crate::math::Vec3;
@@ -47,7 +47,6 @@ use crate::sampling::{mix64, Rng};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::f32::consts::PI;
-use std::sync::atomic::Ordering;
 
 /// Key mixed with the pass number into each photon pass's seed.
 const PASS_STREAM: u64 = 0x7370_706d_0000_0000;
@@ -87,7 +86,7 @@ fn pass_seed(seed: u64, pass: u32) -> u64 {
 pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
-    on_progress: &(dyn Fn() + Sync),
+    on_progress: super::Progress,
     on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
 ) -> Result<(Film, RayStats, u32, PhotonStats)> {
     let mut state = Progressive::new(scene, settings, on_pass);
@@ -197,7 +196,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         self.settings.passes
     }
 
-    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: &(dyn Fn() + Sync)) -> bool {
+    fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool {
         let settings = self.settings;
         let cam = &scene.camera;
         let rect = self.rect;
@@ -219,7 +218,7 @@ impl checkpoint::Progressive for Progressive<'_> {
             .par_chunks_mut(rw as usize)
             .enumerate()
             .map(|(row, states)| {
-                if INTERRUPTED.load(Ordering::Relaxed) {
+                if on_tile.stopped() {
                     return None;
                 }
                 let mut st = RayStats::default();
@@ -264,7 +263,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         let ticks = super::tile_count(rw, rect.height());
         let passes = settings.passes as u64;
         for _ in ticks * pass as u64 / passes..ticks * done as u64 / passes {
-            on_tile();
+            on_tile.tile_done();
         }
         true
     }

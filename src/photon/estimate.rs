@@ -16,18 +16,7 @@ use std::f32::consts::PI;
 /// Jensen's cone filter constant (7.1.1): weights fall to 1 - 1/k at the radius.
 pub const CONE_K: f32 = 1.1;
 
-/// Which photons a gather may use, by the cosine between the photon's stored
-/// surface normal and the shaded point's normal.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum GatherFilter {
-    /// Any photon that arrived on the shaded side.
-    #[default]
-    None,
-    /// Photons whose surface normal is within ~26 degrees (cosine > 0.9): no leaks round corners.
-    Normal,
-    /// The original report's rule (cosine > 0.25): surfaces meeting at an obtuse angle share photons.
-    Report,
-}
+pub use crate::settings::{Gather, GatherFilter};
 
 impl GatherFilter {
     /// Smallest cosine between the normals that passes (exclusive).
@@ -38,18 +27,6 @@ impl GatherFilter {
             GatherFilter::Report => 0.25,
         }
     }
-}
-
-/// How the photons around a shading point are gathered.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gather {
-    /// Gather radius; with `k`, the largest radius searched (may be infinite).
-    pub radius: f32,
-    /// Use the k nearest photons (radius = distance to the k-th).
-    pub k: Option<u32>,
-    /// Weight photons with Jensen's cone filter.
-    pub cone: bool,
-    pub filter: GatherFilter,
 }
 
 /// Which photons that reached a surface with no diffuse bounce before it a

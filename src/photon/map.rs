@@ -54,7 +54,7 @@ pub struct Photon {
     pub object: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<Photon>() == 32);
+const _: () = assert!(std::mem::size_of::<Photon>() as u64 == crate::settings::PHOTON_RECORD_BYTES);
 
 impl Photon {
     /// Packs a photon; `power` is relative to the map's unit.

@@ -321,7 +321,8 @@ impl ResumableTrace {
 }
 
 /// Photons emitted per round of the caustic pass.
-pub const CAUSTIC_ROUND: u64 = 16 * CHUNK;
+pub use crate::settings::CAUSTIC_ROUND;
+const _: () = assert!(CAUSTIC_ROUND == 16 * CHUNK);
 /// The caustic pass gives up after emitting this many photons per photon asked for.
 const CAUSTIC_EMIT_LIMIT: u64 = 256;
 

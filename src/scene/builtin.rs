@@ -1,361 +1,133 @@
-//! The canonical scenes, with the numbers of the project's scene definitions
-//! (`../shared/SCENES.md`) built in so that the default render needs no file.
-//! The bunny scenes draw the Stanford bunny, which the project does not ship:
-//! its path comes from `--mesh`.
+//! The canonical scenes (`../shared/SCENES.md`). They are the scene files in
+//! `scenes/`, compiled in so that the default render needs no file; the
+//! bunny scenes draw the Stanford bunny, which the project does not ship, so
+//! its path comes from `--mesh`. A built-in scene's `[settings]` are its
+//! preset: values a scene file (through `preset = "NAME"`) or the command
+//! line override, and errors in them are reported as `preset NAME: ...`.
 
-use super::mesh::{load_mesh_timed, Mesh};
-use super::transform::{Fit, Transform};
-use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SceneSettings, TriangleDesc};
+use super::{file, LoadOptions, LoadedScene, SceneDesc};
 use crate::error::{Error, Result};
-use crate::geometry::Sphere;
-use crate::light::Light;
-use crate::material::Material;
-use crate::math::Vec3;
-use std::f32::consts::PI;
+use crate::settings::{Layer, Origin, SceneSettings};
+use std::path::Path;
+
+/// The built-in scenes: name, file name in `scenes/`, text.
+const SCENES: &[(&str, &str, &str)] = &[
+    ("cornell", "cornell.toml", include_str!("../../scenes/cornell.toml")),
+    (
+        "cornell-bunny",
+        "cornell-bunny.toml",
+        include_str!("../../scenes/cornell-bunny.toml"),
+    ),
+    (
+        "cornell-final",
+        "cornell-final.toml",
+        include_str!("../../scenes/cornell-final.toml"),
+    ),
+    (
+        "cornell-specular",
+        "cornell-specular.toml",
+        include_str!("../../scenes/cornell-specular.toml"),
+    ),
+];
 
 /// Names accepted by `--scene`.
 pub const NAMES: &[&str] = &["cornell", "cornell-bunny", "cornell-final", "cornell-specular"];
 
-/// Cornell box data (side 555) to the coursework's [-1, 1]^3 with x and y negated.
-pub fn cornell_point(x: f32, y: f32, z: f32) -> Vec3 {
-    let s = 2.0 / 555.0;
-    Vec3::new(-(x * s - 1.0), -(y * s - 1.0), z * s - 1.0)
+/// Scenes that draw a mesh (the bunny), which `--mesh` must supply.
+const WITH_MESH: &[&str] = &["cornell-bunny", "cornell-final"];
+
+fn text_of(name: &str) -> Option<(&'static str, &'static str)> {
+    SCENES.iter().find(|(n, _, _)| *n == name).map(|(_, f, t)| (*f, *t))
 }
 
-/// Vertex order of a block's 10 triangles over its points A..H.
-const BLOCK: [[usize; 3]; 10] = [
-    [4, 1, 0],
-    [4, 5, 1],
-    [5, 3, 1],
-    [5, 7, 3],
-    [7, 2, 3],
-    [7, 6, 2],
-    [6, 4, 2],
-    [4, 0, 2],
-    [6, 5, 4],
-    [6, 7, 5],
-];
+/// The settings of built-in scene `name` as a preset layer.
+pub fn preset(name: &str) -> std::result::Result<Layer, String> {
+    let (file_name, text) = text_of(name).ok_or_else(|| format!("no built-in scene '{name}' (known: {})", NAMES.join(", ")))?;
+    let s = file::settings_of(Path::new(file_name), text).map_err(|e| e.to_string())?;
+    Ok(as_preset(name, s))
+}
 
-pub const SHORT_BLOCK: [[f32; 3]; 8] = [
-    [290.0, 0.0, 114.0],
-    [130.0, 0.0, 65.0],
-    [240.0, 0.0, 272.0],
-    [82.0, 0.0, 225.0],
-    [290.0, 165.0, 114.0],
-    [130.0, 165.0, 65.0],
-    [240.0, 165.0, 272.0],
-    [82.0, 165.0, 225.0],
-];
-
-pub const TALL_BLOCK: [[f32; 3]; 8] = [
-    [423.0, 0.0, 247.0],
-    [265.0, 0.0, 296.0],
-    [472.0, 0.0, 406.0],
-    [314.0, 0.0, 456.0],
-    [423.0, 330.0, 247.0],
-    [265.0, 330.0, 296.0],
-    [472.0, 330.0, 406.0],
-    [314.0, 330.0, 456.0],
-];
-
-/// Adds a block given by its eight corners (A..H, before scaling).
-pub fn add_block(desc: &mut SceneDesc, corners: &[[f32; 3]; 8], material: u32) {
-    let p: Vec<Vec3> = corners.iter().map(|c| cornell_point(c[0], c[1], c[2])).collect();
-    for t in BLOCK {
-        desc.triangles.push(TriangleDesc {
-            vertices: [p[t[0]], p[t[1]], p[t[2]]],
-            normals: None,
-            material,
-        });
+/// A built-in scene's own settings are its preset, over the preset it names.
+fn as_preset(name: &str, s: SceneSettings) -> Layer {
+    let mut layer = s.preset;
+    for (key, (value, _)) in s.scene_file.values {
+        layer.values.insert(key, (value, Origin::Preset(name.to_string())));
     }
-}
-
-/// Albedos of the room's surfaces, in the order floor, left, right, ceiling, back.
-pub struct RoomColours {
-    pub floor: Vec3,
-    pub left: Vec3,
-    pub right: Vec3,
-    pub ceiling: Vec3,
-    pub back: Vec3,
-}
-
-/// Adds the room's ten triangles.
-pub fn add_room(desc: &mut SceneDesc, colours: &RoomColours) {
-    let l = 555.0;
-    let a = cornell_point(l, 0.0, 0.0);
-    let b = cornell_point(0.0, 0.0, 0.0);
-    let c = cornell_point(l, 0.0, l);
-    let d = cornell_point(0.0, 0.0, l);
-    let e = cornell_point(l, l, 0.0);
-    let f = cornell_point(0.0, l, 0.0);
-    let g = cornell_point(l, l, l);
-    let h = cornell_point(0.0, l, l);
-    let walls: [(&str, Vec3, [[Vec3; 3]; 2]); 5] = [
-        ("floor", colours.floor, [[c, b, a], [c, d, b]]),
-        ("left_wall", colours.left, [[a, e, c], [c, e, g]]),
-        ("right_wall", colours.right, [[f, b, d], [h, f, d]]),
-        ("ceiling", colours.ceiling, [[e, f, g], [f, h, g]]),
-        ("back_wall", colours.back, [[g, d, c], [g, h, d]]),
-    ];
-    for (name, albedo, tris) in walls {
-        let m = desc.material(name, Material::Diffuse { albedo });
-        for v in tris {
-            desc.triangles.push(TriangleDesc {
-                vertices: v,
-                normals: None,
-                material: m,
-            });
-        }
-    }
-}
-
-/// The default light: radius 0.1, power 14 pi W, below the ceiling near the front.
-pub fn cornell_light() -> Light {
-    Light::Sphere {
-        sphere: Sphere {
-            centre: Vec3::new(0.0, -0.5, -0.7),
-            radius: 0.1,
-        },
-        power: Vec3::splat(14.0 * PI),
-    }
-}
-
-pub fn cornell_camera(width: u32, height: u32) -> CameraDesc {
-    CameraDesc {
-        position: Vec3::new(0.0, 0.0, -3.0),
-        look_at: Vec3::ZERO,
-        up: Vec3::new(0.0, -1.0, 0.0),
-        fov_y_deg: (2.0 * 0.5f32.atan()).to_degrees(),
-        width,
-        height,
-    }
-}
-
-fn empty(name: &str, camera: CameraDesc) -> SceneDesc {
-    SceneDesc::empty(name, camera)
-}
-
-pub fn cornell_colours() -> RoomColours {
-    RoomColours {
-        floor: Vec3::new(0.15, 0.75, 0.15),
-        left: Vec3::new(0.75, 0.15, 0.75),
-        right: Vec3::new(0.75, 0.75, 0.15),
-        ceiling: Vec3::new(0.15, 0.75, 0.75),
-        back: Vec3::splat(0.75),
-    }
-}
-
-/// Scene `cornell`: the room, both blocks and the sphere light.
-pub fn cornell() -> SceneDesc {
-    let mut d = empty("cornell", cornell_camera(512, 512));
-    add_room(&mut d, &cornell_colours());
-    let short = d.material("short_block", Material::diffuse(0.75, 0.15, 0.15));
-    add_block(&mut d, &SHORT_BLOCK, short);
-    let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
-    add_block(&mut d, &TALL_BLOCK, tall);
-    d.lights.push(cornell_light());
-    d.settings = cornell_photon_preset();
-    d
-}
-
-/// Photon mapping by default in `cornell` and `cornell-bunny`, with the
-/// settings measured best for time and error against the path tracer
-/// (BENCHMARKS.md): a million photons, up to 10 hits each (5 loses 1% of the
-/// light), radius 0.06, no gather filter (in this box of right angles it only
-/// darkens the corners), irradiance precomputed at every 4th photon (3 times
-/// faster at the same error).
-fn cornell_photon_preset() -> SceneSettings {
-    SceneSettings {
-        integrator: Some(crate::integrator::IntegratorKind::Photon),
-        photons: Some(1_000_000),
-        max_bounces: Some(10),
-        gather_radius: Some(0.06),
-        precompute_irradiance: Some(true),
-        ..SceneSettings::default()
-    }
-}
-
-/// Scene `cornell-specular`: `cornell` with the tall block a perfect mirror,
-/// no short block, a glass sphere (ior 1.5) on the floor, and the light moved
-/// behind the sphere so that it focuses a caustic on the floor in front of it.
-pub fn cornell_specular() -> SceneDesc {
-    let mut d = empty("cornell-specular", cornell_camera(512, 512));
-    add_room(&mut d, &cornell_colours());
-    let tall = d.material("tall_block", Material::Mirror { reflectance: Vec3::ONE });
-    add_block(&mut d, &TALL_BLOCK, tall);
-    let glass = d.material("glass_sphere", Material::Glass { ior: 1.5 });
-    d.spheres.push(super::SphereDesc {
-        sphere: Sphere {
-            centre: Vec3::new(0.33, 0.7, -0.39),
-            radius: 0.3,
-        },
-        material: glass,
-    });
-    d.lights.push(Light::Sphere {
-        sphere: Sphere {
-            centre: Vec3::new(0.0, -0.6, 0.3),
-            radius: 0.1,
-        },
-        power: Vec3::splat(14.0 * PI),
-    });
-    // Photon mapping with a caustic map by default: `cornell`'s global map
-    // (hits through mirrors and glass count towards the 10, and fewer lose
-    // about 4% of the light here), and 200k caustic photons gathered within
-    // 0.02, a pixel or two at 512 x 512, so the caustic stays sharp.
-    d.settings.integrator = Some(crate::integrator::IntegratorKind::Photon);
-    d.settings.photons = Some(200_000);
-    d.settings.max_bounces = Some(10);
-    d.settings.gather_radius = Some(0.1);
-    d.settings.caustic_photons = Some(200_000);
-    d.settings.caustic_radius = Some(0.02);
-    d
-}
-
-/// Where the bunny of `cornell-bunny` goes: turned 180 degrees about z,
-/// 0.617336 high, standing on the floor where the short block stood.
-pub fn bunny_transform() -> Transform {
-    Transform {
-        rotate_deg: Vec3::new(0.0, 0.0, 180.0),
-        fit: Some(Fit {
-            height: 0.617336,
-            bottom_centre: Vec3::new(0.33, 1.0, -0.39),
-        }),
-        ..Default::default()
-    }
-}
-
-/// Where the bunny of `cornell-final` goes: turned 180 degrees about x,
-/// 0.41686 high, standing on the short block.
-pub fn final_bunny_transform() -> Transform {
-    Transform {
-        rotate_deg: Vec3::new(180.0, 0.0, 0.0),
-        fit: Some(Fit {
-            height: 0.41686,
-            bottom_centre: Vec3::new(0.27183, 0.40672, -0.48132),
-        }),
-        ..Default::default()
-    }
-}
-
-/// Scene `cornell-bunny`: the room, the tall block and the light of
-/// `cornell`, with the bunny (white, two-sided Lambertian) in place of the
-/// short block. Flat-shaded unless `smooth` and the mesh has normals.
-pub fn cornell_bunny(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
-    let mut d = empty("cornell-bunny", cornell_camera(512, 512));
-    add_room(&mut d, &cornell_colours());
-    let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
-    add_block(&mut d, &TALL_BLOCK, tall);
-    let m = d.material("bunny", Material::diffuse(0.75, 0.75, 0.75));
-    bunny.add_to_scene(&mut d, &bunny_transform(), Some(m), smooth)?;
-    d.lights.push(cornell_light());
-    d.settings = cornell_photon_preset();
-    Ok(d)
-}
-
-/// Scene `cornell-final`: the report's final render made physically based
-/// (SCENES.md): both blocks, the bunny on the short block, a small bright
-/// light, a wide camera and the report's sample counts.
-pub fn cornell_final(bunny: &Mesh, smooth: bool) -> Result<SceneDesc> {
-    let mut d = empty(
-        "cornell-final",
-        CameraDesc {
-            position: Vec3::new(0.0, 0.0, -2.0),
-            look_at: Vec3::ZERO,
-            up: Vec3::new(0.0, -1.0, 0.0),
-            fov_y_deg: 90.0,
-            width: 600,
-            height: 600,
-        },
-    );
-    let off_white = Vec3::new(0.86, 0.86, 0.76);
-    let colours = RoomColours {
-        floor: off_white,
-        left: Vec3::new(0.239, 0.008, 0.031),
-        right: Vec3::new(0.031, 0.239, 0.008),
-        ceiling: off_white,
-        back: off_white,
-    };
-    add_room(&mut d, &colours);
-    let short = d.material("short_block", Material::Diffuse { albedo: off_white });
-    add_block(&mut d, &SHORT_BLOCK, short);
-    let tall = d.material("tall_block", Material::Diffuse { albedo: off_white });
-    add_block(&mut d, &TALL_BLOCK, tall);
-    let m = d.material("bunny", Material::diffuse(0.286, 0.18, 0.039));
-    bunny.add_to_scene(&mut d, &final_bunny_transform(), Some(m), smooth)?;
-    d.lights.push(Light::Sphere {
-        sphere: Sphere {
-            centre: Vec3::new(0.0, -0.5, -0.7),
-            radius: 0.02,
-        },
-        power: Vec3::splat(16.0 * PI),
-    });
-    // The report's final settings: 8x8 supersampling, 400 shadow samples,
-    // 750,000 photons of at most 5 bounces (first hits not stored), gathered
-    // within 0.4 where the surface normals' cosine exceeds 0.25.
-    d.settings = SceneSettings {
-        ssaa: Some(8),
-        shadow_samples: Some(400),
-        integrator: Some(crate::integrator::IntegratorKind::Photon),
-        photons: Some(750_000),
-        max_bounces: Some(5),
-        gather_radius: Some(0.4),
-        gather_filter: Some(crate::photon::GatherFilter::Report),
-        // Not the report's: a gather of radius 0.4 at each of 64 samples a pixel
-        // would cost an hour; the precomputed estimate gives the same picture.
-        precompute_irradiance: Some(true),
-        ..SceneSettings::default()
-    };
-    Ok(d)
+    layer
 }
 
 /// Looks a built-in scene up by name, loading its mesh when it has one.
 /// `Ok(None)` for an unknown name.
 pub fn by_name(name: &str, opts: &LoadOptions) -> Result<Option<LoadedScene>> {
-    let with_bunny = |build: fn(&Mesh, bool) -> Result<SceneDesc>| -> Result<LoadedScene> {
-        let path = opts
-            .mesh
-            .as_deref()
-            .ok_or_else(|| Error::MeshRequired { scene: name.into() })?;
-        let (mesh, report) = load_mesh_timed(path)?;
-        Ok(LoadedScene {
-            desc: build(&mesh, opts.smooth)?,
-            meshes: vec![report],
-        })
+    let Some((file_name, text)) = text_of(name) else {
+        return Ok(None);
     };
-    match name {
-        "cornell" => {
-            if let Some(p) = &opts.mesh {
-                return Err(Error::InvalidSetting(format!(
-                    "--mesh {}: scene 'cornell' has no mesh",
-                    p.display()
-                )));
-            }
-            Ok(Some(LoadedScene {
-                desc: cornell(),
-                meshes: vec![],
-            }))
+    match (&opts.mesh, WITH_MESH.contains(&name)) {
+        (None, true) => return Err(Error::MeshRequired { scene: name.into() }),
+        (Some(p), false) => {
+            return Err(Error::InvalidSetting(format!(
+                "--mesh {}: scene '{name}' has no mesh",
+                p.display()
+            )))
         }
-        "cornell-specular" => {
-            if let Some(p) = &opts.mesh {
-                return Err(Error::InvalidSetting(format!(
-                    "--mesh {}: scene 'cornell-specular' has no mesh",
-                    p.display()
-                )));
-            }
-            Ok(Some(LoadedScene {
-                desc: cornell_specular(),
-                meshes: vec![],
-            }))
-        }
-        "cornell-bunny" => with_bunny(cornell_bunny).map(Some),
-        "cornell-final" => with_bunny(cornell_final).map(Some),
-        _ => Ok(None),
+        _ => {}
     }
+    let mut loaded = file::parse(Path::new(file_name), text, opts)?;
+    let settings = std::mem::take(&mut loaded.desc.settings);
+    loaded.desc.settings.preset = as_preset(name, settings);
+    Ok(Some(loaded))
+}
+
+/// The built-in scene `name` without meshes (`cornell`, `cornell-specular`),
+/// for tests and benchmarks.
+///
+/// # Panics
+/// On a scene that needs a mesh or an unknown name: the texts are ours, and
+/// a test parses every one.
+pub fn desc(name: &str) -> SceneDesc {
+    match by_name(name, &LoadOptions::default()) {
+        Ok(Some(l)) => l.desc,
+        Ok(None) => panic!("no built-in scene '{name}'"),
+        Err(e) => panic!("built-in scene '{name}': {e}"),
+    }
+}
+
+/// Scene `cornell`: the room, both blocks and the sphere light.
+pub fn cornell() -> SceneDesc {
+    desc("cornell")
+}
+
+/// Scene `cornell-specular`: `cornell` with a mirror block and a glass sphere.
+pub fn cornell_specular() -> SceneDesc {
+    desc("cornell-specular")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec3;
+    use crate::scene::mesh::Mesh;
+    use crate::scene::transform::{Fit, Transform};
+
+    #[test]
+    fn every_builtin_scene_parses_and_names_itself() {
+        for name in NAMES {
+            let opts = LoadOptions {
+                mesh: WITH_MESH.contains(name).then(|| "unused.obj".into()),
+                smooth: false,
+            };
+            match by_name(name, &opts) {
+                Ok(Some(l)) => assert_eq!(l.desc.name, *name),
+                // The bunny scenes get as far as their mesh.
+                Err(Error::Syntax { message, .. }) if WITH_MESH.contains(name) => {
+                    assert!(message.contains("unused.obj"), "{name}: {message}")
+                }
+                other => panic!("{name}: {other:?}"),
+            }
+            assert!(!preset(name).unwrap().is_empty(), "{name} has settings");
+        }
+        assert_eq!(SCENES.len(), NAMES.len());
+    }
 
     #[test]
     fn room_spans_the_unit_cube_with_y_down() {
@@ -504,6 +276,27 @@ mod tests {
         glam::DVec3::new(q.x + 0.27183, -q.y + 0.40672, -q.z - 0.48132).as_vec3()
     }
 
+    /// The transform of the mesh shape in built-in scene `name`'s file.
+    fn mesh_transform(name: &str) -> Transform {
+        let (_, text) = text_of(name).unwrap();
+        let doc: toml::Table = toml::from_str(text).unwrap();
+        let shapes = doc["shapes"].as_array().unwrap();
+        let mesh = shapes.iter().find(|s| s["type"].as_str() == Some("mesh")).unwrap();
+        let v3 = |v: &toml::Value| {
+            let a = v.as_array().unwrap();
+            let f = |i: usize| a[i].as_float().or(a[i].as_integer().map(|x| x as f64)).unwrap() as f32;
+            Vec3::new(f(0), f(1), f(2))
+        };
+        Transform {
+            rotate_deg: v3(&mesh["rotate"]),
+            fit: Some(Fit {
+                height: mesh["fit"]["height"].as_float().unwrap() as f32,
+                bottom_centre: v3(&mesh["fit"]["bottom_centre"]),
+            }),
+            ..Default::default()
+        }
+    }
+
     /// Largest distance between the fit transform's and the explicit formula's result.
     fn fit_error(m: &Mesh, t: &Transform, explicit: fn(Vec3) -> Vec3) -> f32 {
         let placed = t.apply(m).unwrap();
@@ -538,9 +331,9 @@ mod tests {
             meshes.push(crate::scene::mesh::load_mesh(&p).unwrap());
         }
         for m in &meshes {
-            let e = fit_error(m, &bunny_transform(), explicit_bunny);
+            let e = fit_error(m, &mesh_transform("cornell-bunny"), explicit_bunny);
             assert!(e < 1e-5, "cornell-bunny: {e}");
-            let e = fit_error(m, &final_bunny_transform(), explicit_final);
+            let e = fit_error(m, &mesh_transform("cornell-final"), explicit_final);
             assert!(e < 1e-5, "cornell-final: {e}");
         }
     }

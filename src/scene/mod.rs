@@ -13,6 +13,7 @@ use crate::geometry::{Bvh, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
+use crate::settings::SceneSettings;
 use mesh::MeshReport;
 use std::path::{Path, PathBuf};
 
@@ -79,24 +80,6 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
-/// Settings a scene recommends (a preset); command-line options override them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SceneSettings {
-    pub ssaa: Option<u32>,
-    pub shadow_samples: Option<u32>,
-    pub integrator: Option<crate::integrator::IntegratorKind>,
-    /// Photon mapping presets (see `photon::PhotonSettings`).
-    pub photons: Option<u64>,
-    pub max_bounces: Option<u32>,
-    pub gather_radius: Option<f32>,
-    pub gather_k: Option<u32>,
-    pub gather_filter: Option<crate::photon::GatherFilter>,
-    pub final_gather: Option<u32>,
-    pub precompute_irradiance: Option<bool>,
-    pub caustic_photons: Option<u64>,
-    pub caustic_radius: Option<f32>,
-}
-
 /// Everything needed to build a scene, before any acceleration structure.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDesc {
@@ -106,6 +89,7 @@ pub struct SceneDesc {
     pub triangles: Vec<TriangleDesc>,
     pub spheres: Vec<SphereDesc>,
     pub lights: Vec<Light>,
+    /// The render settings the scene recommends: its file's and its preset's.
     pub settings: SceneSettings,
 }
 

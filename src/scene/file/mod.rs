@@ -6,245 +6,23 @@
 //! `toml` crate's spans give it for syntax and type errors, and each table
 //! keeps its span so that later checks (a missing key, a key that does not
 //! apply to the shape's type, an unknown material) can point at it too.
-//! Each shape is one flat table with a `type` key rather than a serde tagged
-//! enum, because a tagged enum is buffered before it is read and its errors
-//! lose their line.
+//! The file's types are in `types`; here is one parse function per table.
 
 use super::mesh::{load_mesh_timed_from, Disk, FileSource};
 use super::transform::{Fit, Transform};
-use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SceneSettings, SphereDesc, TriangleDesc};
+use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::Vec3;
-use serde::Deserialize;
+use crate::settings::{self, Kind, Origin, SceneSettings, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
 use toml::Spanned;
+use types::*;
 
-/// A finite number (TOML reads f64; we keep the nearest f32).
-#[derive(Clone, Copy, Debug, Deserialize)]
-#[serde(try_from = "f64")]
-struct Num(f32);
-
-impl TryFrom<f64> for Num {
-    type Error = String;
-    fn try_from(v: f64) -> std::result::Result<Self, String> {
-        let f = v as f32;
-        if f.is_finite() {
-            Ok(Num(f))
-        } else {
-            Err(format!("{v} is not a finite single-precision number"))
-        }
-    }
-}
-
-/// Three finite numbers: a point, a direction or an RGB colour.
-#[derive(Clone, Copy, Debug, Deserialize)]
-#[serde(try_from = "[f64; 3]")]
-struct Vec3Spec(Vec3);
-
-impl TryFrom<[f64; 3]> for Vec3Spec {
-    type Error = String;
-    fn try_from(v: [f64; 3]) -> std::result::Result<Self, String> {
-        let p = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
-        if p.is_finite() {
-            Ok(Vec3Spec(p))
-        } else {
-            Err(format!(
-                "{v:?} has a number that is not a finite single-precision number"
-            ))
-        }
-    }
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SceneFile {
-    name: Option<String>,
-    camera: Spanned<CameraSpec>,
-    settings: Option<Spanned<SettingsSpec>>,
-    #[serde(default)]
-    materials: BTreeMap<String, Spanned<MaterialSpec>>,
-    #[serde(default)]
-    lights: Vec<Spanned<LightSpec>>,
-    #[serde(default)]
-    shapes: Vec<Spanned<ShapeSpec>>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CameraSpec {
-    position: Vec3Spec,
-    look_at: Vec3Spec,
-    up: Option<Vec3Spec>,
-    fov_y: Num,
-    width: Option<u32>,
-    height: Option<u32>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SettingsSpec {
-    ssaa: Option<u32>,
-    shadow_samples: Option<u32>,
-    integrator: Option<IntegratorSpec>,
-    photons: Option<u64>,
-    max_bounces: Option<u32>,
-    gather_radius: Option<f32>,
-    gather_k: Option<u32>,
-    gather_filter: Option<GatherFilterSpec>,
-    final_gather: Option<u32>,
-    precompute_irradiance: Option<bool>,
-    caustic_photons: Option<u64>,
-    caustic_radius: Option<f32>,
-}
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-enum IntegratorSpec {
-    Direct,
-    Photon,
-    Path,
-    Sppm,
-}
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-enum GatherFilterSpec {
-    None,
-    Normal,
-    Report,
-}
-
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-enum MaterialKind {
-    #[default]
-    Diffuse,
-    Mirror,
-    Glass,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MaterialSpec {
-    #[serde(rename = "type", default)]
-    kind: MaterialKind,
-    albedo: Option<Vec3Spec>,
-    /// Mirror reflectance (default white).
-    reflectance: Option<Vec3Spec>,
-    /// Glass index of refraction (default 1.5).
-    ior: Option<f32>,
-}
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-enum LightKind {
-    Sphere,
-    Point,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LightSpec {
-    #[serde(rename = "type")]
-    kind: LightKind,
-    centre: Option<Vec3Spec>,
-    radius: Option<Num>,
-    position: Option<Vec3Spec>,
-    power: Num,
-    colour: Option<Vec3Spec>,
-}
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-enum ShapeKind {
-    Triangle,
-    Quad,
-    Box,
-    Sphere,
-    Mesh,
-}
-
-#[derive(Clone, Copy, Debug, Deserialize)]
-#[serde(untagged, expecting = "a number or an array of three numbers")]
-enum ScaleSpec {
-    Uniform(Num),
-    PerAxis(Vec3Spec),
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FitSpec {
-    height: Num,
-    bottom_centre: Vec3Spec,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ShapeSpec {
-    #[serde(rename = "type")]
-    kind: ShapeKind,
-    material: Option<Spanned<String>>,
-    vertices: Option<Vec<Vec3Spec>>,
-    normals: Option<Vec<Vec3Spec>>,
-    min: Option<Vec3Spec>,
-    max: Option<Vec3Spec>,
-    centre: Option<Vec3Spec>,
-    radius: Option<Num>,
-    path: Option<String>,
-    scale: Option<ScaleSpec>,
-    rotate: Option<Vec3Spec>,
-    translate: Option<Vec3Spec>,
-    fit: Option<FitSpec>,
-    smooth: Option<bool>,
-}
-
-impl ShapeSpec {
-    /// The optional keys that are present, by name.
-    fn given(&self) -> [(&'static str, bool); 13] {
-        [
-            ("material", self.material.is_some()),
-            ("vertices", self.vertices.is_some()),
-            ("normals", self.normals.is_some()),
-            ("min", self.min.is_some()),
-            ("max", self.max.is_some()),
-            ("centre", self.centre.is_some()),
-            ("radius", self.radius.is_some()),
-            ("path", self.path.is_some()),
-            ("scale", self.scale.is_some()),
-            ("rotate", self.rotate.is_some()),
-            ("translate", self.translate.is_some()),
-            ("fit", self.fit.is_some()),
-            ("smooth", self.smooth.is_some()),
-        ]
-    }
-}
-
-impl ShapeKind {
-    fn name(self) -> &'static str {
-        match self {
-            ShapeKind::Triangle => "triangle",
-            ShapeKind::Quad => "quad",
-            ShapeKind::Box => "box",
-            ShapeKind::Sphere => "sphere",
-            ShapeKind::Mesh => "mesh",
-        }
-    }
-
-    /// Keys each shape type reads besides `type`.
-    fn keys(self) -> &'static [&'static str] {
-        match self {
-            ShapeKind::Triangle => &["material", "vertices", "normals"],
-            ShapeKind::Quad => &["material", "vertices"],
-            ShapeKind::Box => &["material", "min", "max"],
-            ShapeKind::Sphere => &["material", "centre", "radius"],
-            ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],
-        }
-    }
-}
+mod types;
 
 /// 1-based line of a byte offset.
 fn line_of(text: &str, offset: usize) -> usize {
@@ -326,52 +104,8 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
             .unwrap_or_default()
     });
     let mut desc = SceneDesc::empty(&name, camera);
-    if let Some(settings) = &file.settings {
-        let s = settings.get_ref();
-        // The same bounds the command line enforces for --ssaa and --shadow-samples.
-        if s.ssaa.is_some_and(|n| n == 0 || n > 64) {
-            return Err(src.error(settings.span(), "settings: ssaa must be between 1 and 64"));
-        }
-        if s.shadow_samples.is_some_and(|n| n > 65_536) {
-            return Err(src.error(settings.span(), "settings: shadow_samples must be at most 65536"));
-        }
-        if s.gather_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
-            return Err(src.error(settings.span(), "settings: gather_radius must be a positive number"));
-        }
-        if s.caustic_radius.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
-            return Err(src.error(settings.span(), "settings: caustic_radius must be a positive number"));
-        }
-        if s.gather_k == Some(0) {
-            return Err(src.error(settings.span(), "settings: gather_k must be at least 1"));
-        }
-        if s.max_bounces == Some(0) {
-            return Err(src.error(settings.span(), "settings: max_bounces must be at least 1"));
-        }
-        use crate::integrator::IntegratorKind;
-        use crate::photon::GatherFilter;
-        desc.settings = SceneSettings {
-            ssaa: s.ssaa,
-            shadow_samples: s.shadow_samples,
-            integrator: s.integrator.map(|i| match i {
-                IntegratorSpec::Direct => IntegratorKind::Direct,
-                IntegratorSpec::Photon => IntegratorKind::Photon,
-                IntegratorSpec::Path => IntegratorKind::Path,
-                IntegratorSpec::Sppm => IntegratorKind::Sppm,
-            }),
-            photons: s.photons,
-            max_bounces: s.max_bounces,
-            gather_radius: s.gather_radius,
-            gather_k: s.gather_k,
-            gather_filter: s.gather_filter.map(|f| match f {
-                GatherFilterSpec::None => GatherFilter::None,
-                GatherFilterSpec::Normal => GatherFilter::Normal,
-                GatherFilterSpec::Report => GatherFilter::Report,
-            }),
-            final_gather: s.final_gather,
-            precompute_irradiance: s.precompute_irradiance,
-            caustic_photons: s.caustic_photons,
-            caustic_radius: s.caustic_radius,
-        };
+    if let Some(table) = &file.settings {
+        desc.settings = scene_settings(&src, table)?;
     }
 
     // Materials, checked here and numbered in order of first use.
@@ -555,6 +289,79 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         desc.material(name, *m);
     }
     Ok(LoadedScene { desc, meshes })
+}
+
+/// The `[settings]` table: each key a setting of the table in
+/// `crate::settings`, checked there and remembered with its line; `preset`
+/// names a built-in scene whose settings apply under the file's own.
+fn scene_settings(
+    src: &Source,
+    table: &Spanned<BTreeMap<String, Spanned<toml::Value>>>,
+) -> Result<SceneSettings> {
+    let mut out = SceneSettings::default();
+    for (key, value) in table.get_ref() {
+        let line = line_of(src.text, value.span().start);
+        let origin = Origin::SceneFile {
+            path: src.path.to_path_buf(),
+            line,
+        };
+        if key == "preset" {
+            let name = value.get_ref().as_str().ok_or_else(|| {
+                src.error(value.span(), "settings: preset must be the name of a built-in scene")
+            })?;
+            out.preset = super::builtin::preset(name).map_err(|m| src.error(value.span(), format!("settings: preset: {m}")))?;
+            continue;
+        }
+        let Some(spec) = settings::spec(key).filter(|s| s.in_scene_file) else {
+            let known: Vec<&str> = settings::SETTINGS
+                .iter()
+                .filter(|s| s.in_scene_file)
+                .map(|s| s.name)
+                .chain(["preset"])
+                .collect();
+            return Err(src.error(
+                value.span(),
+                format!("settings: unknown key `{key}` (known: {})", known.join(", ")),
+            ));
+        };
+        let v = toml_value(spec, value.get_ref())
+            .map_err(|m| settings::SettingError::new(key, value.get_ref(), origin.clone(), m))?;
+        out.scene_file.set(key, v, origin)?;
+    }
+    Ok(out)
+}
+
+/// A TOML value as the setting's kind.
+fn toml_value(spec: &settings::Spec, v: &toml::Value) -> std::result::Result<Value, String> {
+    let wrong = || format!("expected {}", spec.kind_name());
+    Ok(match (spec.kind, v) {
+        (Kind::Count { .. }, toml::Value::Integer(i)) => Value::Int(u64::try_from(*i).map_err(|_| wrong())?),
+        (Kind::Real { .. }, toml::Value::Float(f)) => Value::Real(*f as f32),
+        (Kind::Real { .. }, toml::Value::Integer(i)) => Value::Real(*i as f32),
+        (Kind::Flag, toml::Value::Boolean(b)) => Value::Bool(*b),
+        (Kind::Choice(names), toml::Value::String(s)) => match names.iter().find(|n| *n == s) {
+            Some(n) => Value::Name(n),
+            None => return Err(wrong()),
+        },
+        _ => return Err(wrong()),
+    })
+}
+
+/// Only the `[settings]` table of a scene file (a built-in scene's, as a preset).
+pub fn settings_of(path: &Path, text: &str) -> Result<SceneSettings> {
+    #[derive(serde::Deserialize)]
+    struct SettingsOnly {
+        settings: Option<Spanned<BTreeMap<String, Spanned<toml::Value>>>>,
+    }
+    let src = Source { path, text };
+    let file: SettingsOnly = toml::from_str(text).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        message: e.message().trim().replace('\n', "; "),
+    })?;
+    match &file.settings {
+        Some(table) => scene_settings(&src, table),
+        None => Ok(SceneSettings::default()),
+    }
 }
 
 /// A missing mesh file is reported at the scene file's line, with the hint

@@ -1,0 +1,198 @@
+//! The scene file's tables as serde reads them. Each shape is one flat table
+//! with a `type` key rather than a serde tagged enum, because a tagged enum is
+//! buffered before it is read and its errors lose their line.
+
+use crate::math::Vec3;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A finite number (TOML reads f64; we keep the nearest f32).
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "f64")]
+pub(super) struct Num(pub(super) f32);
+
+impl TryFrom<f64> for Num {
+    type Error = String;
+    fn try_from(v: f64) -> std::result::Result<Self, String> {
+        let f = v as f32;
+        if f.is_finite() {
+            Ok(Num(f))
+        } else {
+            Err(format!("{v} is not a finite single-precision number"))
+        }
+    }
+}
+
+/// Three finite numbers: a point, a direction or an RGB colour.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "[f64; 3]")]
+pub(super) struct Vec3Spec(pub(super) Vec3);
+
+impl TryFrom<[f64; 3]> for Vec3Spec {
+    type Error = String;
+    fn try_from(v: [f64; 3]) -> std::result::Result<Self, String> {
+        let p = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
+        if p.is_finite() {
+            Ok(Vec3Spec(p))
+        } else {
+            Err(format!(
+                "{v:?} has a number that is not a finite single-precision number"
+            ))
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SceneFile {
+    pub(super) name: Option<String>,
+    pub(super) camera: Spanned<CameraSpec>,
+    pub(super) settings: Option<Spanned<BTreeMap<String, Spanned<toml::Value>>>>,
+    #[serde(default)]
+    pub(super) materials: BTreeMap<String, Spanned<MaterialSpec>>,
+    #[serde(default)]
+    pub(super) lights: Vec<Spanned<LightSpec>>,
+    #[serde(default)]
+    pub(super) shapes: Vec<Spanned<ShapeSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CameraSpec {
+    pub(super) position: Vec3Spec,
+    pub(super) look_at: Vec3Spec,
+    pub(super) up: Option<Vec3Spec>,
+    pub(super) fov_y: Num,
+    pub(super) width: Option<u32>,
+    pub(super) height: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum MaterialKind {
+    #[default]
+    Diffuse,
+    Mirror,
+    Glass,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MaterialSpec {
+    #[serde(rename = "type", default)]
+    pub(super) kind: MaterialKind,
+    pub(super) albedo: Option<Vec3Spec>,
+    /// Mirror reflectance (default white).
+    pub(super) reflectance: Option<Vec3Spec>,
+    /// Glass index of refraction (default 1.5).
+    pub(super) ior: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum LightKind {
+    Sphere,
+    Point,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct LightSpec {
+    #[serde(rename = "type")]
+    pub(super) kind: LightKind,
+    pub(super) centre: Option<Vec3Spec>,
+    pub(super) radius: Option<Num>,
+    pub(super) position: Option<Vec3Spec>,
+    pub(super) power: Num,
+    pub(super) colour: Option<Vec3Spec>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum ShapeKind {
+    Triangle,
+    Quad,
+    Box,
+    Sphere,
+    Mesh,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(untagged, expecting = "a number or an array of three numbers")]
+pub(super) enum ScaleSpec {
+    Uniform(Num),
+    PerAxis(Vec3Spec),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FitSpec {
+    pub(super) height: Num,
+    pub(super) bottom_centre: Vec3Spec,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ShapeSpec {
+    #[serde(rename = "type")]
+    pub(super) kind: ShapeKind,
+    pub(super) material: Option<Spanned<String>>,
+    pub(super) vertices: Option<Vec<Vec3Spec>>,
+    pub(super) normals: Option<Vec<Vec3Spec>>,
+    pub(super) min: Option<Vec3Spec>,
+    pub(super) max: Option<Vec3Spec>,
+    pub(super) centre: Option<Vec3Spec>,
+    pub(super) radius: Option<Num>,
+    pub(super) path: Option<String>,
+    pub(super) scale: Option<ScaleSpec>,
+    pub(super) rotate: Option<Vec3Spec>,
+    pub(super) translate: Option<Vec3Spec>,
+    pub(super) fit: Option<FitSpec>,
+    pub(super) smooth: Option<bool>,
+}
+
+impl ShapeSpec {
+    /// The optional keys that are present, by name.
+    pub(super) fn given(&self) -> [(&'static str, bool); 13] {
+        [
+            ("material", self.material.is_some()),
+            ("vertices", self.vertices.is_some()),
+            ("normals", self.normals.is_some()),
+            ("min", self.min.is_some()),
+            ("max", self.max.is_some()),
+            ("centre", self.centre.is_some()),
+            ("radius", self.radius.is_some()),
+            ("path", self.path.is_some()),
+            ("scale", self.scale.is_some()),
+            ("rotate", self.rotate.is_some()),
+            ("translate", self.translate.is_some()),
+            ("fit", self.fit.is_some()),
+            ("smooth", self.smooth.is_some()),
+        ]
+    }
+}
+
+impl ShapeKind {
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            ShapeKind::Triangle => "triangle",
+            ShapeKind::Quad => "quad",
+            ShapeKind::Box => "box",
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Mesh => "mesh",
+        }
+    }
+
+    /// Keys each shape type reads besides `type`.
+    pub(super) fn keys(self) -> &'static [&'static str] {
+        match self {
+            ShapeKind::Triangle => &["material", "vertices", "normals"],
+            ShapeKind::Quad => &["material", "vertices"],
+            ShapeKind::Box => &["material", "min", "max"],
+            ShapeKind::Sphere => &["material", "centre", "radius"],
+            ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],
+        }
+    }
+}
+

@@ -1,0 +1,204 @@
+//! The render settings, each declared once: name, kind and range, default and
+//! one-line doc. The command line's options, the scene file's `[settings]`
+//! keys, `--help` and `docs/scene-format.md` all come from this table, so a
+//! new setting is one entry here plus its field in [`super::RenderSettings`].
+
+use super::{DefaultValue, Kind, Spec};
+
+const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm"];
+const FILTERS: &[&str] = &["box", "tent", "gaussian"];
+const GATHER_FILTERS: &[&str] = &["none", "normal", "report"];
+
+/// Largest count of samples, passes and the like we accept (2^20).
+const MILLION: u64 = 1 << 20;
+
+pub const SETTINGS: &[Spec] = &[
+    Spec {
+        name: "integrator",
+        kind: Kind::Choice(INTEGRATORS),
+        default: DefaultValue::Name("direct"),
+        doc: "Light transport algorithm: direct (shadow rays only), photon (photon mapping), path (the reference \
+              path tracer), sppm (stochastic progressive photon mapping)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "ssaa",
+        kind: Kind::Count { min: 1, max: 64 },
+        default: DefaultValue::Int(4),
+        doc: "Supersampling: NxN stratified, jittered camera samples per pixel (direct and photon integrators)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "shadow_samples",
+        kind: Kind::Count { min: 0, max: 65_536 },
+        default: DefaultValue::Int(4),
+        doc: "Shadow rays per light per shading point, stratified over the light",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "filter",
+        kind: Kind::Choice(FILTERS),
+        default: DefaultValue::Name("box"),
+        doc: "Pixel reconstruction filter: box (the pixel's area), tent (radius one pixel), gaussian (sigma 0.5, \
+              truncated at 1.5 pixels)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "spp",
+        kind: Kind::Count { min: 1, max: MILLION },
+        default: DefaultValue::Int(64),
+        doc: "Path tracer: samples per pixel (replaces ssaa)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "max_depth",
+        kind: Kind::Count { min: 1, max: 1 << 16 },
+        default: DefaultValue::Unset("no limit: Russian roulette ends paths"),
+        doc: "Path tracer: most bounces, 1 = direct light only",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "photons",
+        kind: Kind::Count { min: 0, max: 1 << 40 },
+        default: DefaultValue::Int(200_000),
+        doc: "Photons emitted (SPPM: per pass); 0 turns photon mapping off (direct light only)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "max_bounces",
+        kind: Kind::Count { min: 1, max: 100 },
+        default: DefaultValue::Derived("5; 16 with integrator sppm"),
+        doc: "Surface hits traced per photon, the first being its direct-light hit",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "store_first_hit",
+        kind: Kind::Flag,
+        default: DefaultValue::Bool(false),
+        doc: "Store the photons' first hits (direct light) too; final gathering always does",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "gather_radius",
+        kind: Kind::Real {
+            min: 0.0,
+            min_inclusive: false,
+            max: f32::MAX,
+        },
+        default: DefaultValue::Derived("0.1; unbounded with gather_k"),
+        doc: "Photon gather radius (SPPM: the initial radius); with gather_k, the largest radius searched",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "gather_k",
+        kind: Kind::Count {
+            min: 1,
+            max: u32::MAX as u64,
+        },
+        default: DefaultValue::Unset("none: all photons within the radius"),
+        doc: "Gather the K nearest photons (the radius is the distance to the K-th) instead of all within the radius",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "cone_filter",
+        kind: Kind::Flag,
+        default: DefaultValue::Bool(false),
+        doc: "Weight gathered photons with Jensen's cone filter (k = 1.1), normalised",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "gather_filter",
+        kind: Kind::Choice(GATHER_FILTERS),
+        default: DefaultValue::Name("none"),
+        doc: "Photons a gather may use, by the cosine between their surface normal and the shaded one: none (any \
+              photon arriving on the shaded side), normal (> 0.9), report (> 0.25)",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "final_gather",
+        kind: Kind::Count { min: 0, max: 65_536 },
+        default: DefaultValue::Int(0),
+        doc: "Final-gather rays per shading point; 0 reads the photon map at the visible point",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "precompute_irradiance",
+        kind: Kind::Flag,
+        default: DefaultValue::Bool(false),
+        doc: "Estimate photon irradiance once at every 4th photon and read the nearest estimate at each shading \
+              point (Christensen 1999): much faster with wide gathers",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "caustic_photons",
+        kind: Kind::Count { min: 0, max: 1 << 40 },
+        default: DefaultValue::Int(100_000),
+        doc: "Photons wanted in the caustic map (paths light -> mirror/glass -> diffuse, shown directly); 0 leaves \
+              caustics out",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "caustic_radius",
+        kind: Kind::Real {
+            min: 0.0,
+            min_inclusive: false,
+            max: f32::MAX,
+        },
+        default: DefaultValue::Real(0.025),
+        doc: "Gather radius of the caustic map",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "passes",
+        kind: Kind::Count { min: 1, max: MILLION },
+        default: DefaultValue::Int(64),
+        doc: "SPPM: camera and photon passes (photons each; gather_radius is the initial radius)",
+        in_scene_file: true,
+        only_for: &["sppm"],
+    },
+    Spec {
+        name: "alpha",
+        kind: Kind::Real {
+            min: 0.0,
+            min_inclusive: false,
+            max: 1.0,
+        },
+        default: DefaultValue::Real(0.7),
+        doc: "SPPM: fraction of each pass's photons kept as the radius shrinks, in (0, 1]",
+        in_scene_file: true,
+        only_for: &["sppm"],
+    },
+    Spec {
+        name: "seed",
+        kind: Kind::Count { min: 0, max: u64::MAX },
+        default: DefaultValue::Int(0),
+        doc: "Random seed; the same seed gives the same image on any thread count",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
+        name: "threads",
+        kind: Kind::Count { min: 1, max: 1024 },
+        default: DefaultValue::Unset("all cores"),
+        doc: "Worker threads",
+        in_scene_file: false,
+        only_for: &[],
+    },
+];
