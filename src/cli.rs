@@ -187,7 +187,11 @@ impl clap::Args for SettingArgs {
         SETTINGS.iter().fold(cmd, |cmd, spec| {
             let mut arg = clap::Arg::new(spec.name)
                 .long(spec.flag().trim_start_matches('-').to_string())
-                .help(format!("{} [default: {}]", spec.doc, spec.default.describe()))
+                .help(if spec.in_scene_file {
+                    format!("{} [default: the scene's, else {}]", spec.doc, spec.default.describe())
+                } else {
+                    format!("{} [default: {}]", spec.doc, spec.default.describe())
+                })
                 .allow_negative_numbers(true)
                 .action(clap::ArgAction::Set);
             arg = match spec.kind {

@@ -96,6 +96,14 @@ fn report_dropped(scene: &Scene, quiet: bool) {
 }
 
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
+    // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
+    // Installed first, so that a signal during loading is not a silent death.
+    let cancel = match args.files.stop_after_tiles {
+        Some(n) => integrator::CancelToken::after_tiles(n),
+        None => integrator::CancelToken::new(),
+    };
+    let on_signal = cancel.clone();
+    let _ = ctrlc::set_handler(move || on_signal.cancel());
     let (loaded, settings) = cli::prepare(args)?;
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;
@@ -111,13 +119,6 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     } else {
         ProgressBar::hidden()
     };
-    // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
-    let cancel = match args.files.stop_after_tiles {
-        Some(n) => integrator::CancelToken::after_tiles(n),
-        None => integrator::CancelToken::new(),
-    };
-    let on_signal = cancel.clone();
-    let _ = ctrlc::set_handler(move || on_signal.cancel());
     // SPPM with --write-every K: the image so far, every K passes, written atomically.
     let window = integrator::frame_window(&scene, &settings)?;
     let on_pass = |k: u32, film: &raytracer::Film| match args.write_every {

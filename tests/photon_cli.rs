@@ -32,7 +32,7 @@ fn bad_photon_options_are_refused_before_any_work() {
         (&["--gather-filter", "sideways"][..], "--gather-filter"),
         (&["--caustic-radius", "0"][..], "--caustic-radius"),
         (&["--caustic-radius", "-0.1"][..], "--caustic-radius"),
-        (&["--passes", "8"][..], "--passes: only for --integrator sppm"),
+        (&["--passes", "8"][..], "--passes 8: only for integrator sppm"),
         (&["--integrator", "sppm", "--alpha", "0"][..], "--alpha"),
         (&["--integrator", "sppm", "--alpha", "1.5"][..], "--alpha"),
         (&["--integrator", "sppm", "--passes", "0"][..], "--passes"),

@@ -1,21 +1,15 @@
-//! Shared pieces of the BVH benchmarks and tests: the `cornell-bunny` scene
-//! built from the built-in room pieces plus the Stanford bunny read with
-//! `tobj`, the three ray sets of BENCHMARKS.md, and the binary ray file the
-//! Embree comparison (`bench/embree/embree_bench.c`) reads.
-//!
-//! The scene is assembled here rather than through a scene loader so that the
-//! benchmarks do not depend on one; swap `cornell_bunny` for the built-in
-//! scene once it exists.
+//! Shared pieces of the BVH benchmarks and tests: the built-in `cornell-bunny`
+//! scene with the shared Stanford bunny, the three ray sets of BENCHMARKS.md,
+//! and the binary ray file the Embree comparison (`bench/embree/embree_bench.c`)
+//! reads.
 
 // Each bench, example and test that includes this file uses a different part.
 #![allow(dead_code)]
 
 use raytracer::camera::Camera;
-use raytracer::material::Material;
 use raytracer::math::{Ray, Vec3};
 use raytracer::sampling::{stratified, uniform_sphere, Rng};
-use raytracer::scene::builtin::{add_block, add_room, cornell_camera, cornell_colours, cornell_light, TALL_BLOCK};
-use raytracer::scene::{SceneDesc, SceneSettings, TriangleDesc};
+use raytracer::scene::{LoadOptions, SceneDesc};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -24,65 +18,21 @@ pub fn bunny_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/stanford-bunny.obj")
 }
 
-/// The bunny's triangles in `cornell-bunny` world space (SCENES.md):
-/// q = (p - c) * 4, world = (-q.x + 0.33, -q.y + 1.0, q.z - 0.39).
-pub fn load_bunny(path: &Path) -> Result<Vec<[Vec3; 3]>, String> {
-    let (models, _) = tobj::load_obj(
-        path,
-        &tobj::LoadOptions {
-            triangulate: true,
-            single_index: true,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| format!("{}: {e}", path.display()))?;
-    let c = Vec3::new(-0.0168405, 0.032987, -0.001537);
-    let mut tris = Vec::new();
-    for m in &models {
-        let p = &m.mesh.positions;
-        let vertex = |i: u32| {
-            let i = i as usize * 3;
-            let q = (Vec3::new(p[i], p[i + 1], p[i + 2]) - c) * 4.0;
-            Vec3::new(-q.x + 0.33, -q.y + 1.0, q.z - 0.39)
-        };
-        for f in m.mesh.indices.chunks_exact(3) {
-            tris.push([vertex(f[0]), vertex(f[1]), vertex(f[2])]);
-        }
-    }
-    Ok(tris)
-}
-
-/// Scene `cornell-bunny`: the room, the tall block, the bunny (albedo 0.75)
-/// in place of the short block, the sphere light and the camera.
-pub fn cornell_bunny(bunny: &[[Vec3; 3]]) -> SceneDesc {
-    let mut d = SceneDesc {
-        name: "cornell-bunny".into(),
-        camera: cornell_camera(512, 512),
-        materials: vec![],
-        triangles: vec![],
-        spheres: vec![],
-        lights: vec![cornell_light()],
-        settings: SceneSettings::default(),
-    };
-    add_room(&mut d, &cornell_colours());
-    let tall = d.material("tall_block", Material::diffuse(0.15, 0.15, 0.75));
-    add_block(&mut d, &TALL_BLOCK, tall);
-    let white = d.material("bunny", Material::diffuse(0.75, 0.75, 0.75));
-    d.triangles.extend(bunny.iter().map(|v| TriangleDesc {
-        vertices: *v,
-        normals: None,
-        material: white,
-    }));
-    d
-}
-
-/// Loads the bunny and builds `cornell-bunny`, or says why it cannot.
+/// Loads the built-in `cornell-bunny` with the shared bunny, or says why it cannot.
 pub fn cornell_bunny_scene() -> Result<SceneDesc, String> {
     let path = bunny_path();
     if !path.exists() {
         return Err(format!("{} not found", path.display()));
     }
-    Ok(cornell_bunny(&load_bunny(&path)?))
+    let opts = LoadOptions {
+        mesh: Some(path),
+        smooth: false,
+    };
+    match raytracer::scene::builtin::by_name("cornell-bunny", &opts) {
+        Ok(Some(l)) => Ok(l.desc),
+        Ok(None) => Err("no built-in scene cornell-bunny".into()),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// What a ray set asks of the acceleration structure.

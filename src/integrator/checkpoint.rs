@@ -69,6 +69,10 @@ pub trait Progressive {
     /// Passes in the whole render.
     fn total_passes(&self) -> u32;
 
+    /// Progress ticks the first `passes` passes give (so that a resumed
+    /// render's progress starts where it left off).
+    fn ticks_after(&self, passes: u32) -> u64;
+
     /// Runs pass `pass` (from 0). Returns false if it was interrupted, having
     /// left the state as it was before the pass.
     fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool;
@@ -114,6 +118,7 @@ pub fn run(
             message: format!("checkpoint does not fit this render: {message}"),
         })?;
         done = passes;
+        on_tile.skip(state.ticks_after(done));
     }
     let mut last_write = Instant::now();
     let mut this_run = 0;
@@ -236,7 +241,7 @@ mod tests {
         for spp in [100, 5] {
             let settings = path(spp, StateFiles::default());
             let est = crate::integrator::path::PathTracer { max_depth: None };
-            let (one_pass, ..) = render_tiles(&scene, &settings, &est, &|| {});
+            let (one_pass, ..) = render_tiles(&scene, &settings, &est, crate::integrator::Progress::silent());
             let out = render(&scene, &settings, &|| {}).unwrap();
             assert_eq!(
                 out.passes,

@@ -105,6 +105,13 @@ impl<'a> Progress<'a> {
         self.cancel.tile_done();
     }
 
+    /// Reports `ticks` done earlier (a resumed render's passes).
+    pub(crate) fn skip(&self, ticks: u64) {
+        for _ in 0..ticks {
+            (self.on_tile)();
+        }
+    }
+
     pub(crate) fn stopped(&self) -> bool {
         self.cancel.is_cancelled()
     }

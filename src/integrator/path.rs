@@ -180,6 +180,10 @@ impl checkpoint::Progressive for Progressive<'_> {
         Self::passes_for(self.settings.spp)
     }
 
+    fn ticks_after(&self, passes: u32) -> u64 {
+        super::tile_count(self.rect.width(), self.rect.height()) * passes as u64
+    }
+
     fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool {
         let samples = self.samples_after(pass)..self.samples_after(pass + 1);
         // Tiles finished before an interruption must not count: keep the sums to go back to.

@@ -196,6 +196,11 @@ impl checkpoint::Progressive for Progressive<'_> {
         self.settings.passes
     }
 
+    fn ticks_after(&self, passes: u32) -> u64 {
+        let ticks = super::tile_count(self.rect.width(), self.rect.height());
+        ticks * passes as u64 / self.settings.passes as u64
+    }
+
     fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool {
         let settings = self.settings;
         let cam = &scene.camera;
@@ -260,9 +265,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         ps.stored += stored;
         ps.bytes = ps.bytes.max(map.bytes());
         // Progress in tiles of the frame, spread over the passes.
-        let ticks = super::tile_count(rw, rect.height());
-        let passes = settings.passes as u64;
-        for _ in ticks * pass as u64 / passes..ticks * done as u64 / passes {
+        for _ in checkpoint::Progressive::ticks_after(self, pass)..checkpoint::Progressive::ticks_after(self, done) {
             on_tile.tile_done();
         }
         true
@@ -477,7 +480,13 @@ mod tests {
             seen.lock().unwrap().push((k, film.clone()));
             Ok(())
         };
-        let last = crate::integrator::render_observed(&scene, &sppm(4, 2_000), &|| {}, &on_pass).unwrap();
+        let last = crate::integrator::render_observed(
+            &scene,
+            &sppm(4, 2_000),
+            crate::integrator::Progress::silent(),
+            &on_pass,
+        )
+        .unwrap();
         let seen = seen.into_inner().unwrap();
         assert_eq!(seen.iter().map(|(k, _)| *k).collect::<Vec<_>>(), [1, 2, 3, 4]);
         assert_eq!(seen[3].1, last.film);

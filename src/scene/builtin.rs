@@ -42,7 +42,8 @@ fn text_of(name: &str) -> Option<(&'static str, &'static str)> {
 
 /// The settings of built-in scene `name` as a preset layer.
 pub fn preset(name: &str) -> std::result::Result<Layer, String> {
-    let (file_name, text) = text_of(name).ok_or_else(|| format!("no built-in scene '{name}' (known: {})", NAMES.join(", ")))?;
+    let (file_name, text) =
+        text_of(name).ok_or_else(|| format!("no built-in scene '{name}' (known: {})", NAMES.join(", ")))?;
     let s = file::settings_of(Path::new(file_name), text).map_err(|e| e.to_string())?;
     Ok(as_preset(name, s))
 }

@@ -13,7 +13,7 @@ use crate::geometry::{Bvh, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Ray, Vec3};
-use crate::settings::SceneSettings;
+pub use crate::settings::SceneSettings;
 use mesh::MeshReport;
 use std::path::{Path, PathBuf};
 

@@ -211,7 +211,8 @@ impl RenderSettings {
             // Derived defaults (an unbounded radius with gather_k) are values
             // no user can type but the resolver itself produces.
             if !(name == "gather_radius" && self.photon.gather.k.is_some() && value == Value::Real(f32::INFINITY)) {
-                spec.check(&value).map_err(|m| SettingError::new(name, &value, Origin::Caller, m))?;
+                spec.check(&value)
+                    .map_err(|m| SettingError::new(name, &value, Origin::Caller, m))?;
             }
             layer.values.insert(name, (value, Origin::Caller));
         }
@@ -364,7 +365,14 @@ impl Spec {
                     });
                 }
             }
-            (Kind::Real { min, min_inclusive, max }, Value::Real(v)) => {
+            (
+                Kind::Real {
+                    min,
+                    min_inclusive,
+                    max,
+                },
+                Value::Real(v),
+            ) => {
                 let above = if min_inclusive { *v >= min } else { *v > min };
                 if !(v.is_finite() && above && *v <= max) {
                     let low = if min_inclusive { ">=" } else { ">" };
@@ -582,9 +590,7 @@ pub fn resolve(layers: Layers, files: StateFiles) -> Result<RenderSettings, Sett
 /// Builds the settings from a lookup of the values given; what is not given
 /// takes the table's default, or the derived default the table describes.
 fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
-    let value = |name: &str| {
-        get(name).or_else(|| spec(name).and_then(|s| s.default.value()))
-    };
+    let value = |name: &str| get(name).or_else(|| spec(name).and_then(|s| s.default.value()));
     let int = |name: &str| match value(name) {
         Some(Value::Int(v)) => Some(v),
         _ => None,
@@ -637,16 +643,23 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
 
 /// Rules that involve more than one setting, or the machine.
 fn check_combinations(s: &RenderSettings, origin: &dyn Fn(&str) -> Origin) -> Result<(), SettingError> {
-    let err = |name: &str, value: &dyn std::fmt::Display, m: String| Err(SettingError::new(name, value, origin(name), m));
+    let err =
+        |name: &str, value: &dyn std::fmt::Display, m: String| Err(SettingError::new(name, value, origin(name), m));
     let p = &s.photon;
     if s.integrator == IntegratorKind::Sppm {
         if let Some(k) = p.gather.k {
-            return err("gather_k", &k, "not with integrator sppm, which needs a finite gather_radius (its initial radius)".into());
+            return err(
+                "gather_k",
+                &k,
+                "not with integrator sppm, which needs a finite gather_radius (its initial radius)".into(),
+            );
         }
     }
     let photon_map = matches!(s.integrator, IntegratorKind::Photon | IntegratorKind::Sppm);
     if photon_map {
-        let available = crate::limits::available_memory().unwrap_or(MAX_MAP_BYTES).min(MAX_MAP_BYTES);
+        let available = crate::limits::available_memory()
+            .unwrap_or(MAX_MAP_BYTES)
+            .min(MAX_MAP_BYTES);
         let need = p.worst_case_bytes();
         if need > available as u128 {
             return err(
@@ -689,7 +702,10 @@ fn check_combinations(s: &RenderSettings, origin: &dyn Fn(&str) -> Origin) -> Re
     }
     let files = &s.files;
     let has_map = s.integrator == IntegratorKind::Photon && p.photons > 0;
-    for (name, given) in [("save_photons", &files.save_photons), ("load_photons", &files.load_photons)] {
+    for (name, given) in [
+        ("save_photons", &files.save_photons),
+        ("load_photons", &files.load_photons),
+    ] {
         if let Some(f) = given.as_ref().filter(|_| !has_map) {
             return Err(SettingError::new(
                 name,
@@ -721,7 +737,11 @@ pub fn markdown_table() -> String {
         let range = match s.kind {
             Kind::Count { min, max } if max == u64::MAX => format!("whole number >= {min}"),
             Kind::Count { min, max } => format!("whole number {min}..{max}"),
-            Kind::Real { min, min_inclusive, max } => {
+            Kind::Real {
+                min,
+                min_inclusive,
+                max,
+            } => {
                 let low = if min_inclusive { ">=" } else { ">" };
                 if max < f32::MAX {
                     format!("number {low} {min}, <= {max}")

@@ -57,9 +57,9 @@ pub const SETTINGS: &[Spec] = &[
     },
     Spec {
         name: "max_depth",
-        kind: Kind::Count { min: 1, max: 1 << 16 },
+        kind: Kind::Count { min: 0, max: 1 << 16 },
         default: DefaultValue::Unset("no limit: Russian roulette ends paths"),
-        doc: "Path tracer: most bounces, 1 = direct light only",
+        doc: "Path tracer: most bounces: 0 = emitted light only, 1 = direct light only",
         in_scene_file: true,
         only_for: &[],
     },

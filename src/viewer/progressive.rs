@@ -284,7 +284,15 @@ impl Progressive {
             return false;
         };
         let end = range.end;
-        match accumulate_tiles(scene, settings, est, range, &mut self.sums, cancel, crate::integrator::Progress::silent()) {
+        match accumulate_tiles(
+            scene,
+            settings,
+            est,
+            range,
+            &mut self.sums,
+            cancel,
+            crate::integrator::Progress::silent(),
+        ) {
             Some((s, _)) => {
                 self.done = end;
                 self.stats.camera_rays += s.camera_rays;

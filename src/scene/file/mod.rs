@@ -277,7 +277,11 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
                 };
                 transform.validate().map_err(err)?;
                 let (mesh, report) =
-                    load_mesh_timed_from(&mesh_path, files).map_err(|e| missing_mesh(&src, span.clone(), e))?;
+                    load_mesh_timed_from(&mesh_path, files).map_err(|e| match &opts.mesh {
+                        // A path the user gave is reported as given, not at the file's line.
+                        Some(_) => e,
+                        None => missing_mesh(&src, span.clone(), e),
+                    })?;
                 let smooth = s.smooth.unwrap_or(false) || opts.smooth;
                 mesh.add_to_scene(&mut desc, &transform, mat, smooth)?;
                 meshes.push(report);
@@ -294,10 +298,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
 /// The `[settings]` table: each key a setting of the table in
 /// `crate::settings`, checked there and remembered with its line; `preset`
 /// names a built-in scene whose settings apply under the file's own.
-fn scene_settings(
-    src: &Source,
-    table: &Spanned<BTreeMap<String, Spanned<toml::Value>>>,
-) -> Result<SceneSettings> {
+fn scene_settings(src: &Source, table: &Spanned<BTreeMap<String, Spanned<toml::Value>>>) -> Result<SceneSettings> {
     let mut out = SceneSettings::default();
     for (key, value) in table.get_ref() {
         let line = line_of(src.text, value.span().start);
@@ -306,10 +307,12 @@ fn scene_settings(
             line,
         };
         if key == "preset" {
-            let name = value.get_ref().as_str().ok_or_else(|| {
-                src.error(value.span(), "settings: preset must be the name of a built-in scene")
-            })?;
-            out.preset = super::builtin::preset(name).map_err(|m| src.error(value.span(), format!("settings: preset: {m}")))?;
+            let name = value
+                .get_ref()
+                .as_str()
+                .ok_or_else(|| src.error(value.span(), "settings: preset must be the name of a built-in scene"))?;
+            out.preset =
+                super::builtin::preset(name).map_err(|m| src.error(value.span(), format!("settings: preset: {m}")))?;
             continue;
         }
         let Some(spec) = settings::spec(key).filter(|s| s.in_scene_file) else {

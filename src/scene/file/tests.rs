@@ -29,13 +29,33 @@ fn small_pfm(mut desc: SceneDesc, dir: &Path, name: &str) -> Vec<u8> {
     std::fs::read(p).unwrap()
 }
 
+/// The settings a scene resolves to with nothing on the command line.
+fn same_settings(d: &SceneDesc) -> crate::settings::RenderSettings {
+    let none = crate::settings::Layer::default();
+    let layers = crate::settings::Layers {
+        command_line: &none,
+        scene_file: &d.settings.scene_file,
+        preset: &d.settings.preset,
+    };
+    crate::settings::resolve(layers, Default::default()).unwrap()
+}
+
+fn without_settings(d: &SceneDesc) -> SceneDesc {
+    SceneDesc {
+        settings: Default::default(),
+        ..d.clone()
+    }
+}
+
 #[test]
 fn cornell_toml_is_the_builtin_scene_bit_for_bit() {
     let file = load(&scenes_dir().join("cornell.toml"), &LoadOptions::default()).unwrap();
     let embedded = builtin::cornell();
     assert!(file.meshes.is_empty());
-    // Same numbers, in the same order, down to the last bit.
-    assert_eq!(file.desc, embedded);
+    // Same numbers, in the same order, down to the last bit; the built-in
+    // scene's settings are its preset, the file's its own, and resolve alike.
+    assert_eq!(same_settings(&file.desc), same_settings(&embedded));
+    assert_eq!(without_settings(&file.desc), without_settings(&embedded));
     let dir = tempfile::tempdir().unwrap();
     let a = small_pfm(file.desc, dir.path(), "file.pfm");
     let b = small_pfm(embedded, dir.path(), "builtin.pfm");
@@ -110,8 +130,13 @@ fn every_shape_and_light_type_is_read() {
     assert_eq!(d.name, "s");
     assert_eq!((d.camera.width, d.camera.height), (32, 512));
     assert_eq!(d.camera.up, Vec3::new(0.0, -1.0, 0.0));
-    assert_eq!(d.settings.ssaa, Some(3));
-    assert_eq!(d.settings.shadow_samples, None);
+    let origin = crate::settings::Origin::SceneFile {
+        path: path.clone(),
+        line: 9,
+    };
+    let ssaa = d.settings.scene_file.get("ssaa");
+    assert_eq!(ssaa, Some(&(crate::settings::Value::Int(3), origin)));
+    assert_eq!(d.settings.scene_file.get("shadow_samples"), None);
     assert_eq!(
         d.lights[0],
         Light::Point {
@@ -166,7 +191,7 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}fov = 3\n"), 5, "unknown field `fov`"),
         ("[camera]\nposition = [0, 0]\n".into(), 2, "length 2"),
         ("[camera\n".into(), 1, ""),
-        (format!("{CAMERA}[settings]\nssaa = -1\n"), 6, "u32"),
+        (format!("{CAMERA}[settings]\nssaa = -1\n"), 6, "ssaa = -1: expected a whole number"),
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\ncentre = [0, 0, 0]\n"), 7, "missing `radius`"),
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"cone\"\n"), 8, "unknown variant `cone`"),
         (format!("{CAMERA}{m}\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"gray\"\ncentre = [0, 0, 0]\nradius = 1\n"), 10, "unknown material 'gray'"),
@@ -181,7 +206,9 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\npower = 1\n"), 5, "missing `radius`"),
         (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nradius = 1\npower = 1\n"), 5, "position` only"),
         ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 180\n".into(), 1, "fov_y"),
-        (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 6, "ssaa must be between 1 and 64"),
+        (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 7, "ssaa = 0: must be between 1 and 64"),
+        (format!("{CAMERA}\n[settings]\nssaa = 2\nthreads = 2\n"), 8, "unknown key `threads`"),
+        (format!("{CAMERA}\n[settings]\npreset = \"nowhere\"\n"), 7, "no built-in scene 'nowhere'"),
     ];
     for (text, line, what) in cases {
         let e = parse_str(&text).expect_err(&text).to_string();
@@ -223,7 +250,8 @@ fn cornell_bunny_toml_is_the_builtin_scene() {
     };
     let file = load(&scenes_dir().join("cornell-bunny.toml"), &opts).unwrap();
     let embedded = builtin::by_name("cornell-bunny", &opts).unwrap().unwrap();
-    assert_eq!(file.desc, embedded.desc);
+    assert_eq!(same_settings(&file.desc), same_settings(&embedded.desc));
+    assert_eq!(without_settings(&file.desc), without_settings(&embedded.desc));
 }
 
 #[test]
@@ -303,5 +331,7 @@ fn mirror_and_glass_materials_are_read_and_checked() {
 #[test]
 fn cornell_specular_toml_is_the_builtin_scene() {
     let file = load(&scenes_dir().join("cornell-specular.toml"), &LoadOptions::default()).unwrap();
-    assert_eq!(file.desc, builtin::cornell_specular());
+    let embedded = builtin::cornell_specular();
+    assert_eq!(same_settings(&file.desc), same_settings(&embedded));
+    assert_eq!(without_settings(&file.desc), without_settings(&embedded));
 }
