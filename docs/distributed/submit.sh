@@ -104,6 +104,15 @@ band_states() {
     while IFS='|' read -r id st code; do
         if [ -n "$id" ] && [ -z "${sched[$id]:-}" ]; then sched[$id]="${st%% *}||${code%%:*}"; fi
     done < <(sacct -n -X -P -j "$ids" -o JobID,State,ExitCode 2>/dev/null || true)
+    # Bands waiting for a photon map whose job failed wait for good (before
+    # Slurm says so, with DependencyNeverSatisfied).
+    photons_failed=0
+    if [ -n "$photons_job" ] && [ ! -f "$PHOTON_MAP" ]; then
+        case $(job_state "$photons_job") in
+            PENDING* | RUNNING* | CONFIGURING* | COMPLETING*) ;;
+            *) photons_failed=1 ;;
+        esac
+    fi
     state=()
     why=()
     for ((k = 0; k < bands; k++)); do
@@ -118,6 +127,9 @@ band_states() {
             if [ "$reason" = DependencyNeverSatisfied ]; then
                 state[k]=stuck
                 why[k]="waits for a job that failed"
+            elif [ "$st" = PENDING ] && [ "$photons_failed" = 1 ]; then
+                state[k]=stuck
+                why[k]="waits for the photon map, whose job failed"
             elif [ "$st" = PENDING ] && [ -n "$reason" ] && [ "$reason" != None ]; then
                 why[k]=$reason
             fi
@@ -175,13 +187,10 @@ status() {
             echo "photons (job $photons_job): done, $PHOTON_MAP"
         else
             echo "photons (job $photons_job): $(job_state "$photons_job")"
-            case $(job_state "$photons_job") in
-                PENDING* | RUNNING* | CONFIGURING* | COMPLETING*) ;;
-                *)
-                    n_failed=$((n_failed + 1))
-                    if [ -f logs/photons.log ]; then tail -n "${TAIL:-10}" logs/photons.log | sed 's/^/    | /'; fi
-                    ;;
-            esac
+            if [ "$photons_failed" = 1 ]; then
+                n_failed=$((n_failed + 1))
+                if [ -f logs/photons.log ]; then tail -n "${TAIL:-10}" logs/photons.log | sed 's/^/    | /'; fi
+            fi
         fi
     fi
     for ((k = 0; k < bands; k++)); do
@@ -202,6 +211,9 @@ status() {
     # A merge left waiting by failed bands is not one more failure.
     if ! merge_ok "$m" && { [[ $m != *DependencyNeverSatisfied* ]] || [ "$n_failed" = 0 ]; }; then
         n_failed=$((n_failed + 1))
+        if [[ $m == *DependencyNeverSatisfied* ]]; then
+            echo "    a band it waits for failed once: Slurm keeps the dependency failed even after a requeue"
+        fi
         if [ -f logs/merge.log ] && [[ $m != PENDING* ]]; then tail -n "${TAIL:-10}" logs/merge.log | sed 's/^/    | /'; fi
     fi
     if [ "$n_failed" -gt 0 ]; then
@@ -230,10 +242,10 @@ resubmit() {
     if [ ${#todo[@]} -gt 0 ]; then
         # A photon map that was never written is traced again first.
         if [ -n "$PHOTON_MAP" ] && [ ! -f "$PHOTON_MAP" ]; then
-            case $(job_state "$photons_job") in
-                PENDING* | RUNNING* | CONFIGURING*) ;;
-                *) photons_job=$(submit ${cpus[@]+"${cpus[@]}"} ${req[@]+"${req[@]}"} "$here/photons.sbatch" "${args[@]}") ;;
-            esac
+            if [ "$photons_failed" = 1 ]; then
+                photons_job=$(submit ${cpus[@]+"${cpus[@]}"} ${req[@]+"${req[@]}"} "$here/photons.sbatch" "${args[@]}")
+                echo "photons: job $photons_job"
+            fi
             after=(--dependency=afterok:"$photons_job")
         fi
         array=$(submit ${after[@]+"${after[@]}"} ${cpus[@]+"${cpus[@]}"} ${req[@]+"${req[@]}"} \
