@@ -115,14 +115,11 @@ band_states() {
     fi
     state=()
     why=()
+    local f
     for ((k = 0; k < bands; k++)); do
         IFS='|' read -r st reason code <<<"${sched[${band_job[k]}]:-}"
-        if [ -f "$OUT/band-$(printf %04d "$k").exr" ] && [[ $st != @(RUNNING|PENDING|COMPLETING|CONFIGURING|REQUEUED) ]]; then
-            state[k]="done"
-        elif [ -z "$st" ]; then
-            state[k]=failed
-            why[k]="no image, and the scheduler no longer knows job ${band_job[k]}"
-        elif [[ $st == @(PENDING|RUNNING|COMPLETING|CONFIGURING|REQUEUED|SUSPENDED|RESIZING|SIGNALING|STAGE_OUT) ]]; then
+        f="$OUT/band-$(printf %04d "$k")"
+        if [[ $st == @(PENDING|RUNNING|COMPLETING|CONFIGURING|REQUEUED|SUSPENDED|RESIZING|SIGNALING|STAGE_OUT) ]]; then
             state[k]=${st,,}
             if [ "$reason" = DependencyNeverSatisfied ]; then
                 state[k]=stuck
@@ -133,6 +130,13 @@ band_states() {
             elif [ "$st" = PENDING ] && [ -n "$reason" ] && [ "$reason" != None ]; then
                 why[k]=$reason
             fi
+        elif [[ $st == @(COMPLETED|) ]] && [ -f "$f.exr" ] && [ ! -f "$f.partial.exr" ] && [ ! -f "$f.ckpt" ]; then
+            # (An SPPM band with --write-every writes its image before it is
+            # done; a band that finished has left no partial image or checkpoint.)
+            state[k]="done"
+        elif [ -z "$st" ]; then
+            state[k]=failed
+            why[k]="not finished, and the scheduler no longer knows job ${band_job[k]}"
         else
             state[k]=failed
             why[k]="$st, exit code ${code:-?}"
