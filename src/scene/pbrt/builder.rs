@@ -305,7 +305,9 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        let (path, e) = first_error.expect("at least one candidate");
+        let Some((path, e)) = first_error else {
+            return Err(PbrtError::at(loc, format!("{what} \"{name}\": cannot be found")));
+        };
         Err(PbrtError::at(
             loc,
             format!("{what} \"{name}\": cannot read {}: {e}", path.display()),

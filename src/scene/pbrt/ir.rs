@@ -50,6 +50,43 @@ pub struct Camera {
     pub medium: Option<String>,
 }
 
+impl Camera {
+    /// A perspective camera's screen window `[xmin, xmax, ymin, ymax]` for a
+    /// film of `width` x `height` pixels, as pbrt-v4's `PerspectiveCamera::Create`:
+    /// the `screenwindow` parameter if given, else [-1, 1] on the shorter
+    /// image axis and [-a, a] on the longer, a being the `frameaspectratio`
+    /// parameter (default width / height) or its inverse.
+    ///
+    /// With `t = tan(fov / 2)` (`fov` in degrees, default 90), pbrt's camera
+    /// ray through raster point (x, y) (x right, y down, in pixels over the
+    /// full resolution) has the camera-space direction
+    /// `(sx * t, sy * t, 1)` where `sx = xmin + x / width * (xmax - xmin)`
+    /// and `sy = ymax - y / height * (ymax - ymin)`; so `fov` spans the
+    /// shorter image axis. `world_from_camera` takes it to world space.
+    pub fn screen_window(&self, width: u32, height: u32) -> super::error::Result<[f32; 4]> {
+        let frame = self
+            .params
+            .get_float("frameaspectratio", width as f32 / height.max(1) as f32)?;
+        let mut w = if frame > 1.0 {
+            [-frame, frame, -1.0, 1.0]
+        } else {
+            [-1.0, 1.0, -1.0 / frame, 1.0 / frame]
+        };
+        let sw = self.params.get_floats("screenwindow");
+        if sw.len() == 4 {
+            w.copy_from_slice(sw);
+        } else if !sw.is_empty() {
+            if let Some(p) = self.params.get("screenwindow") {
+                return Err(super::error::PbrtError::at(
+                    &p.loc,
+                    format!("\"screenwindow\" needs four values, not {}", sw.len()),
+                ));
+            }
+        }
+        Ok(w)
+    }
+}
+
 /// A material: `Material` (anonymous, `name` None) or `MakeNamedMaterial`
 /// (its `"string type"` taken out of the parameters into `ty`).
 #[derive(Clone, Debug, PartialEq)]

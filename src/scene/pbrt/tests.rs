@@ -338,6 +338,27 @@ fn defaults_apply_without_directives() {
     assert_eq!(s.camera.camera_from_world, Mat4::IDENTITY);
 }
 
+#[test]
+fn the_screen_window_spans_the_shorter_axis() {
+    let cam = |text: &str| parse(&format!("Camera \"perspective\" {text}\nWorldBegin\n")).camera;
+    assert_eq!(cam("").screen_window(64, 32).unwrap(), [-2.0, 2.0, -1.0, 1.0]);
+    assert_eq!(cam("").screen_window(32, 64).unwrap(), [-1.0, 1.0, -2.0, 2.0]);
+    assert_eq!(cam("").screen_window(10, 10).unwrap(), [-1.0, 1.0, -1.0, 1.0]);
+    assert_eq!(
+        cam("\"float frameaspectratio\" 0.5").screen_window(64, 32).unwrap(),
+        [-1.0, 1.0, -2.0, 2.0]
+    );
+    assert_eq!(
+        cam("\"float screenwindow\" [0 1 0 1]").screen_window(64, 32).unwrap(),
+        [0.0, 1.0, 0.0, 1.0]
+    );
+    let e = cam("\"float screenwindow\" [0 1]").screen_window(64, 32).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "scene/main.pbrt:1:22: \"screenwindow\" needs four values, not 2"
+    );
+}
+
 // ---- transforms -------------------------------------------------------------
 
 fn shape_transform(prefix: &str) -> Mat4 {
