@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod file;
 pub mod mesh;
+pub mod pbrt;
 pub mod transform;
 
 use crate::camera::Camera;

@@ -1,0 +1,1316 @@
+use super::lexer::{Lexer, TokenKind};
+use super::*;
+use crate::math::{Vec2, Vec3};
+use glam::{Mat4, Vec4};
+use std::collections::BTreeMap;
+use std::io::{Error as IoError, ErrorKind};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// In-memory files; every other path is not found.
+#[derive(Default)]
+struct Files(BTreeMap<PathBuf, Vec<u8>>);
+
+impl Files {
+    fn with(mut self, path: &str, text: impl AsRef<[u8]>) -> Self {
+        self.0.insert(PathBuf::from(path), text.as_ref().to_vec());
+        self
+    }
+}
+
+impl crate::scene::mesh::FileSource for Files {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        self.0
+            .get(path)
+            .cloned()
+            .ok_or_else(|| IoError::new(ErrorKind::NotFound, "no such file"))
+    }
+}
+
+/// A camera-less header that lets a test start in the world block.
+const WORLD: &str = "WorldBegin\n";
+
+fn parse(text: &str) -> PbrtScene {
+    parse_with(text, Files::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn parse_with(text: &str, files: Files) -> Result<PbrtScene> {
+    let files = files.with("scene/main.pbrt", text);
+    load_from(Path::new("scene/main.pbrt"), &files)
+}
+
+/// The error's message, checked to be one line starting with `place`.
+fn error(text: &str, place: &str) -> String {
+    error_with(text, Files::default(), place)
+}
+
+fn error_with(text: &str, files: Files, place: &str) -> String {
+    let e = parse_with(text, files)
+        .expect_err("the scene should not load")
+        .to_string();
+    assert!(e.starts_with(place), "'{e}' does not start with '{place}'");
+    assert!(!e.contains('\n'), "'{e}' is not one line");
+    e
+}
+
+fn assert_mat(a: Mat4, b: Mat4) {
+    assert!(a.abs_diff_eq(b, 1e-5), "\n{a:?}\n!=\n{b:?}");
+}
+
+fn point(m: Mat4, p: Vec3) -> Vec3 {
+    m.transform_point3(p)
+}
+
+fn assert_vec(a: Vec3, b: Vec3) {
+    assert!(a.abs_diff_eq(b, 1e-5), "{a} != {b}");
+}
+
+// ---- tokenizer --------------------------------------------------------------
+
+fn tokens(text: &str) -> Vec<(TokenKind, u32, u32)> {
+    let mut lx = Lexer::new(Arc::new(PathBuf::from("t.pbrt")), text.as_bytes().to_vec()).unwrap();
+    let mut out = vec![];
+    while let Some(t) = lx.next_token().unwrap() {
+        out.push((t.kind, t.loc.line, t.loc.col));
+    }
+    out
+}
+
+fn num(v: f64) -> TokenKind {
+    TokenKind::Num { value: v, int: None }
+}
+
+fn int(i: i64) -> TokenKind {
+    TokenKind::Num {
+        value: i as f64,
+        int: Some(i),
+    }
+}
+
+fn word(w: &str) -> TokenKind {
+    TokenKind::Word(w.into())
+}
+
+#[test]
+fn tokens_carry_line_and_column() {
+    let text = "# a comment\nShape \"sphere\" \"float radius\" [ 2.5 ]# tail\n\t  Translate -1 +2 .5e1\n\"é\" x[1]\r\n";
+    assert_eq!(
+        tokens(text),
+        vec![
+            (word("Shape"), 2, 1),
+            (TokenKind::Str("sphere".into()), 2, 7),
+            (TokenKind::Str("float radius".into()), 2, 16),
+            (TokenKind::Open, 2, 31),
+            (num(2.5), 2, 33),
+            (TokenKind::Close, 2, 37),
+            (word("Translate"), 3, 4),
+            (int(-1), 3, 14),
+            (int(2), 3, 17),
+            (num(5.0), 3, 20),
+            (TokenKind::Str("é".into()), 4, 1),
+            // Columns count characters: "é" is one.
+            (word("x"), 4, 5),
+            (TokenKind::Open, 4, 6),
+            (int(1), 4, 7),
+            (TokenKind::Close, 4, 8),
+        ]
+    );
+}
+
+#[test]
+fn tokens_strings_escapes_and_malformed_numbers() {
+    assert_eq!(
+        tokens(r#""a\"b\\c\n" 1.2.3 inf 1e999 -"#),
+        vec![
+            (TokenKind::Str("a\"b\\c\n".into()), 1, 1),
+            (word("1.2.3"), 1, 13),
+            (word("inf"), 1, 19),
+            (word("1e999"), 1, 23),
+            (word("-"), 1, 29),
+        ]
+    );
+    // A word runs up to a quote or bracket.
+    assert_eq!(
+        tokens("ab\"c\"]"),
+        vec![
+            (word("ab"), 1, 1),
+            (TokenKind::Str("c".into()), 1, 3),
+            (TokenKind::Close, 1, 6)
+        ]
+    );
+}
+
+fn lex_error(text: &[u8]) -> String {
+    let mut lx = match Lexer::new(Arc::new(PathBuf::from("t.pbrt")), text.to_vec()) {
+        Ok(lx) => lx,
+        Err(e) => return e.to_string(),
+    };
+    loop {
+        match lx.next_token() {
+            Ok(Some(_)) => {}
+            Ok(None) => panic!("no error"),
+            Err(e) => return e.to_string(),
+        }
+    }
+}
+
+#[test]
+fn tokenizer_errors_name_the_place() {
+    assert_eq!(
+        lex_error(b"Shape \"sphere\n\"x\""),
+        "t.pbrt:1:7: unterminated string: a string must end on the line it starts"
+    );
+    assert_eq!(
+        lex_error(b"\n  \"abc"),
+        "t.pbrt:2:3: unterminated string: the file ends inside it"
+    );
+    assert_eq!(lex_error(b"\"a\\qb\""), "t.pbrt:1:4: unknown escape '\\q' in a string");
+    assert_eq!(lex_error(b"ok\n ab\xff"), "t.pbrt:2:4: the file is not UTF-8 text");
+    assert!(lex_error(b"\xff\xfeS\0").contains("UTF-16"));
+}
+
+// ---- directives ---------------------------------------------------------------
+
+#[test]
+fn every_directive_is_read() {
+    let files = Files::default()
+        .with("scene/inc/geometry.pbrt", "Shape \"sphere\" \"float radius\" 3\n")
+        .with(
+            "scene/imported.pbrt",
+            "Material \"conductor\"\nShape \"disk\"\nReverseOrientation\n",
+        );
+    let text = r#"
+Option "disablepixeljitter" true
+ColorSpace "srgb"
+LookAt 0 0 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" 45 "float screenwindow" [-1 1 -0.5 0.5]
+Film "rgb" "integer xresolution" 64 "integer yresolution" [32] "float cropwindow" [0 1 0 0.5]
+    "string filename" "out.exr"
+Sampler "independent" "integer pixelsamples" 16
+PixelFilter "box"
+Integrator "sppm" "integer iterations" 8 "float radius" 0.1
+Accelerator "bvh"
+TransformTimes 0 1
+WorldBegin
+Attribute "shape" "float radius" 2
+Texture "checks" "spectrum" "checkerboard" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1]
+Texture "rough" "float" "constant" "float value" 0.2
+MakeNamedMaterial "red" "string type" "diffuse" "texture reflectance" "checks"
+Material "dielectric" "float eta" 1.5
+LightSource "point" "rgb I" [1 2 3] "point3 from" [0 4 0]
+MakeNamedMedium "fog" "string type" "homogeneous"
+AttributeBegin
+  MediumInterface "fog" ""
+  CoordinateSystem "here"
+  Identity
+  Translate 1 2 3
+  Rotate 90 0 0 1
+  Scale 2 2 2
+  ConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  0 0 0 1]
+  CoordSysTransform "here"
+  NamedMaterial "red"
+  AreaLightSource "diffuse" "blackbody L" 6500 "float scale" 2
+  ReverseOrientation
+  Shape "sphere"
+AttributeEnd
+ObjectBegin "thing"
+  Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0]
+ObjectEnd
+Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 7 1]
+ObjectInstance "thing"
+Include "inc/geometry.pbrt"
+Import "imported.pbrt"
+Shape "bilinearmesh" "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0]
+"#;
+    let s = parse_with(text, files).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.options.len(), 1);
+    assert_eq!(s.options[0].name, "disablepixeljitter");
+    assert_eq!(s.options[0].value, "true");
+    assert_eq!(s.camera.ty, "perspective");
+    assert_eq!(s.camera.params.get_float("fov", 90.0).unwrap(), 45.0);
+    assert_eq!(s.camera.params.get_floats("screenwindow"), &[-1.0, 1.0, -0.5, 0.5]);
+    assert_eq!(s.film.params.get_int("xresolution", 1280).unwrap(), 64);
+    assert_eq!(s.film.params.get_int("yresolution", 720).unwrap(), 32);
+    assert_eq!(s.film.params.get_floats("cropwindow"), &[0.0, 1.0, 0.0, 0.5]);
+    assert_eq!(s.sampler.ty, "independent");
+    assert_eq!(s.filter.ty, "box");
+    assert_eq!(s.integrator.ty, "sppm");
+    assert_eq!(s.integrator.params.get_int("iterations", 64).unwrap(), 8);
+    assert_eq!(s.accelerator.ty, "bvh");
+    let loc = s.film.loc.as_ref().unwrap();
+    assert_eq!(loc.to_string(), "scene/main.pbrt:6:1");
+    // The film's unread parameter is reported, located.
+    let unused: Vec<_> = s.film.params.unused().iter().map(|p| p.name.clone()).collect();
+    assert_eq!(unused, ["filename"]);
+    assert_eq!(s.film.params.unused()[0].loc.to_string(), "scene/main.pbrt:7:5");
+
+    assert_eq!(s.textures.len(), 2);
+    assert_eq!(s.textures[0].kind, TextureKind::Spectrum);
+    assert_eq!(s.textures[0].class, "checkerboard");
+    assert_eq!(s.texture("rough", TextureKind::Float).unwrap().class, "constant");
+    assert!(s.texture("rough", TextureKind::Spectrum).is_none());
+
+    // Default, red, dielectric, conductor (imported).
+    let types: Vec<_> = s.materials.iter().map(|m| m.ty.as_str()).collect();
+    assert_eq!(types, ["diffuse", "diffuse", "dielectric", "conductor"]);
+    let red = s.named_material("red").unwrap();
+    assert_eq!(
+        red.params.get_spectrum_or_texture("reflectance").unwrap(),
+        Some(SpectrumOrTexture::Texture("checks".into()))
+    );
+    // "type" was read to make `ty`.
+    assert!(red.params.unused().is_empty());
+
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.lights[0].params.get_rgb("I").unwrap(), Some(Vec3::new(1.0, 2.0, 3.0)));
+    assert_eq!(s.media.len(), 1);
+    assert_eq!(s.media[0].ty, "homogeneous");
+    assert!(s.unsupported.iter().any(|n| n.message.contains("participating media")));
+
+    let types: Vec<_> = s.shapes.iter().map(|s| s.ty.as_str()).collect();
+    assert_eq!(types, ["sphere", "trianglemesh", "sphere", "disk", "bilinearmesh"]);
+    let lit = &s.shapes[0];
+    // CoordSysTransform "here" undid Identity, Translate, Rotate, Scale.
+    assert_mat(lit.world_from_object, Mat4::IDENTITY);
+    assert!(lit.reverse_orientation);
+    assert_eq!(s.materials[lit.material].name.as_deref(), Some("red"));
+    assert_eq!(lit.inside_medium.as_deref(), Some("fog"));
+    assert_eq!(lit.outside_medium, None);
+    let area = &s.area_lights[lit.area_light.unwrap()];
+    assert_eq!(area.ty, "diffuse");
+    let l = area.params.get_spectrum("L").unwrap().unwrap();
+    assert_eq!(l, SpectrumValue::Blackbody(6500.0));
+    // The Attribute "shape" radius applies to spheres without their own.
+    assert_eq!(
+        lit.geometry,
+        Geometry::Sphere(Sphere {
+            radius: 2.0,
+            zmin: -2.0,
+            zmax: 2.0,
+            phimax_deg: 360.0
+        })
+    );
+    assert_eq!(
+        s.shapes[2].geometry,
+        Geometry::Sphere(Sphere {
+            radius: 3.0,
+            zmin: -3.0,
+            zmax: 3.0,
+            phimax_deg: 360.0
+        })
+    );
+    assert_eq!(s.shapes[2].loc.to_string(), "scene/inc/geometry.pbrt:1:1");
+    // After the block: the anonymous dielectric, no area light, no reversal.
+    let inst = &s.shapes[1];
+    assert_eq!(s.materials[inst.material].ty, "dielectric");
+    assert_eq!(inst.area_light, None);
+    assert!(!inst.reverse_orientation);
+    assert_eq!(inst.instance.as_ref().unwrap().object, "thing");
+    assert_mat(inst.world_from_object, Mat4::from_translation(Vec3::new(0.0, 0.0, 7.0)));
+    // The import's material and reversal ended with it.
+    assert_eq!(s.materials[s.shapes[3].material].ty, "conductor");
+    assert!(!s.shapes[3].reverse_orientation);
+    assert_eq!(s.materials[s.shapes[4].material].ty, "dielectric");
+    assert!(!s.shapes[4].reverse_orientation);
+    assert_eq!(
+        s.files,
+        ["scene/main.pbrt", "scene/inc/geometry.pbrt", "scene/imported.pbrt"].map(PathBuf::from)
+    );
+}
+
+#[test]
+fn defaults_apply_without_directives() {
+    let s = parse(WORLD);
+    assert_eq!(
+        [
+            &s.film.ty,
+            &s.sampler.ty,
+            &s.filter.ty,
+            &s.integrator.ty,
+            &s.accelerator.ty,
+            &s.camera.ty
+        ],
+        ["rgb", "zsobol", "gaussian", "volpath", "bvh", "perspective"]
+    );
+    assert!(s.film.loc.is_none() && s.camera.loc.is_none());
+    assert_eq!(s.materials.len(), 1);
+    assert_eq!(s.materials[0].ty, "diffuse");
+    assert_eq!(s.camera.camera_from_world, Mat4::IDENTITY);
+}
+
+#[test]
+fn the_screen_window_spans_the_shorter_axis() {
+    let cam = |text: &str| parse(&format!("Camera \"perspective\" {text}\nWorldBegin\n")).camera;
+    assert_eq!(cam("").screen_window(64, 32).unwrap(), [-2.0, 2.0, -1.0, 1.0]);
+    assert_eq!(cam("").screen_window(32, 64).unwrap(), [-1.0, 1.0, -2.0, 2.0]);
+    assert_eq!(cam("").screen_window(10, 10).unwrap(), [-1.0, 1.0, -1.0, 1.0]);
+    assert_eq!(
+        cam("\"float frameaspectratio\" 0.5").screen_window(64, 32).unwrap(),
+        [-1.0, 1.0, -2.0, 2.0]
+    );
+    assert_eq!(
+        cam("\"float screenwindow\" [0 1 0 1]").screen_window(64, 32).unwrap(),
+        [0.0, 1.0, 0.0, 1.0]
+    );
+    let e = cam("\"float screenwindow\" [0 1]").screen_window(64, 32).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "scene/main.pbrt:1:22: \"screenwindow\" needs four values, not 2"
+    );
+}
+
+// ---- transforms -------------------------------------------------------------
+
+fn shape_transform(prefix: &str) -> Mat4 {
+    let s = parse(&format!("WorldBegin\n{prefix}\nShape \"sphere\"\n"));
+    s.shapes[0].world_from_object
+}
+
+fn camera_transform(prefix: &str) -> Mat4 {
+    parse(&format!("{prefix}\nCamera \"perspective\"\nWorldBegin\n"))
+        .camera
+        .camera_from_world
+}
+
+#[test]
+fn look_at_matches_hand_computed_matrices() {
+    assert_mat(camera_transform("LookAt 0 0 0  0 0 1  0 1 0"), Mat4::IDENTITY);
+    assert_mat(
+        camera_transform("LookAt 1 2 3  1 2 10  0 1 0"),
+        Mat4::from_translation(Vec3::new(-1.0, -2.0, -3.0)),
+    );
+    // Looking down +x with +z up: camera x (right) = world y, camera y = z,
+    // camera z (forward) = x; the rows of camera-from-world.
+    let m = camera_transform("LookAt 0 0 0  1 0 0  0 0 1");
+    let expected = Mat4::from_cols(
+        Vec4::new(0.0, 0.0, 1.0, 0.0),
+        Vec4::new(1.0, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 1.0, 0.0, 0.0),
+        Vec4::W,
+    );
+    assert_mat(m, expected);
+    // An eye at (0, 0, -5) looking at the origin: the origin is 5 ahead.
+    let m = camera_transform("LookAt 0 0 -5  0 0 0  0 1 0");
+    assert_vec(point(m, Vec3::ZERO), Vec3::new(0.0, 0.0, 5.0));
+    assert_vec(point(m, Vec3::new(1.0, 0.0, 0.0)), Vec3::new(1.0, 0.0, 5.0));
+    // The up vector needs not be orthogonal to the view direction.
+    let m = camera_transform("LookAt 0 0 -5  0 0 0  0 1 1");
+    assert_vec(point(m, Vec3::new(0.0, 1.0, 0.0)), Vec3::new(0.0, 1.0, 5.0));
+    let s = parse("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n");
+    assert_mat(s.camera.world_from_camera * s.camera.camera_from_world, Mat4::IDENTITY);
+    assert_vec(point(s.camera.world_from_camera, Vec3::ZERO), Vec3::new(0.0, 0.0, -5.0));
+}
+
+#[test]
+fn scale_minus_one_flips_camera_x() {
+    // Exporters write `Scale -1 1 1` before LookAt to turn a right-handed
+    // camera into pbrt's left-handed one: CTM = S * L.
+    let m = camera_transform("Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0");
+    assert_vec(point(m, Vec3::new(1.0, 0.0, 0.0)), Vec3::new(-1.0, 0.0, 5.0));
+    assert_vec(point(m, Vec3::new(0.0, 1.0, 0.0)), Vec3::new(0.0, 1.0, 5.0));
+    assert!(m.determinant() < 0.0);
+    // After LookAt the scale acts in world space first: L * S.
+    let m = camera_transform("LookAt 0 0 -5  0 0 0  0 1 0\nScale -1 1 1");
+    assert_vec(point(m, Vec3::new(1.0, 0.0, 1.0)), Vec3::new(-1.0, 0.0, 6.0));
+    // Two flips cancel.
+    assert_mat(camera_transform("Scale -1 1 1\nScale -1 1 1"), Mat4::IDENTITY);
+}
+
+#[test]
+fn transforms_compose_by_post_multiplication() {
+    // Translate then Scale: p -> T(S(p)).
+    let m = shape_transform("Translate 1 2 3\nScale 2 2 2");
+    assert_vec(point(m, Vec3::ONE), Vec3::new(3.0, 4.0, 5.0));
+    // Rotate 90 about z takes x to y; about x takes y to z.
+    assert_vec(point(shape_transform("Rotate 90 0 0 1"), Vec3::X), Vec3::Y);
+    assert_vec(point(shape_transform("Rotate 90 1 0 0"), Vec3::Y), Vec3::Z);
+    assert_vec(point(shape_transform("Rotate 90 0 0 5"), Vec3::X), Vec3::Y);
+    assert_vec(point(shape_transform("Rotate -90 0 1 0"), Vec3::X), Vec3::Z);
+    // The 16 numbers of Transform are the matrix's columns.
+    let m = shape_transform("Transform [2 0 0 0  0 3 0 0  0 0 4 0  5 6 7 1]");
+    assert_mat(
+        m,
+        Mat4::from_cols_array(&[2., 0., 0., 0., 0., 3., 0., 0., 0., 0., 4., 0., 5., 6., 7., 1.]),
+    );
+    assert_vec(point(m, Vec3::ONE), Vec3::new(7.0, 9.0, 11.0));
+    // ConcatTransform post-multiplies; Transform and Identity replace.
+    let m = shape_transform("Translate 1 0 0\nConcatTransform [0 1 0 0  -1 0 0 0  0 0 1 0  0 0 0 1]");
+    assert_vec(point(m, Vec3::X), Vec3::new(1.0, 1.0, 0.0));
+    assert_mat(shape_transform("Translate 1 0 0\nIdentity"), Mat4::IDENTITY);
+    assert_mat(
+        shape_transform("Translate 1 0 0\nTransform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 9 1]"),
+        Mat4::from_translation(Vec3::new(0.0, 0.0, 9.0)),
+    );
+}
+
+#[test]
+fn named_coordinate_systems_and_the_camera() {
+    // The camera's coordinate system places a shape relative to the camera:
+    // one unit in front of an eye at (0, 0, -5) looking at the origin.
+    let s = parse(
+        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+         AttributeBegin\nCoordSysTransform \"camera\"\nTranslate 0 0 1\nShape \"sphere\"\nAttributeEnd\n\
+         Translate 5 5 5\nCoordSysTransform \"world\"\nShape \"disk\"\n\
+         CoordSysTransform \"nowhere\"\n",
+    );
+    assert_vec(
+        point(s.shapes[0].world_from_object, Vec3::ZERO),
+        Vec3::new(0.0, 0.0, -4.0),
+    );
+    assert_mat(s.shapes[1].world_from_object, Mat4::IDENTITY);
+    assert_eq!(s.warnings.len(), 1);
+    assert!(s.warnings[0].message.contains("nowhere"), "{:?}", s.warnings);
+    assert_eq!(s.warnings[0].loc.line, 12);
+    // Scale -1 1 1 before the camera: the camera space is mirrored, and so
+    // is a shape placed in it.
+    let s = parse(
+        "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+         CoordSysTransform \"camera\"\nTranslate 1 0 1\nShape \"sphere\"\n",
+    );
+    assert_vec(
+        point(s.shapes[0].world_from_object, Vec3::ZERO),
+        Vec3::new(-1.0, 0.0, -4.0),
+    );
+    assert!(s.shapes[0].flips_normals());
+}
+
+#[test]
+fn reverse_orientation_and_handedness_decide_normal_flips() {
+    let s = parse(
+        "WorldBegin\nShape \"sphere\"\nAttributeBegin\nReverseOrientation\nShape \"sphere\"\n\
+         Scale 1 -1 1\nShape \"sphere\"\nAttributeEnd\nScale 1 1 -1\nShape \"sphere\"\n",
+    );
+    let flips: Vec<_> = s.shapes.iter().map(|s| s.flips_normals()).collect();
+    assert_eq!(flips, [false, true, false, true]);
+    let rev: Vec<_> = s.shapes.iter().map(|s| s.reverse_orientation).collect();
+    assert_eq!(rev, [false, true, true, false]);
+}
+
+#[test]
+fn attribute_blocks_save_and_restore_the_graphics_state() {
+    let s = parse(
+        "WorldBegin\nMakeNamedMaterial \"m\" \"string type\" \"coateddiffuse\"\n\
+         Translate 1 0 0\nAttribute \"shape\" \"float radius\" 4\n\
+         AttributeBegin\n  Translate 0 1 0\n  NamedMaterial \"m\"\n  AreaLightSource \"diffuse\"\n\
+           Attribute \"shape\" \"float radius\" 5\n  AttributeBegin\n    Translate 0 0 1\n    Material \"conductor\"\n    Shape \"sphere\"\n  AttributeEnd\n\
+           Shape \"sphere\" \"float radius\" 6\nAttributeEnd\nShape \"sphere\"\n",
+    );
+    let at = |i: usize| point(s.shapes[i].world_from_object, Vec3::ZERO);
+    assert_vec(at(0), Vec3::new(1.0, 1.0, 1.0));
+    assert_vec(at(1), Vec3::new(1.0, 1.0, 0.0));
+    assert_vec(at(2), Vec3::new(1.0, 0.0, 0.0));
+    let mats: Vec<_> = s.shapes.iter().map(|x| s.materials[x.material].ty.as_str()).collect();
+    assert_eq!(mats, ["conductor", "coateddiffuse", "diffuse"]);
+    assert_eq!(s.shapes[0].area_light, Some(0));
+    assert_eq!(s.shapes[1].area_light, Some(0));
+    assert_eq!(s.shapes[2].area_light, None);
+    let radii: Vec<_> = s
+        .shapes
+        .iter()
+        .map(|x| match x.geometry {
+            Geometry::Sphere(sp) => sp.radius,
+            _ => 0.0,
+        })
+        .collect();
+    // The later Attribute wins over the earlier; the shape's own wins over both.
+    assert_eq!(radii, [5.0, 6.0, 4.0]);
+    // Attributes are never reported unused.
+    assert!(s.shapes[2].params.unused().is_empty());
+}
+
+#[test]
+fn motion_is_noted_and_transform_blocks_work_as_attribute_blocks() {
+    let s = parse(
+        "WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n\
+         TransformBegin\nActiveTransform StartTime\nTranslate 0 1 0\nTransformEnd\nShape \"disk\"\n",
+    );
+    // The start transformation is used; the motion is listed.
+    assert_mat(s.shapes[0].world_from_object, Mat4::IDENTITY);
+    assert_mat(s.shapes[1].world_from_object, Mat4::IDENTITY);
+    let lines: Vec<_> = s.unsupported.iter().map(|n| n.loc.line).collect();
+    assert_eq!(lines, [5, 10]);
+    assert!(s.unsupported[0].message.contains("animated transformation"));
+    error(
+        "ActiveTransform Sometimes\n",
+        "scene/main.pbrt:1:17: ActiveTransform: expected All, StartTime or EndTime",
+    );
+    error(
+        "WorldBegin\nTransformTimes 0 1\n",
+        "scene/main.pbrt:2:1: TransformTimes is not allowed after WorldBegin",
+    );
+}
+
+// ---- instances --------------------------------------------------------------
+
+#[test]
+fn object_instances_are_flattened_with_composed_transforms() {
+    let s = parse(
+        "WorldBegin\nMaterial \"conductor\"\n\
+         ObjectInstance \"early\"\n\
+         AttributeBegin\nTranslate 0 0 10\nObjectBegin \"early\"\n  Translate 1 0 0\n  Shape \"disk\"\n  AreaLightSource \"diffuse\"\n  Shape \"sphere\"\nObjectEnd\nAttributeEnd\n\
+         Scale 2 2 2\nObjectInstance \"early\"\n\
+         ObjectBegin \"unused\"\nShape \"sphere\"\nObjectEnd\n",
+    );
+    assert_eq!(s.shapes.len(), 4);
+    // The definition's transform (including what preceded ObjectBegin),
+    // then the instance's.
+    let at = |i: usize| point(s.shapes[i].world_from_object, Vec3::ZERO);
+    assert_vec(at(0), Vec3::new(1.0, 0.0, 10.0));
+    assert_vec(at(2), Vec3::new(2.0, 0.0, 20.0));
+    assert_eq!(s.shapes[2].instance.as_ref().unwrap().loc.line, 14);
+    assert!(s.shapes.iter().all(|x| s.materials[x.material].ty == "conductor"));
+    // pbrt-v4 ignores area lights in instances, and says so.
+    assert!(s.shapes.iter().all(|x| x.area_light.is_none()));
+    assert!(s.warnings.iter().any(|w| w.message.contains("object instances")));
+    // The copies share one mesh/parameter set.
+    assert!(Arc::ptr_eq(&s.shapes[0].params, &s.shapes[2].params));
+
+    error(
+        "WorldBegin\nObjectInstance \"nothing\"\n",
+        "scene/main.pbrt:2:1: ObjectInstance: object \"nothing\" is not defined",
+    );
+    error(
+        "WorldBegin\nObjectBegin \"a\"\nObjectBegin \"b\"\n",
+        "scene/main.pbrt:3:1: ObjectBegin inside",
+    );
+    error(
+        "WorldBegin\nObjectBegin \"a\"\nObjectEnd\nObjectBegin \"a\"\n",
+        "scene/main.pbrt:4:1: ObjectBegin: \"a\" is defined twice",
+    );
+    error(
+        "WorldBegin\nObjectBegin \"a\"\n",
+        "scene/main.pbrt:2:1: ObjectBegin without ObjectEnd",
+    );
+    error(
+        "WorldBegin\nObjectBegin \"a\"\nAttributeEnd\n",
+        "scene/main.pbrt:3:1: AttributeEnd closes the ObjectBegin",
+    );
+    error(
+        "WorldBegin\nAttributeBegin\nObjectBegin \"a\"\nAttributeEnd",
+        "scene/main.pbrt:4:1: AttributeEnd closes",
+    );
+    error(
+        "WorldBegin\nObjectEnd\n",
+        "scene/main.pbrt:2:1: ObjectEnd without ObjectBegin",
+    );
+    error(
+        "WorldBegin\nObjectBegin \"a\"\nNamedMaterial \"x\"\nShape \"sphere\"\nObjectEnd\n",
+        "scene/main.pbrt:4:1: the shape's material \"x\" is not defined",
+    );
+}
+
+// ---- Include and Import -----------------------------------------------------
+
+#[test]
+fn includes_resolve_beside_the_including_file_then_the_scene_folder() {
+    let files = Files::default()
+        .with("scene/a/one.pbrt", "Include \"two.pbrt\"\nInclude \"top.pbrt\"\n")
+        .with("scene/a/two.pbrt", "Shape \"sphere\" \"float radius\" 2\n")
+        .with("scene/top.pbrt", "Shape \"sphere\" \"float radius\" 3\n");
+    let s = parse_with("WorldBegin\nInclude \"a/one.pbrt\"\nShape \"disk\"\n", files).unwrap();
+    let files: Vec<_> = s.shapes.iter().map(|x| x.loc.file.display().to_string()).collect();
+    assert_eq!(files, ["scene/a/two.pbrt", "scene/top.pbrt", "scene/main.pbrt"]);
+    // An Include may open a block that the including file closes.
+    let files = Files::default().with("scene/open.pbrt", "AttributeBegin\nTranslate 1 0 0\n");
+    let s = parse_with(
+        "WorldBegin\nInclude \"open.pbrt\"\nShape \"disk\"\nAttributeEnd\nShape \"disk\"\n",
+        files,
+    )
+    .unwrap();
+    assert_vec(point(s.shapes[0].world_from_object, Vec3::ZERO), Vec3::X);
+    assert_vec(point(s.shapes[1].world_from_object, Vec3::ZERO), Vec3::ZERO);
+    // Gzipped scene files are read too.
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    std::io::Write::write_all(&mut gz, b"Shape \"sphere\"\n").unwrap();
+    let files = Files::default().with("scene/g.pbrt.gz", gz.finish().unwrap());
+    assert_eq!(
+        parse_with("WorldBegin\nInclude \"g.pbrt.gz\"\n", files)
+            .unwrap()
+            .shapes
+            .len(),
+        1
+    );
+}
+
+#[test]
+fn include_errors_name_the_include() {
+    let e = error(
+        "WorldBegin\n  Include \"missing.pbrt\"\n",
+        "scene/main.pbrt:2:3: Include \"missing.pbrt\": cannot read scene/missing.pbrt",
+    );
+    assert!(e.contains("no such file"), "{e}");
+    error(
+        "WorldBegin\nInclude \"main.pbrt\"\n",
+        "scene/main.pbrt:2:1: Include \"main.pbrt\": include cycle: scene/main.pbrt -> scene/main.pbrt",
+    );
+    let files = Files::default()
+        .with("scene/a.pbrt", "\n\nInclude \"b.pbrt\"\n")
+        .with("scene/b.pbrt", "Import \"a.pbrt\"\n");
+    error_with(
+        "WorldBegin\nInclude \"a.pbrt\"\n",
+        files,
+        "scene/b.pbrt:1:1: Import \"a.pbrt\": include cycle: scene/main.pbrt -> scene/a.pbrt -> scene/b.pbrt -> scene/a.pbrt",
+    );
+    // A file included twice in a row (not nested) is fine.
+    let files = Files::default().with("scene/s.pbrt", "Shape \"sphere\"\n");
+    let s = parse_with("WorldBegin\nInclude \"s.pbrt\"\nInclude \"s.pbrt\"\n", files).unwrap();
+    assert_eq!(s.shapes.len(), 2);
+    // Import only in the world block, and it must close its blocks.
+    error(
+        "Import \"x.pbrt\"\n",
+        "scene/main.pbrt:1:1: Import is only allowed after WorldBegin",
+    );
+    let files = Files::default().with("scene/x.pbrt", "\nAttributeBegin\n");
+    error_with(
+        "WorldBegin\nImport \"x.pbrt\"\n",
+        files,
+        "scene/x.pbrt:2:1: AttributeBegin without its end in an imported file",
+    );
+}
+
+// ---- errors -----------------------------------------------------------------
+
+#[test]
+fn errors_name_file_line_and_column() {
+    let cases: &[(&str, &str)] = &[
+        ("Translate 1 2 x\n", "scene/main.pbrt:1:15: Translate: expected a number, got 'x'"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" [ 1.2.3 ]\n", "scene/main.pbrt:2:33: \"float radius\": expected a number, got '1.2.3'"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" 1e999\n", "scene/main.pbrt:2:31: \"float radius\": expected a number, got '1e999'"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" 1e39\n", "scene/main.pbrt:2:31: '1e39': the number is too large"),
+        ("WorldBegin\nShape \"sphere\n", "scene/main.pbrt:2:7: unterminated string"),
+        ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0\n", "scene/main.pbrt:2:33: \"point3 P\": unterminated '['"),
+        ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0\nShape \"sphere\"\n", "scene/main.pbrt:3:1: \"point3 P\": 'Shape' in a value list (missing ']' for the '[' at 2:33?)"),
+        ("WorldBegin\nSphere 1\n", "scene/main.pbrt:2:1: unknown directive 'Sphere'"),
+        ("WorldBegin\n\"sphere\"\n", "scene/main.pbrt:2:1: expected a directive, got \"sphere\""),
+        ("WorldBegin\nWorldEnd\n", "scene/main.pbrt:2:1: unknown directive WorldEnd"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" \"big\"\n", "scene/main.pbrt:2:31: \"float radius\": expected a number, got \"big\""),
+        ("WorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 2.5]\n", "scene/main.pbrt:2:45: \"integer indices\": expected an integer, got '2.5'"),
+        ("WorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 9999999999]\n", "scene/main.pbrt:2:45: \"integer indices\": expected an integer that fits in 32 bits"),
+        ("WorldBegin\nShape \"sphere\" \"bool flip\" 1\n", "scene/main.pbrt:2:28: \"bool flip\": expected true or false, got '1'"),
+        ("WorldBegin\nShape \"sphere\" \"string name\" [ x ]\n", "scene/main.pbrt:2:32: \"string name\": expected a quoted string, got 'x'"),
+        ("WorldBegin\nShape \"sphere\" \"float3 radius\" 1\n", "scene/main.pbrt:2:16: \"float3 radius\": unknown parameter type 'float3'"),
+        ("WorldBegin\nShape \"sphere\" \"radius\" 1\n", "scene/main.pbrt:2:16: \"radius\": a parameter is declared as \"type name\""),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" [ ]\n", "scene/main.pbrt:2:16: \"float radius\": no values"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\"", "scene/main.pbrt:2:16: the file ends where the value of \"float radius\" was expected"),
+        ("WorldBegin\nShape \"sphere\" \"rgb c\" [1 2]\n", "scene/main.pbrt:2:16: \"rgb c\": 2 values, not a multiple of 3"),
+        ("WorldBegin\nShape \"sphere\" \"rgb c\" [1 -2 3]\n", "scene/main.pbrt:2:16: \"rgb c\": a negative component"),
+        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" \"Cu.spd\"\n", "scene/main.pbrt:2:37: \"spectrum eta\": \"Cu.spd\" is not a spectrum pbrt-v4 names"),
+        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [400 1 300 2]\n", "scene/main.pbrt:2:22: \"spectrum eta\": wavelengths must increase (400 then 300)"),
+        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [400 1 500]\n", "scene/main.pbrt:2:22: \"spectrum eta\": an odd number of values"),
+        ("WorldBegin\nAttributeEnd\n", "scene/main.pbrt:2:1: AttributeEnd without a matching AttributeBegin"),
+        ("WorldBegin\nAttributeBegin\nAttributeBegin\nAttributeEnd\n", "scene/main.pbrt:2:1: AttributeBegin without AttributeEnd"),
+        ("Shape \"sphere\"\nWorldBegin\n", "scene/main.pbrt:1:1: Shape is only allowed after WorldBegin"),
+        ("AttributeBegin\n", "scene/main.pbrt:1:1: AttributeBegin is only allowed after WorldBegin"),
+        ("WorldBegin\nCamera \"perspective\"\n", "scene/main.pbrt:2:1: Camera is not allowed after WorldBegin"),
+        ("WorldBegin\nWorldBegin\n", "scene/main.pbrt:2:1: WorldBegin is not allowed after WorldBegin"),
+        ("Camera \"perspective\"\n", "scene/main.pbrt:1:8: the scene ends before WorldBegin"),
+        ("Scale 0 0 0\nCamera \"perspective\"\nWorldBegin\n", "scene/main.pbrt:2:1: Camera: the current transformation is not invertible"),
+        ("LookAt 0 0 0 0 0 1 0 0 1\n", "scene/main.pbrt:1:1: LookAt: the eye is at the target, or the up vector"),
+        ("Rotate 30 0 0 0\n", "scene/main.pbrt:1:1: Rotate: the axis is zero"),
+        ("Transform [1 0 0 0]\n", "scene/main.pbrt:1:19: Transform: expected a number, got ']'"),
+        ("Transform 1 0 0 0\n", "scene/main.pbrt:1:11: Transform: expected '[' and 16 numbers"),
+        ("WorldBegin\nAttribute \"camera\" \"float x\" 1\n", "scene/main.pbrt:2:1: Attribute: unknown target \"camera\""),
+        ("Option \"fastmode\" true\n", "scene/main.pbrt:1:1: Option: unknown option \"fastmode\""),
+        ("WorldBegin\nTexture \"t\" \"rgb\" \"constant\"\n", "scene/main.pbrt:2:13: Texture \"t\": type \"rgb\" is neither"),
+        ("WorldBegin\nTexture \"t\" \"float\" \"constant\"\nTexture \"t\" \"float\" \"scale\"\n", "scene/main.pbrt:3:1: Texture \"t\" is defined twice"),
+        ("WorldBegin\nMakeNamedMaterial \"m\" \"float roughness\" 0\n", "scene/main.pbrt:2:1: MakeNamedMaterial \"m\": no \"string type\" parameter"),
+        ("WorldBegin\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\n", "scene/main.pbrt:3:1: MakeNamedMaterial: \"m\" is defined twice"),
+        ("WorldBegin\nNamedMaterial \"none\"\nShape \"sphere\"\n", "scene/main.pbrt:3:1: the shape's material \"none\" is not defined"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" [1 2]\n", "scene/main.pbrt:2:16: \"float radius\": expected one value, got 2"),
+        ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]\n", "scene/main.pbrt:2:1: trianglemesh: vertex index 3 is out of range (\"P\" has 3 points)"),
+        ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 -1]\n", "scene/main.pbrt:2:1: trianglemesh: vertex index -1 is out of range"),
+        ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]\n", "scene/main.pbrt:2:1: trianglemesh: vertex indices \"indices\" are required"),
+        ("WorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 2]\n", "scene/main.pbrt:2:1: trianglemesh: vertex positions \"P\" are required"),
+        ("WorldBegin\nShape \"plymesh\" \"string filename\" \"gone.ply\"\n", "scene/main.pbrt:2:1: plymesh \"gone.ply\": cannot read scene/gone.ply"),
+        ("WorldBegin\nShape \"plymesh\"\n", "scene/main.pbrt:2:1: plymesh: no file name given"),
+    ];
+    for (text, place) in cases {
+        error(text, place);
+    }
+    // An unreadable top-level file names just the file.
+    let e = load_from(Path::new("nowhere.pbrt"), &Files::default()).unwrap_err();
+    assert!(e.loc().is_none());
+    assert!(e.to_string().starts_with("nowhere.pbrt: "), "{e}");
+    // The library error keeps file:line:col.
+    let e = parse_with("WorldBegin\n  Sphere\n", Files::default()).unwrap_err();
+    assert_eq!(
+        crate::error::Error::from(e).to_string(),
+        "scene/main.pbrt:2: column 3: unknown directive 'Sphere'"
+    );
+}
+
+// ---- parameters ---------------------------------------------------------------
+
+#[test]
+fn parameters_have_typed_lookups_and_remember_what_was_read() {
+    let s = parse(
+        "WorldBegin\nMaterial \"x\" \"float a\" 1.5 \"integer n\" [1 2 3] \"bool b\" false \"bool old\" \"true\"\n\
+         \"string s\" \"hi\" \"point2 p2\" [1 2 3 4] \"point3 p3\" [1 2 3] \"point q\" [4 5 6] \"vector v\" [0 0 1]\n\
+         \"normal3 n3\" [0 1 0] \"color c\" [0.1 0.2 0.3] \"spectrum eta\" \"metal-Cu-eta\"\n\
+         \"spectrum k\" [300 1  800 3] \"blackbody L\" [3000] \"texture tex\" \"t\" \"float a\" 2.5 \"float twice\" [1 2]\n",
+    );
+    let p = &s.materials[1].params;
+    // The later of two same-named parameters wins; the earlier is hidden.
+    assert_eq!(p.get_float("a", 0.0).unwrap(), 2.5);
+    assert_eq!(p.get_float("missing", 7.0).unwrap(), 7.0);
+    assert_eq!(p.get_ints("n"), &[1, 2, 3]);
+    assert!(p.get_int("n", 0).is_err());
+    assert!(!p.get_bool("b", true).unwrap());
+    assert!(p.get_bool("old", false).unwrap());
+    assert_eq!(p.get_string("s").unwrap().as_deref(), Some("hi"));
+    assert_eq!(p.get_point2s("p2"), [Vec2::new(1.0, 2.0), Vec2::new(3.0, 4.0)]);
+    assert_eq!(p.get_point3("p3", Vec3::ZERO).unwrap(), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(p.get_point3s("q"), [Vec3::new(4.0, 5.0, 6.0)]);
+    assert_eq!(p.get_vector3("v", Vec3::ZERO).unwrap(), Vec3::Z);
+    assert_eq!(p.get_normal("n3", Vec3::ZERO).unwrap(), Vec3::Y);
+    assert_eq!(p.get_rgb("c").unwrap(), Some(Vec3::new(0.1, 0.2, 0.3)));
+    assert_eq!(
+        p.get_spectrum("eta").unwrap(),
+        Some(SpectrumValue::Named("metal-Cu-eta".into()))
+    );
+    let Some(SpectrumValue::Sampled(k)) = p.get_spectrum("k").unwrap() else {
+        panic!()
+    };
+    assert_eq!(k.eval(550.0), 2.0);
+    assert_eq!(k.eval(200.0), 0.0);
+    assert_eq!(p.get_spectrum("L").unwrap(), Some(SpectrumValue::Blackbody(3000.0)));
+    assert_eq!(p.get_texture("tex").unwrap().as_deref(), Some("t"));
+    assert_eq!(
+        p.get_float_or_texture("tex").unwrap(),
+        Some(FloatOrTexture::Texture("t".into()))
+    );
+    assert_eq!(p.get_float_or_texture("a").unwrap(), Some(FloatOrTexture::Value(2.5)));
+    // A look-up of the wrong type finds nothing and reads nothing.
+    assert_eq!(p.get_float("s", 0.5).unwrap(), 0.5);
+    let e = p.get_float("twice", 0.0).unwrap_err().to_string();
+    assert_eq!(e, "scene/main.pbrt:5:82: \"float twice\": expected one value, got 2");
+    let unused: Vec<_> = p.unused().iter().map(|q| q.name.as_str()).collect();
+    assert_eq!(unused, ["twice"]);
+    assert_eq!(p.get("p3").unwrap().ty, ParamType::Point3);
+    assert_eq!(p.loc_of("p3").unwrap().to_string(), "scene/main.pbrt:3:39");
+}
+
+// ---- spectra ----------------------------------------------------------------
+
+fn chromaticity(xyz: Vec3) -> (f32, f32) {
+    let sum = xyz.x + xyz.y + xyz.z;
+    (xyz.x / sum, xyz.y / sum)
+}
+
+#[test]
+fn blackbody_colours_are_on_the_planckian_locus() {
+    // CIE 1931 chromaticities of the Planckian radiator: 6504 K (D65's CCT)
+    // and 2856 K (illuminant A).
+    let (x, y) = chromaticity(spectrum::blackbody_xyz(6504.0));
+    assert!((x - 0.3135).abs() < 0.003 && (y - 0.3236).abs() < 0.003, "{x} {y}");
+    let (x, y) = chromaticity(spectrum::blackbody_xyz(2856.0));
+    assert!((x - 0.4476).abs() < 0.003 && (y - 0.4074).abs() < 0.003, "{x} {y}");
+    // Near-white at 6504 K, red above blue at 3000 K.
+    let c = spectrum::blackbody_rgb(6504.0);
+    assert!((c.x / c.z - 1.0).abs() < 0.05 && (c.y / c.z - 1.0).abs() < 0.05, "{c}");
+    let c = spectrum::blackbody_rgb(3000.0);
+    assert!(c.x > c.y && c.y > c.z, "{c}");
+    // pbrt's lights see unit luminance.
+    let l = SpectrumValue::Blackbody(3000.0).light_rgb().unwrap();
+    assert!((spectrum::luminance(l) - 1.0).abs() < 0.01, "{l}");
+    assert_eq!(SpectrumValue::Rgb(Vec3::ONE).light_rgb(), Some(Vec3::ONE));
+    assert_eq!(SpectrumValue::Named("stdillum-D65".into()).to_rgb(), None);
+    // A constant spectrum of 1 has Y = 1 (equal-energy white).
+    let flat = SampledSpectrum {
+        lambda: vec![300.0, 900.0],
+        value: vec![1.0, 1.0],
+    };
+    assert!((spectrum::spectrum_to_xyz(|l| flat.eval(l)).y - 1.0).abs() < 1e-4);
+    // The peak-normalised spectrum has a maximum of 1.
+    let peak = (360..=830)
+        .map(|l| spectrum::blackbody_normalized(l as f64, 6000.0))
+        .fold(0.0, f64::max);
+    assert!((peak - 1.0).abs() < 1e-3, "{peak}");
+    assert_eq!(spectrum::blackbody_normalized(500.0, 0.0), 0.0);
+}
+
+// ---- shapes -----------------------------------------------------------------
+
+fn mesh(s: &Shape) -> &TriMesh {
+    match &s.geometry {
+        Geometry::Mesh(m) => m,
+        g => panic!("not a mesh: {g:?}"),
+    }
+}
+
+#[test]
+fn meshes_spheres_and_disks_are_decoded() {
+    let s = parse(
+        "WorldBegin\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"normal N\" [0 0 1 0 0 1 0 0 1] \"point2 uv\" [0 0 1 0]\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"integer indices\" [0 1 2 2 1 3 0]\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"point2 uv\" [0 0 1 0 0 1 1 1]\n\
+         Shape \"sphere\" \"float radius\" 2 \"float zmax\" 1\n\
+         Shape \"disk\" \"float radius\" 3 \"float height\" 1\n\
+         Shape \"disk\" \"float innerradius\" 0.5\n\
+         Shape \"cylinder\"\n\
+         Shape \"teapot\"\n",
+    );
+    let m = mesh(&s.shapes[0]);
+    assert_eq!(m.triangles, [[0, 1, 2]]);
+    assert_eq!(m.normals.as_ref().unwrap().len(), 3);
+    assert_eq!(m.uvs, None); // two uvs for three points: dropped, with a warning
+    assert_eq!(mesh(&s.shapes[1]).triangles, [[0, 1, 2], [2, 1, 3]]);
+    // The bilinear patch (p00 p10 p01 p11): both triangles face +z, as the patch.
+    let b = mesh(&s.shapes[2]);
+    assert_eq!(b.triangles, [[0, 1, 3], [0, 3, 2]]);
+    assert_eq!(b.quads_split, 1);
+    for t in &b.triangles {
+        let p = t.map(|i| b.positions[i as usize]);
+        assert!((p[1] - p[0]).cross(p[2] - p[0]).z > 0.0);
+    }
+    assert_eq!(b.uvs.as_ref().unwrap()[3], Vec2::ONE);
+    assert_eq!(
+        s.shapes[3].geometry,
+        Geometry::Sphere(Sphere {
+            radius: 2.0,
+            zmin: -2.0,
+            zmax: 1.0,
+            phimax_deg: 360.0
+        })
+    );
+    assert_eq!(
+        s.shapes[4].geometry,
+        Geometry::Disk(Disk {
+            height: 1.0,
+            radius: 3.0,
+            inner_radius: 0.0,
+            phimax_deg: 360.0
+        })
+    );
+    assert_eq!(s.shapes[6].geometry, Geometry::Other);
+    let unsupported: Vec<_> = s.unsupported.iter().map(|n| (n.loc.line, n.message.as_str())).collect();
+    assert_eq!(
+        unsupported,
+        [
+            (5, "a partial sphere (zmin -2, zmax 1, phimax 360) is not supported"),
+            (7, "a partial disk (innerradius 0.5, phimax 360) is not supported"),
+            (8, "shape \"cylinder\" is not supported"),
+            (9, "\"teapot\" is not a pbrt-v4 shape type"),
+        ]
+    );
+    let warnings: Vec<_> = s.warnings.iter().map(|n| (n.loc.line, n.message.as_str())).collect();
+    assert_eq!(
+        warnings,
+        [
+            (
+                2,
+                "trianglemesh: 2 texture coordinates \"uv\" for 3 points; they are ignored"
+            ),
+            (
+                3,
+                "trianglemesh: 7 vertex indices is not a multiple of 3; the last 1 are ignored"
+            ),
+        ]
+    );
+    assert_eq!(s.triangle_count(), 5);
+    // A full sphere given its defaults explicitly is not partial.
+    let s = parse(
+        "WorldBegin\nShape \"sphere\" \"float radius\" 2 \"float zmin\" -2 \"float zmax\" 3 \"float phimax\" 360\n",
+    );
+    assert!(s.unsupported.is_empty(), "{:?}", s.unsupported);
+}
+
+fn ply_ascii(body_faces: &str, nfaces: usize) -> String {
+    format!(
+        "ply\nformat ascii 1.0\ncomment test\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nproperty float s\nproperty float t\n\
+         element face {nfaces}\nproperty list uchar int vertex_indices\nproperty int face_indices\nend_header\n\
+         0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n0 1 0 0 0 1 0 1\n2 2 0 0 0 1 0.5 0.5\n{body_faces}"
+    )
+}
+
+fn ply_binary(big_endian: bool) -> Vec<u8> {
+    let fmt = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut b = format!(
+        "ply\nformat {fmt} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         property float u\nproperty float v\nelement face 2\nproperty list uchar uint vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    let f = |b: &mut Vec<u8>, v: f32| b.extend(if big_endian { v.to_be_bytes() } else { v.to_le_bytes() });
+    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+        for v in [x, y, 0.0, x, y] {
+            f(&mut b, v);
+        }
+    }
+    let u = |b: &mut Vec<u8>, v: u32| b.extend(if big_endian { v.to_be_bytes() } else { v.to_le_bytes() });
+    b.push(4);
+    for i in [0, 1, 2, 3] {
+        u(&mut b, i);
+    }
+    b.push(3);
+    for i in [0, 2, 3] {
+        u(&mut b, i);
+    }
+    b
+}
+
+#[test]
+fn ply_meshes_read_uv_normals_quads_and_gzip() {
+    let ascii = ply_ascii("4 0 1 2 3 7\n3 0 2 4 8\n5 0 1 2 3 4 9\n", 3);
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut gz, &ply_binary(true)).unwrap();
+    let files = Files::default()
+        .with("scene/m/a.ply", &ascii)
+        .with("scene/m/le.ply", ply_binary(false))
+        .with("scene/m/be.ply.gz", gz.finish().unwrap());
+    let s = parse_with(
+        "WorldBegin\nShape \"plymesh\" \"string filename\" \"m/a.ply\"\n\
+         Shape \"plymesh\" \"string filename\" \"m/le.ply\"\n\
+         Shape \"plymesh\" \"string filename\" \"m/be.ply.gz\"\n\
+         Shape \"plymesh\" \"string filename\" \"m/a.ply\" \"texture displacement\" \"d\"\n",
+        files,
+    )
+    .unwrap();
+    let a = mesh(&s.shapes[0]);
+    // The quad (f0 f1 f2 f3) becomes (f0 f1 f2), (f0 f2 f3); the pentagon is skipped.
+    assert_eq!(a.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 4]]);
+    assert_eq!(a.quads_split, 1);
+    assert_eq!(a.uvs.as_ref().unwrap()[4], Vec2::new(0.5, 0.5));
+    assert_eq!(a.normals.as_ref().unwrap()[1], Vec3::Z);
+    assert_eq!(a.file.as_deref(), Some(Path::new("scene/m/a.ply")));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("1 faces of other than 3 or 4 vertices skipped")));
+    let le = mesh(&s.shapes[1]);
+    let be = mesh(&s.shapes[2]);
+    assert_eq!(
+        le,
+        &TriMesh {
+            file: le.file.clone(),
+            ..be.clone()
+        }
+    );
+    assert_eq!(le.triangles, [[0, 1, 2], [0, 2, 3], [0, 2, 3]]);
+    assert_eq!(le.uvs.as_ref().unwrap()[2], Vec2::ONE);
+    assert_eq!(le.normals, None);
+    // The same file is read once and shared.
+    assert!(Arc::ptr_eq(
+        match &s.shapes[0].geometry {
+            Geometry::Mesh(m) => m,
+            _ => unreachable!(),
+        },
+        match &s.shapes[3].geometry {
+            Geometry::Mesh(m) => m,
+            _ => unreachable!(),
+        }
+    ));
+    assert!(s.unsupported.iter().any(|n| n.message.contains("displacement")));
+    assert_eq!(s.files.len(), 4);
+}
+
+/// The binary PLY without its last index.
+fn truncated_binary() -> Vec<u8> {
+    let b = ply_binary(false);
+    b[..b.len() - 4].to_vec()
+}
+
+#[test]
+fn malformed_ply_files_are_errors_naming_the_shape_and_the_file() {
+    let cases: &[(Vec<u8>, &str)] = &[
+        (
+            ply_ascii("3 0 1 5\n", 1).into_bytes(),
+            "scene/x.ply: line 22: face 0 has vertex index 5, out of range (0..5)",
+        ),
+        (
+            ply_ascii("3 0 1\n", 1).into_bytes(),
+            "scene/x.ply: line 22: the file ends early",
+        ),
+        (ply_ascii("3 0 1 z\n", 1).into_bytes(), "bad number 'z'"),
+        (
+            b"ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\nend_header\n1\n".to_vec(),
+            "line 3: element 'vertex' declares 1000000000 items",
+        ),
+        (b"plx\n".to_vec(), "not a PLY file"),
+        (truncated_binary(), "the file ends early"),
+    ];
+    for (bytes, what) in cases {
+        let files = Files::default().with("scene/x.ply", bytes);
+        let e = error_with(
+            "WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n",
+            files,
+            "scene/main.pbrt:2:1: plymesh \"x.ply\": scene/x.ply: ",
+        );
+        assert!(e.contains(what), "'{e}' does not say '{what}'");
+    }
+    // The binary file's error names the offset where the missing index starts.
+    let cut = truncated_binary();
+    let files = Files::default().with("scene/x.ply", &cut);
+    let e = error_with(
+        "WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n",
+        files,
+        "scene/main.pbrt:2:1",
+    );
+    assert!(
+        e.ends_with(&format!("byte offset {}: the file ends early", cut.len())),
+        "{e}"
+    );
+    let files = Files::default().with("scene/x.ply.gz", b"not gzip");
+    let e = error_with(
+        "WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply.gz\"\n",
+        files,
+        "scene/main.pbrt:2:1: plymesh \"x.ply.gz\"",
+    );
+    assert!(e.contains("cannot decompress"), "{e}");
+}
+
+// ---- the real scenes --------------------------------------------------------
+
+/// `../shared/bitterli/NAME/scene-v4.pbrt` beside the repository; under CI
+/// (`CI` set) it must be there, elsewhere a missing copy skips the test.
+fn bitterli(name: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/bitterli")
+        .join(name)
+        .join("scene-v4.pbrt");
+    if path.is_file() {
+        return Some(path);
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!("{} is missing (CI must have ../shared/bitterli)", path.display());
+    }
+    eprintln!("skipped: {} is not there", path.display());
+    None
+}
+
+fn mesh_of(s: &PbrtScene, i: usize) -> &TriMesh {
+    mesh(&s.shapes[i])
+}
+
+#[test]
+fn bitterli_cornell_box_reads_as_written() {
+    let Some(path) = bitterli("cornell-box") else { return };
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 8);
+    assert_eq!(s.materials.len(), 9); // 8 named and the default
+    assert_eq!(s.area_lights.len(), 1);
+    assert_eq!(s.lights.len(), 0);
+    assert_eq!(s.triangle_count(), 36);
+    assert_eq!(s.integrator.ty, "path");
+    assert_eq!(s.integrator.params.get_int("maxdepth", 5).unwrap(), 65);
+    assert_eq!(s.sampler.params.get_int("pixelsamples", 16).unwrap(), 512);
+    assert_eq!(s.filter.ty, "gaussian");
+    assert_eq!(s.filter.params.get_float("xradius", 0.0).unwrap(), 1.5);
+    assert_eq!(s.film.params.get_int("xresolution", 0).unwrap(), 1024);
+    assert_eq!(s.camera.params.get_float("fov", 90.0).unwrap(), 19.5);
+    // Transform [1 0 0 0  0 1 0 0  0 0 -1 0  0 -1 6.8 1]: the eye at (0, 1, 6.8).
+    assert_vec(point(s.camera.world_from_camera, Vec3::ZERO), Vec3::new(0.0, 1.0, 6.8));
+    assert_vec(
+        s.camera.world_from_camera.transform_vector3(Vec3::Z),
+        Vec3::new(0.0, 0.0, -1.0),
+    );
+    let light = &s.shapes[7];
+    let area = &s.area_lights[light.area_light.unwrap()];
+    assert_eq!(area.params.get_rgb("L").unwrap(), Some(Vec3::new(17.0, 12.0, 4.0)));
+    assert_eq!(s.materials[light.material].name.as_deref(), Some("Light"));
+    assert_eq!(light.loc.to_string(), format!("{}:147:5", path.display()));
+    let left = s.named_material("LeftWall").unwrap();
+    assert_eq!(
+        left.params.get_rgb("reflectance").unwrap(),
+        Some(Vec3::new(0.63, 0.065, 0.05))
+    );
+    // The light faces down: its triangles' normal (pbrt's rule) is -y.
+    let m = mesh_of(&s, 7);
+    let p = m.triangles[0].map(|i| light.world_from_object.transform_point3(m.positions[i as usize]));
+    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    assert!(!light.flips_normals() && n.y < 0.0, "{n}");
+    assert!(s.unsupported.is_empty(), "{:?}", s.unsupported);
+}
+
+#[test]
+fn bitterli_veach_mis_reads_as_written() {
+    let Some(path) = bitterli("veach-mis") else { return };
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 9);
+    assert_eq!(s.materials.len(), 7);
+    assert_eq!(s.area_lights.len(), 3);
+    let spheres: Vec<_> = s
+        .shapes
+        .iter()
+        .filter_map(|x| match x.geometry {
+            Geometry::Sphere(sp) => Some((sp.radius, point(x.world_from_object, Vec3::ZERO), x.area_light)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(spheres.len(), 3);
+    assert_eq!(spheres[0].0, 1.0);
+    assert_eq!(spheres[2].0, 0.05);
+    assert_vec(spheres[0].1, Vec3::new(0.0, 6.5, -2.8));
+    assert_vec(spheres[2].1, Vec3::new(0.0, 6.5, 2.7));
+    let radiance: Vec<_> = spheres
+        .iter()
+        .map(|sp| s.area_lights[sp.2.unwrap()].params.get_rgb("L").unwrap().unwrap().x)
+        .collect();
+    assert_eq!(radiance, [7.599088, 30.396353, 3039.6353]);
+    let smooth = s.named_material("Smooth").unwrap();
+    assert_eq!(smooth.ty, "conductor");
+    assert_eq!(smooth.params.get_float("uroughness", 0.0).unwrap(), 0.01);
+    assert!(!smooth.params.get_bool("remaproughness", true).unwrap());
+    assert_eq!(
+        smooth.params.get_spectrum("eta").unwrap(),
+        Some(SpectrumValue::Rgb(Vec3::new(0.200438, 0.924033, 1.102212)))
+    );
+    assert_eq!(s.film.params.get_int("xresolution", 0).unwrap(), 1280);
+    assert_eq!(s.integrator.params.get_int("maxdepth", 5).unwrap(), 3);
+    assert_eq!(s.filter.ty, "triangle");
+}
+
+#[test]
+fn bitterli_water_caustic_reads_as_written() {
+    let Some(path) = bitterli("water-caustic") else { return };
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 10);
+    assert_eq!(s.materials.len(), 10);
+    assert_eq!(s.area_lights.len(), 1);
+    assert_eq!(s.integrator.ty, "sppm");
+    assert_eq!(s.integrator.params.get_float("radius", 0.0).unwrap(), 0.01);
+    assert_eq!(s.integrator.params.get_int("maxdepth", 0).unwrap(), 9);
+    let water = s.named_material("Water").unwrap();
+    assert_eq!(water.ty, "dielectric");
+    assert_eq!(water.params.get_float("eta", 1.5).unwrap(), 1.8);
+    // Two PLY meshes, stretched by 1.5 in y.
+    let surface = mesh_of(&s, 8);
+    assert_eq!(surface.positions.len(), 63768);
+    assert_eq!(surface.triangles.len(), 102938);
+    assert!(surface.normals.is_some() && surface.uvs.is_some());
+    assert_vec(surface.positions[0], Vec3::new(-0.329465, 1.048474, 1.0));
+    let bottom = mesh_of(&s, 9);
+    assert_eq!((bottom.positions.len(), bottom.triangles.len()), (519, 513));
+    assert!(bottom.normals.is_none() && bottom.uvs.is_some());
+    assert_mat(
+        s.shapes[9].world_from_object,
+        Mat4::from_scale(Vec3::new(1.0, 1.5, 1.0)),
+    );
+    assert_eq!(s.materials[s.shapes[9].material].name.as_deref(), Some("Water"));
+    let area = &s.area_lights[s.shapes[7].area_light.unwrap()];
+    assert_eq!(
+        area.params.get_rgb("L").unwrap(),
+        Some(Vec3::new(541126.75, 381971.8, 127323.94))
+    );
+    assert_eq!(s.files.len(), 3);
+}
+
+// ---- robustness ---------------------------------------------------------------
+
+/// A small deterministic generator (SplitMix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+const SAMPLE: &str = r#"LookAt 0 1 -5  0 1 0  0 1 0
+Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 64 ] "integer yresolution" [ 64 ]
+WorldBegin
+Texture "t" "spectrum" "checkerboard" "rgb tex1" [ 1 1 1 ]
+MakeNamedMaterial "white" "string type" [ "diffuse" ] "texture reflectance" "t"
+AttributeBegin
+  AreaLightSource "diffuse" "blackbody L" [ 5000 ]
+  Translate 0 2 0
+  Shape "bilinearmesh" "point3 P" [ -1 0 -1 1 0 -1 -1 0 1 1 0 1 ]
+AttributeEnd
+ObjectBegin "o"
+  NamedMaterial "white"
+  Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]
+ObjectEnd
+Scale -1 1 1
+ObjectInstance "o"
+Include "inc.pbrt"
+Shape "plymesh" "string filename" "m.ply"
+"#;
+
+#[test]
+fn truncated_and_mutated_scenes_never_panic() {
+    let base = match bitterli("cornell-box") {
+        Some(p) => std::fs::read_to_string(p).unwrap(),
+        None => SAMPLE.to_string(),
+    };
+    let ply = ply_ascii("4 0 1 2 3 7\n3 0 2 4 8\n", 2);
+    let pieces: &[&[u8]] = &[
+        b" ",
+        b"\n",
+        b"[",
+        b"]",
+        b"\"",
+        b"#",
+        b"\\",
+        b"-",
+        b"1e38",
+        b"AttributeBegin",
+        b"AttributeEnd",
+        b"ObjectBegin \"o\"",
+        b"ObjectEnd",
+        b"Include \"inc.pbrt\"",
+        b"Import \"main.pbrt\"",
+        b"\xff",
+        b"0",
+        b"e",
+        b"\"integer indices\" [ 0 1 99 ]",
+        b"Shape \"plymesh\" \"string filename\" \"m.ply\"",
+        b"WorldBegin",
+    ];
+    let mut rng = Rng(0x5eed);
+    // Unchanged, the sample loads.
+    let files = Files::default()
+        .with("scene/main.pbrt", SAMPLE)
+        .with("scene/inc.pbrt", "Shape \"sphere\"\n")
+        .with("scene/m.ply", &ply);
+    let s = load_from(Path::new("scene/main.pbrt"), &files).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 4);
+    for text in [base.as_bytes(), SAMPLE.as_bytes()] {
+        let run = |bytes: Vec<u8>, ply: &[u8]| {
+            let files = Files::default()
+                .with("scene/main.pbrt", &bytes)
+                .with("scene/inc.pbrt", "Shape \"sphere\"\n")
+                .with("scene/m.ply", ply);
+            let _ = load_from(Path::new("scene/main.pbrt"), &files);
+        };
+        // Every truncation on a stride, and random ones.
+        for cut in (0..text.len()).step_by(7) {
+            run(text[..cut].to_vec(), ply.as_bytes());
+        }
+        for _ in 0..300 {
+            let mut bytes = text.to_vec();
+            for _ in 0..1 + rng.below(4) {
+                let at = rng.below(bytes.len() + 1);
+                match rng.below(3) {
+                    0 if at < bytes.len() => {
+                        let end = (at + 1 + rng.below(12)).min(bytes.len());
+                        bytes.drain(at..end);
+                    }
+                    1 => {
+                        let piece = pieces[rng.below(pieces.len())];
+                        bytes.splice(at..at, piece.iter().copied());
+                    }
+                    _ if at < bytes.len() => bytes[at] = rng.next() as u8,
+                    _ => {}
+                }
+            }
+            let mut p = ply.as_bytes().to_vec();
+            let at = rng.below(p.len());
+            p[at] = rng.next() as u8;
+            run(bytes, &p[..p.len() - rng.below(20)]);
+        }
+    }
+}
