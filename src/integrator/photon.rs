@@ -237,14 +237,18 @@ pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<Ph
         stats.load_seconds = start.elapsed().as_secs_f64();
         return Ok(PhotonMaps { global, caustic, stats });
     }
-    let (global, mut stats) = match ps.photons {
+    let (global, stats) = match ps.photons {
         0 => (None, PhotonStats::default()),
         _ => {
             let (m, s) = crate::photon::build_map(scene, &ps, settings.seed);
             (Some(m), s)
         }
     };
-    let caustic = crate::photon::build_caustic_map(scene, &ps, settings.seed, &mut stats);
+    let PhotonMaps {
+        global,
+        caustic,
+        mut stats,
+    } = with_caustics(scene, settings, global, stats);
     if let Some(path) = &settings.files.save_photons {
         let start = std::time::Instant::now();
         let mut stored: Vec<file::StoredMap> = [
@@ -269,39 +273,80 @@ pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<Ph
     Ok(PhotonMaps { global, caustic, stats })
 }
 
+/// The maps of a render whose global map is traced (or not asked for): the
+/// caustic map is traced after it, as `photon_maps` does. The preview, which
+/// traces its global map in resumable chunks, finishes it here too.
+pub fn with_caustics(
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    global: Option<PhotonMap>,
+    mut stats: PhotonStats,
+) -> PhotonMaps {
+    let ps = map_settings(settings);
+    let caustic = crate::photon::build_caustic_map(scene, &ps, settings.seed, &mut stats);
+    PhotonMaps { global, caustic, stats }
+}
+
+/// What a photon-mapped render reads while it shades: the maps and, when
+/// asked for, the irradiance precomputed from the global map. The offline
+/// render and the preview both shade through it.
+pub struct PhotonPipeline {
+    maps: PhotonMaps,
+    precomputed: Option<PrecomputedIrradiance>,
+    settings: PhotonSettings,
+    shadow_samples: u32,
+}
+
+impl PhotonPipeline {
+    /// Precomputes the irradiance if the settings ask for it.
+    pub fn new(mut maps: PhotonMaps, settings: &super::RenderSettings) -> Self {
+        let ps = map_settings(settings);
+        let precomputed = match &maps.global {
+            Some(map) if ps.precompute_irradiance => {
+                let start = std::time::Instant::now();
+                let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings));
+                maps.stats.precompute_seconds = start.elapsed().as_secs_f64();
+                Some(pre)
+            }
+            _ => None,
+        };
+        PhotonPipeline {
+            maps,
+            precomputed,
+            settings: ps,
+            shadow_samples: settings.shadow_samples,
+        }
+    }
+
+    pub fn maps(&self) -> &PhotonMaps {
+        &self.maps
+    }
+
+    /// The radiance estimator over these maps.
+    pub fn estimator(&self) -> PhotonMapping<'_> {
+        PhotonMapping {
+            map: self.maps.global.as_ref(),
+            gather: self.settings.gather,
+            caustics: self.maps.caustic.as_ref(),
+            caustic_radius: self.settings.caustic_radius,
+            shadow_samples: self.shadow_samples,
+            final_gather: self.settings.final_gather,
+            precomputed: self.precomputed.as_ref(),
+        }
+    }
+}
+
 /// Gets the photon maps (if any photons are asked for), then renders.
 pub fn render(
     scene: &Scene,
     settings: &super::RenderSettings,
     on_tile: super::Progress,
 ) -> Result<((crate::Film, RayStats, u64), Option<PhotonStats>)> {
-    let ps = map_settings(settings);
-    let PhotonMaps {
-        global,
-        caustic,
-        mut stats,
-    } = photon_maps(scene, settings)?;
-    let precomputed = match &global {
-        Some(map) if ps.precompute_irradiance => {
-            let start = std::time::Instant::now();
-            let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings));
-            stats.precompute_seconds = start.elapsed().as_secs_f64();
-            Some(pre)
-        }
-        _ => None,
-    };
-    let est = PhotonMapping {
-        map: global.as_ref(),
-        gather: ps.gather,
-        caustics: caustic.as_ref(),
-        caustic_radius: ps.caustic_radius,
-        shadow_samples: settings.shadow_samples,
-        final_gather: ps.final_gather,
-        precomputed: precomputed.as_ref(),
-    };
-    let out = super::render_tiles(scene, settings, &est, on_tile);
-    let any = global.is_some() || caustic.is_some();
-    Ok((out, any.then_some(stats)))
+    let pipeline = PhotonPipeline::new(photon_maps(scene, settings)?, settings);
+    let out = super::render_tiles(scene, settings, &pipeline.estimator(), on_tile);
+    let maps = pipeline.maps();
+    let any = maps.global.is_some() || maps.caustic.is_some();
+    Ok((out, any.then(|| maps.stats.clone())))
 }
 
 #[cfg(test)]

@@ -19,12 +19,11 @@
 //! photons at all.
 //!
 use crate::film::Film;
-use crate::integrator::photon::{global_admit, map_settings, PhotonMapping};
+use crate::integrator::photon::{map_settings, with_caustics, PhotonPipeline};
 use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstimator, RayStats, RenderSettings};
 use crate::math::Vec3;
-use crate::photon::estimate::{Admit, PrecomputedIrradiance};
 use crate::photon::trace::ResumableTrace;
-use crate::photon::{build_caustic_map, map_from_trace, PhotonMap, PhotonSettings, PhotonStats};
+use crate::photon::{map_from_trace, PhotonMap, PhotonStats};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -96,47 +95,33 @@ impl ViewIntegrator for DirectView {
 /// Photon mapping: direct light by shadow rays plus indirect light from a
 /// photon map traced for the current light positions.
 pub struct PhotonView {
-    photon: PhotonSettings,
-    seed: u64,
-    shadow_samples: u32,
+    settings: RenderSettings,
     quick: direct::DirectLighting,
     /// The trace in progress, when the map is not there yet.
     trace: Option<ResumableTrace>,
     /// Time spent on the trace in progress, over its runs.
     trace_seconds: f64,
-    /// The map for the current lights; `None` until traced (and always when
-    /// no photons are asked for, which renders direct light as offline).
-    map: Option<PhotonMap>,
-    /// The caustic map and the precomputed irradiance, when the settings ask
-    /// for them: made after the global map, as the offline render does.
-    caustic: Option<PhotonMap>,
-    precomputed: Option<PrecomputedIrradiance>,
-    admit: Admit,
-    ready: bool,
+    /// The offline render's maps and precomputed irradiance for the current
+    /// lights; `None` until traced.
+    pipeline: Option<PhotonPipeline>,
 }
 
 impl PhotonView {
     pub fn new(settings: &RenderSettings) -> Self {
         PhotonView {
-            photon: map_settings(settings),
-            seed: settings.seed,
-            shadow_samples: settings.shadow_samples,
+            settings: settings.clone(),
             quick: direct::DirectLighting {
                 shadow_samples: settings.shadow_samples.min(1),
             },
             trace: None,
             trace_seconds: 0.0,
-            map: None,
-            caustic: None,
-            precomputed: None,
-            admit: global_admit(settings),
-            ready: false,
+            pipeline: None,
         }
     }
 
     /// The photon map for the current lights, once `prepare` has finished.
     pub fn map(&self) -> Option<&PhotonMap> {
-        self.map.as_ref()
+        self.pipeline.as_ref().and_then(|p| p.maps().global.as_ref())
     }
 }
 
@@ -144,52 +129,50 @@ impl ViewIntegrator for PhotonView {
     fn light_moved(&mut self) {
         self.trace = None;
         self.trace_seconds = 0.0;
-        self.map = None;
-        self.caustic = None;
-        self.precomputed = None;
-        self.ready = false;
+        self.pipeline = None;
     }
 
     fn prepare(&mut self, scene: &Scene, _settings: &RenderSettings, cancel: &AtomicBool) -> bool {
-        if self.ready {
+        if self.pipeline.is_some() {
             return true;
         }
-        if self.photon.photons > 0 {
-            // The same trace as the offline render's `build_map`, in resumable chunks.
+        let photon = map_settings(&self.settings);
+        let mut global = None;
+        let mut stats = PhotonStats::default();
+        if photon.photons > 0 {
+            // The offline render's `build_map`, in resumable chunks.
             let start = std::time::Instant::now();
             let trace = self
                 .trace
-                .get_or_insert_with(|| ResumableTrace::new(scene, &self.photon, self.seed));
+                .get_or_insert_with(|| ResumableTrace::new(scene, &photon, self.settings.seed));
             let complete = trace.run(scene, &|| cancel.load(Ordering::Relaxed));
             self.trace_seconds += start.elapsed().as_secs_f64();
             if !complete {
                 return false;
             }
-            let traced = self.trace.take().map(ResumableTrace::finish);
-            self.map = traced.map(|t| map_from_trace(t, self.trace_seconds).0);
-        }
-        // Neither is cancellable; both take a fraction of the global trace's time.
-        self.caustic = build_caustic_map(scene, &self.photon, self.seed, &mut PhotonStats::default());
-        self.precomputed = match &self.map {
-            Some(map) if self.photon.precompute_irradiance => {
-                Some(PrecomputedIrradiance::build(map, &self.photon.gather, self.admit))
+            if let Some((map, s)) = self
+                .trace
+                .take()
+                .map(|t| map_from_trace(t.finish(), self.trace_seconds))
+            {
+                (global, stats) = (Some(map), s);
             }
-            _ => None,
-        };
-        self.ready = true;
+        }
+        // The rest as offline; neither part is cancellable, and both take a
+        // fraction of the global trace's time.
+        let maps = with_caustics(scene, &self.settings, global, stats);
+        self.pipeline = Some(PhotonPipeline::new(maps, &self.settings));
         true
     }
 
     fn estimator(&self) -> Box<dyn RadianceEstimator + '_> {
-        Box::new(PhotonMapping {
-            map: self.map.as_ref(),
-            gather: self.photon.gather,
-            caustics: self.caustic.as_ref(),
-            caustic_radius: self.photon.caustic_radius,
-            shadow_samples: self.shadow_samples,
-            final_gather: self.photon.final_gather,
-            precomputed: self.precomputed.as_ref(),
-        })
+        match &self.pipeline {
+            Some(p) => Box::new(p.estimator()),
+            // Not prepared: nothing but direct light is known.
+            None => Box::new(direct::DirectLighting {
+                shadow_samples: self.settings.shadow_samples,
+            }),
+        }
     }
 
     fn low_res_estimator(&self) -> &dyn RadianceEstimator {
@@ -198,8 +181,8 @@ impl ViewIntegrator for PhotonView {
 
     fn pending(&self) -> Option<String> {
         match &self.trace {
-            Some(t) if !self.ready => Some(format!("tracing photons {:.0}%", 100.0 * t.progress())),
-            None if !self.ready && self.photon.photons > 0 => Some("tracing photons".into()),
+            Some(t) if self.pipeline.is_none() => Some(format!("tracing photons {:.0}%", 100.0 * t.progress())),
+            None if self.pipeline.is_none() && self.settings.photon.photons > 0 => Some("tracing photons".into()),
             _ => None,
         }
     }
