@@ -8,7 +8,7 @@
 //! apply to the shape's type, an unknown material) can point at it too.
 //! The file's types are in `types`; here is one parse function per table.
 
-use super::mesh::{load_mesh_timed_from, Disk, FileSource};
+use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::transform::{Fit, Transform};
 use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::error::{Error, Result};
@@ -79,8 +79,35 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
     })?;
 
-    let cam_span = file.camera.span();
-    let cam = file.camera.into_inner();
+    let camera = camera(&src, &file.camera)?;
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    let mut desc = SceneDesc::empty(&name, camera);
+    if let Some(table) = &file.settings {
+        desc.settings = scene_settings(&src, table)?;
+    }
+
+    // Materials, checked here and numbered in order of first use.
+    let materials = materials(&src, &file.materials)?;
+    for l in &file.lights {
+        desc.lights.push(light(&src, l)?);
+    }
+
+    let meshes = shapes(&src, &file.shapes, &materials, opts, files, &mut desc)?;
+    // Materials no shape uses still belong to the scene, after the used ones.
+    for (name, m) in &materials {
+        desc.material(name, *m);
+    }
+    Ok(LoadedScene { desc, meshes })
+}
+
+/// The `[camera]` table.
+fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
+    let cam_span = spanned.span();
+    let cam = spanned.get_ref();
     let camera = CameraDesc {
         position: cam.position.0,
         look_at: cam.look_at.0,
@@ -98,19 +125,13 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     // An absurd size is refused here, at its line, before anything is sized by it.
     crate::limits::check_resolution(camera.width, camera.height)
         .map_err(|m| src.error(cam_span.clone(), format!("camera {m}")))?;
-    let name = file.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    });
-    let mut desc = SceneDesc::empty(&name, camera);
-    if let Some(table) = &file.settings {
-        desc.settings = scene_settings(&src, table)?;
-    }
+    Ok(camera)
+}
 
-    // Materials, checked here and numbered in order of first use.
+/// The `[materials.NAME]` tables.
+fn materials(src: &Source, specs: &BTreeMap<String, Spanned<MaterialSpec>>) -> Result<BTreeMap<String, Material>> {
     let mut materials = BTreeMap::new();
-    for (name, spec) in &file.materials {
+    for (name, spec) in specs {
         let m = match spec.get_ref().kind {
             MaterialKind::Diffuse => {
                 let Some(a) = spec.get_ref().albedo else {
@@ -160,6 +181,19 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
         materials.insert(name.clone(), m);
     }
+    Ok(materials)
+}
+
+/// The `[[shapes]]` tables, added to `desc`; returns what loading each mesh took.
+fn shapes(
+    src: &Source,
+    specs: &[Spanned<ShapeSpec>],
+    materials: &BTreeMap<String, Material>,
+    opts: &LoadOptions,
+    files: &dyn FileSource,
+    desc: &mut SceneDesc,
+) -> Result<Vec<MeshReport>> {
+    let path = src.path;
     let material = |desc: &mut SceneDesc, name: &Spanned<String>| -> Result<u32> {
         match materials.get(name.get_ref()) {
             Some(m) => Ok(desc.material(name.get_ref(), *m)),
@@ -174,15 +208,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
     };
 
-    for l in &file.lights {
-        desc.lights.push(light(&src, l)?);
-    }
-
-    let mesh_count = file
-        .shapes
-        .iter()
-        .filter(|s| s.get_ref().kind == ShapeKind::Mesh)
-        .count();
+    let mesh_count = specs.iter().filter(|s| s.get_ref().kind == ShapeKind::Mesh).count();
     if let Some(p) = &opts.mesh {
         if mesh_count != 1 {
             return Err(Error::InvalidSetting(format!(
@@ -194,7 +220,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     }
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut meshes = vec![];
-    for spanned in &file.shapes {
+    for spanned in specs {
         let span = spanned.span();
         let s = spanned.get_ref();
         let kind = s.kind.name();
@@ -206,7 +232,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
         let need = |key: &str| err(format!("missing `{key}`"));
         let mat = match &s.material {
-            Some(m) => Some(material(&mut desc, m)?),
+            Some(m) => Some(material(desc, m)?),
             None if s.kind == ShapeKind::Mesh => None,
             None => return Err(need("material")),
         };
@@ -282,16 +308,12 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
                     None => missing_mesh(&src, span.clone(), e),
                 })?;
                 let smooth = s.smooth.unwrap_or(false) || opts.smooth;
-                mesh.add_to_scene(&mut desc, &transform, mat, smooth)?;
+                mesh.add_to_scene(desc, &transform, mat, smooth)?;
                 meshes.push(report);
             }
         }
     }
-    // Materials no shape uses still belong to the scene, after the used ones.
-    for (name, m) in &materials {
-        desc.material(name, *m);
-    }
-    Ok(LoadedScene { desc, meshes })
+    Ok(meshes)
 }
 
 /// The `[settings]` table: each key a setting of the table in
