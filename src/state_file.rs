@@ -130,6 +130,16 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 h.vec3(position);
                 h.vec3(power);
             }
+            Light::Triangle {
+                vertices,
+                radiance,
+                two_sided,
+            } => {
+                h.u32(2);
+                vertices.iter().for_each(|&v| h.vec3(v));
+                h.vec3(radiance);
+                h.u32(two_sided as u32);
+            }
         }
     }
     if camera {

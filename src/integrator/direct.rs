@@ -21,7 +21,7 @@ impl RadianceEstimator for DirectLighting {
             return Vec3::ZERO;
         };
         if let Some(l) = hit.light {
-            return beta * scene.lights[l as usize].radiance();
+            return beta * scene.lights[l as usize].le(wo);
         }
         let m = scene.material(hit.material);
         beta * (m.le() + m.f() * irradiance(scene, &hit, wo, self.shadow_samples, rng, stats))

@@ -61,7 +61,7 @@ impl RadianceEstimator for PathTracer {
         while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
             if let Some(li) = hit.light {
                 if depth == 0 || specular {
-                    l += beta * scene.lights[li as usize].radiance();
+                    l += beta * scene.lights[li as usize].le(-ray.d);
                 }
                 break;
             }

@@ -129,7 +129,7 @@ impl PhotonMapping<'_> {
                     // Shadow rays counted this light, or the caustic map did
                     // when it came through mirrors or glass.
                     if self.shadow_samples == 0 && depth == 0 {
-                        sum += scene.lights[l as usize].radiance();
+                        sum += scene.lights[l as usize].le(-ray.d);
                     }
                     break;
                 }
@@ -158,7 +158,7 @@ impl RadianceEstimator for PhotonMapping<'_> {
             return Vec3::ZERO;
         };
         if let Some(l) = hit.light {
-            return beta * scene.lights[l as usize].radiance();
+            return beta * scene.lights[l as usize].le(wo);
         }
         let m = scene.material(hit.material);
         let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats) + self.caustic_irradiance(&hit, wo);

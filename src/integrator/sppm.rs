@@ -334,7 +334,7 @@ fn visible_point(
 ) -> Option<VisiblePoint> {
     let (hit, wo, beta) = first_diffuse_hit(scene, ray, rng, stats)?;
     if let Some(l) = hit.light {
-        px.direct += beta * scene.lights[l as usize].radiance();
+        px.direct += beta * scene.lights[l as usize].le(wo);
         return None;
     }
     let m = scene.material(hit.material);

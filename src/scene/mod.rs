@@ -168,6 +168,8 @@ struct TriInfo {
     material: u32,
     object: u32,
     normal: Vec3,
+    /// The triangle light it is, if any.
+    light: Option<u32>,
 }
 
 #[derive(Clone, Debug)]
@@ -231,6 +233,7 @@ impl Scene {
                 material: t.material,
                 object: i as u32,
                 normal: n.normalize(),
+                light: None,
             });
             normals.push(
                 t.normals
@@ -267,15 +270,33 @@ impl Scene {
                 return Err(Error::Scene(format!("invalid light {l:?}")));
             }
             // Emitters reflect nothing and block light like any surface.
-            if let Light::Sphere { sphere, .. } = l {
-                if !sphere.radius.is_finite() || sphere.radius <= 0.0 {
-                    return Err(Error::Scene(format!("invalid light radius {}", sphere.radius)));
+            match l {
+                Light::Sphere { sphere, .. } => {
+                    if !sphere.radius.is_finite() || sphere.radius <= 0.0 {
+                        return Err(Error::Scene(format!("invalid light radius {}", sphere.radius)));
+                    }
+                    spheres.push(SphereObject {
+                        sphere: *sphere,
+                        material: black,
+                        light: Some(i as u32),
+                    });
                 }
-                spheres.push(SphereObject {
-                    sphere: *sphere,
-                    material: black,
-                    light: Some(i as u32),
-                });
+                Light::Triangle { vertices: v, .. } => {
+                    let tri = Triangle::new(v[0], v[1], v[2]);
+                    let n = tri.normal_raw();
+                    if !v.iter().all(|p| p.is_finite()) || !n.is_finite() || n.length_squared() == 0.0 {
+                        return Err(Error::Scene(format!("light {i}: a triangle of zero area")));
+                    }
+                    tris.push(tri);
+                    info.push(TriInfo {
+                        material: black,
+                        object: (desc.triangles.len() + desc.spheres.len() + i) as u32,
+                        normal: n.normalize(),
+                        light: Some(i as u32),
+                    });
+                    normals.push(None);
+                }
+                Light::Point { .. } => {}
             }
         }
 
@@ -357,8 +378,12 @@ impl Scene {
                 ns,
                 material: inf.material,
                 object: inf.object,
-                kind: PrimKind::Triangle,
-                light: None,
+                kind: if inf.light.is_some() {
+                    PrimKind::Light
+                } else {
+                    PrimKind::Triangle
+                },
+                light: inf.light,
             })
         } else {
             let s = &self.spheres[idx];
@@ -411,10 +436,11 @@ impl Scene {
         let Some(light) = self.lights.get_mut(index) else {
             return;
         };
-        match light {
-            Light::Sphere { sphere, .. } => sphere.centre = position,
-            Light::Point { position: p, .. } => *p = position,
+        if matches!(light, Light::Triangle { .. }) {
+            // Its triangle is in the BVH: moving it would mean a rebuild.
+            return;
         }
+        light.move_to(position);
         if let Some(l) = self.desc.lights.get_mut(index) {
             *l = *light;
         }

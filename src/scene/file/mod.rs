@@ -93,7 +93,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     // Materials, checked here and numbered in order of first use.
     let materials = materials(&src, &file.materials)?;
     for l in &file.lights {
-        desc.lights.push(light(&src, l)?);
+        desc.lights.extend(light(&src, l)?);
     }
 
     let meshes = shapes(&src, &file.shapes, &materials, opts, files, &mut desc)?;
@@ -436,40 +436,90 @@ fn box_triangles(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
         .collect()
 }
 
-fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Light> {
+fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
     let l = spanned.get_ref();
     let err = |m: String| src.error(spanned.span(), m);
+    let kind = match l.kind {
+        LightKind::Sphere => "sphere",
+        LightKind::Point => "point",
+        LightKind::Triangle => "triangle",
+        LightKind::Quad => "quad",
+    };
     let colour = l.colour.map_or(Vec3::ONE, |c| c.0);
-    if colour.min_element() < 0.0 || l.power.0 < 0.0 {
+    if colour.min_element() < 0.0 || l.power.is_some_and(|p| p.0 < 0.0) {
         return Err(err("light power and colour must be >= 0".into()));
     }
-    let power = colour * l.power.0;
+    let area_light = matches!(l.kind, LightKind::Triangle | LightKind::Quad);
+    // Keys that belong to another kind of light are mistakes, not options.
+    let given = [
+        ("centre", l.centre.is_some(), !area_light && l.kind == LightKind::Sphere),
+        ("radius", l.radius.is_some(), l.kind == LightKind::Sphere),
+        ("position", l.position.is_some(), l.kind == LightKind::Point),
+        ("vertices", l.vertices.is_some(), area_light),
+        ("radiance", l.radiance.is_some(), area_light),
+        ("two_sided", l.two_sided.is_some(), area_light),
+    ];
+    if let Some((key, ..)) = given.iter().find(|(_, given, applies)| *given && !applies) {
+        return Err(err(format!("`{key}` does not apply to a {kind} light")));
+    }
+    let power = || -> Result<Vec3> {
+        let p = l.power.ok_or_else(|| err(format!("{kind} light: missing `power`")))?;
+        Ok(colour * p.0)
+    };
     match l.kind {
         LightKind::Sphere => {
-            if l.position.is_some() {
-                return Err(err("a sphere light takes `centre`, not `position`".into()));
-            }
             let centre = l.centre.ok_or_else(|| err("sphere light: missing `centre`".into()))?.0;
             let radius = l.radius.ok_or_else(|| err("sphere light: missing `radius`".into()))?.0;
             if radius <= 0.0 {
                 return Err(err(format!("sphere light: radius {radius} must be > 0")));
             }
-            Ok(Light::Sphere {
+            Ok(vec![Light::Sphere {
                 sphere: Sphere { centre, radius },
-                power,
-            })
+                power: power()?,
+            }])
         }
         LightKind::Point => {
-            if l.centre.is_some() || l.radius.is_some() {
-                return Err(err(
-                    "a point light takes `position` only (no `centre` or `radius`)".into()
-                ));
-            }
             let position = l
                 .position
                 .ok_or_else(|| err("point light: missing `position`".into()))?
                 .0;
-            Ok(Light::Point { position, power })
+            Ok(vec![Light::Point {
+                position,
+                power: power()?,
+            }])
+        }
+        LightKind::Triangle | LightKind::Quad => {
+            let tris: Vec<[Vec3; 3]> = if l.kind == LightKind::Triangle {
+                vec![points::<3>(l.vertices.as_deref(), "vertices").map_err(|m| err(format!("{kind} light: {m}")))?]
+            } else {
+                let [a, b, c, d] =
+                    points::<4>(l.vertices.as_deref(), "vertices").map_err(|m| err(format!("{kind} light: {m}")))?;
+                vec![[a, b, c], [a, c, d]]
+            };
+            let two_sided = l.two_sided.unwrap_or(false);
+            let area: f32 = tris.iter().map(crate::light::triangle_area).sum();
+            if !(area > 0.0 && area.is_finite()) {
+                return Err(err(format!("{kind} light: its area is zero")));
+            }
+            let radiance = match (l.radiance, l.power) {
+                (Some(r), None) => {
+                    if r.0.min_element() < 0.0 {
+                        return Err(err(format!("{kind} light: radiance must be >= 0")));
+                    }
+                    r.0 * colour
+                }
+                // Total power over the emitting sides: L = Phi / (pi A sides).
+                (None, Some(_)) => power()? / (std::f32::consts::PI * area * if two_sided { 2.0 } else { 1.0 }),
+                _ => return Err(err(format!("{kind} light: give `radiance` or `power`, one of them"))),
+            };
+            Ok(tris
+                .into_iter()
+                .map(|vertices| Light::Triangle {
+                    vertices,
+                    radiance,
+                    two_sided,
+                })
+                .collect())
         }
     }
 }

@@ -94,6 +94,8 @@ pub(super) struct MaterialSpec {
 pub(super) enum LightKind {
     Sphere,
     Point,
+    Triangle,
+    Quad,
 }
 
 #[derive(Debug, Deserialize)]
@@ -104,8 +106,12 @@ pub(super) struct LightSpec {
     pub(super) centre: Option<Vec3Spec>,
     pub(super) radius: Option<Num>,
     pub(super) position: Option<Vec3Spec>,
-    pub(super) power: Num,
+    pub(super) power: Option<Num>,
     pub(super) colour: Option<Vec3Spec>,
+    /// Triangle and quad lights: corners, radiance, whether both sides emit.
+    pub(super) vertices: Option<Vec<Vec3Spec>>,
+    pub(super) radiance: Option<Vec3Spec>,
+    pub(super) two_sided: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
