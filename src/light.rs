@@ -174,6 +174,36 @@ impl Light {
         }
     }
 
+    /// `pdf_li` for a direction known to reach the light at `q` (a ray from
+    /// `p` hit it there): no intersection test that could disagree with the
+    /// one that found the hit near an edge or silhouette.
+    pub fn pdf_li_hit(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
+        match self {
+            Light::Point { .. } => 0.0,
+            Light::Sphere { sphere, .. } => {
+                let dc2 = (sphere.centre - p).length_squared();
+                let r2 = sphere.radius * sphere.radius;
+                if dc2 <= r2 {
+                    return 0.0;
+                }
+                let sin2_max = r2 / dc2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                1.0 / (2.0 * PI * (sin2_max / (1.0 + cos_max)))
+            }
+            Light::Triangle {
+                vertices: v, two_sided, ..
+            } => {
+                let cos_l = -triangle_normal(v).dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                let area = triangle_area(v);
+                if cos_l <= 0.0 || area == 0.0 {
+                    return 0.0;
+                }
+                (q - p).length_squared() / (cos_l * area)
+            }
+        }
+    }
+
     /// Solid-angle density with which `sample_li` at `p` picks direction `wi`
     /// (zero where it never does; a point light's is a delta, reported as 0).
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
@@ -364,6 +394,8 @@ mod tests {
                         // The weight is radiance over the solid-angle density.
                         let pdf = l.pdf_li(Vec3::ZERO, s.wi);
                         assert!((s.weight.x * pdf / 3.0 - 1.0).abs() < 1e-3, "{} {pdf}", s.weight.x);
+                        let at = l.pdf_li_hit(Vec3::ZERO, s.wi, s.wi * s.dist);
+                        assert!((at / pdf - 1.0).abs() < 1e-3, "{at} vs {pdf}");
                     }
                 }
             }
@@ -412,6 +444,7 @@ mod tests {
             let s = l.sample_li(Vec3::ZERO, rng.next_2d()).unwrap();
             let pdf = l.pdf_li(Vec3::ZERO, s.wi);
             assert!((s.weight.x * pdf / l.radiance().x - 1.0).abs() < 1e-3);
+            assert_eq!(l.pdf_li_hit(Vec3::ZERO, s.wi, s.wi * s.dist), pdf);
         }
         assert_eq!(l.pdf_li(Vec3::ZERO, Vec3::X), 0.0);
     }

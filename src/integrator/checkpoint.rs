@@ -240,7 +240,10 @@ mod tests {
         // 100 spp: passes of 2 samples; 5 spp (not a square): passes of 1.
         for spp in [100, 5] {
             let settings = path(spp, StateFiles::default());
-            let est = crate::integrator::path::PathTracer { max_depth: None };
+            let est = crate::integrator::path::PathTracer {
+                max_depth: None,
+                light_sampling: Default::default(),
+            };
             let (one_pass, ..) = render_tiles(&scene, &settings, &est, crate::integrator::Progress::silent());
             let out = render(&scene, &settings, &|| {}).unwrap();
             assert_eq!(

@@ -24,7 +24,7 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
-pub use crate::settings::{IntegratorKind, RenderSettings, StateFiles};
+pub use crate::settings::{IntegratorKind, LightSampling, RenderSettings, StateFiles};
 
 pub const TILE: u32 = 32;
 

@@ -3,18 +3,21 @@
 //!
 //! pbrt-v4's `PathIntegrator` (13.4) for Lambertian, mirror and glass
 //! surfaces: at every diffuse vertex, next-event estimation to the lights (one
-//! shadow ray per light, `direct::irradiance`), then a cosine-distributed
-//! bounce (throughput *= albedo). At a mirror or glass vertex the BSDF is a
-//! delta, so there is no next-event estimation (a shadow ray cannot hit the one
-//! direction it reflects); the specular direction is sampled (Fresnel chooses
-//! reflection or refraction) and the throughput takes the sample's weight. From
-//! the third vertex on, Russian roulette with survival probability
-//! min(max throughput, 0.95). A light hit by a camera ray, or right after a
-//! specular bounce, gives its Le (next-event estimation could not have sampled
-//! that path); after a diffuse bounce only next-event estimation counts light
-//! from lights (one sphere light at a time, so no MIS is needed). Emissive
-//! surfaces are not sampled by shadow rays, so their Le counts wherever a path
-//! hits them.
+//! shadow ray per light), then a cosine-distributed bounce (throughput *=
+//! albedo). The light a path finds at a diffuse vertex is sampled twice, by
+//! the shadow ray and by the bounce when it hits a light, and the two are
+//! combined by multiple importance sampling with the power heuristic (Veach
+//! 1997, 9.2): the shadow ray's sample weighted p_light^2 / (p_light^2 +
+//! p_bsdf^2), the bounce's p_bsdf^2 / (p_bsdf^2 + p_light^2), both densities
+//! in solid angle at the vertex. `light_sampling` can keep either one alone
+//! (weight 1), for comparisons. At a mirror or glass vertex the BSDF is a
+//! delta, so there is no next-event estimation (a shadow ray cannot hit the
+//! one direction it reflects); the specular direction is sampled (Fresnel
+//! chooses reflection or refraction) and the throughput takes the sample's
+//! weight. From the third vertex on, Russian roulette with survival
+//! probability min(max throughput, 0.95). A light hit by a camera ray, or
+//! right after a specular bounce, gives its whole Le. Emissive surfaces are
+//! not sampled by shadow rays, so their Le counts wherever a path hits them.
 //!
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
@@ -27,13 +30,12 @@
 //! between passes and resumed (`integrator::checkpoint`).
 
 use super::checkpoint::{self, Buffer};
-use super::direct::irradiance;
-use super::{accumulate_tiles, RadianceEstimator, RayStats, RenderSettings};
+use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect};
 use crate::material::Transport;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::sampling::{cosine_hemisphere, Rng};
-use crate::scene::Scene;
+use crate::scene::{Hit, Scene};
 use std::sync::atomic::AtomicBool;
 
 /// A render is cut into at most this many passes.
@@ -48,6 +50,20 @@ pub struct PathTracer {
     /// Most bounces: emission is counted up to this many bounces, next-event
     /// estimation at one fewer (1: direct light only); `None`: unlimited.
     pub max_depth: Option<u32>,
+    pub light_sampling: LightSampling,
+}
+
+/// The power heuristic's weight of a sample drawn with density `a` against
+/// one drawn with density `b` (Veach 1997, 9.2.4, beta = 2).
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
 }
 
 impl RadianceEstimator for PathTracer {
@@ -58,10 +74,22 @@ impl RadianceEstimator for PathTracer {
         let mut depth = 0;
         // Whether the last bounce was specular: then no shadow ray counted the light it may hit.
         let mut specular = false;
+        // Where the last diffuse bounce left from, and its solid-angle density.
+        let mut bounce_from = (Vec3::ZERO, 0.0f32);
         while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
             if let Some(li) = hit.light {
+                let light = &scene.lights[li as usize];
+                let le = light.le(-ray.d);
                 if depth == 0 || specular {
-                    l += beta * scene.lights[li as usize].le(-ray.d);
+                    l += beta * le;
+                } else {
+                    let (p, pdf_bsdf) = bounce_from;
+                    let w = match self.light_sampling {
+                        LightSampling::Light => 0.0,
+                        LightSampling::Bsdf => 1.0,
+                        LightSampling::Mis => power_heuristic(pdf_bsdf, light.pdf_li_hit(p, ray.d, hit.p)),
+                    };
+                    l += beta * le * w;
                 }
                 break;
             }
@@ -82,7 +110,10 @@ impl RadianceEstimator for PathTracer {
                 (offset_origin(hit.p, hit.ng, s.wi), s.wi)
             } else {
                 // Next-event estimation.
-                l += beta * m.f() * irradiance(scene, &hit, wo, 1, rng, stats);
+                if self.light_sampling != LightSampling::Bsdf {
+                    let mis = self.light_sampling == LightSampling::Mis;
+                    l += beta * m.f() * direct_light(scene, &hit, wo, mis, rng, stats);
+                }
                 // Bounce: f cos / pdf = albedo for a cosine-distributed direction.
                 let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
                 let (ng, ns) = (hit.ng * side, hit.ns * side);
@@ -92,6 +123,7 @@ impl RadianceEstimator for PathTracer {
                 }
                 beta *= m.albedo();
                 specular = false;
+                bounce_from = (hit.p, ns.dot(d).max(0.0) * std::f32::consts::FRAC_1_PI);
                 (offset_origin(hit.p, ng, d), d)
             };
             if depth >= ROULETTE_DEPTH {
@@ -106,6 +138,42 @@ impl RadianceEstimator for PathTracer {
         }
         l
     }
+}
+
+/// Irradiance at a diffuse vertex from one shadow ray per light (multiply by
+/// the BRDF), each weighted against the cosine-distributed bounce that could
+/// have found the same light when `mis` (else weight 1).
+fn direct_light(scene: &Scene, hit: &Hit, wo: Vec3, mis: bool, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+    let flip = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
+    let (ng, ns) = (hit.ng * flip, hit.ns * flip);
+    let mut e = Vec3::ZERO;
+    for (li, light) in scene.lights.iter().enumerate() {
+        let u = rng.next_2d();
+        let Some(ls) = light.sample_li(hit.p, u) else {
+            continue;
+        };
+        let cos = ns.dot(ls.wi);
+        if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+            continue;
+        }
+        let o = offset_origin(hit.p, ng, ls.wi);
+        let to_light = hit.p + ls.wi * ls.dist - o;
+        let dist = to_light.length();
+        stats.shadow_rays += 1;
+        if scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32) {
+            continue;
+        }
+        let w = if mis {
+            power_heuristic(
+                light.pdf_li_hit(hit.p, ls.wi, hit.p + ls.wi * ls.dist),
+                cos * std::f32::consts::FRAC_1_PI,
+            )
+        } else {
+            1.0
+        };
+        e += ls.weight * cos * w;
+    }
+    e
 }
 
 /// The path tracer's render in passes: the per-pixel sums of the samples so far.
@@ -125,6 +193,7 @@ impl<'a> Progressive<'a> {
             settings,
             est: PathTracer {
                 max_depth: settings.max_depth,
+                light_sampling: settings.light_sampling,
             },
             rect,
             sums: vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize],
@@ -163,10 +232,11 @@ impl checkpoint::Progressive for Progressive<'_> {
         let s = self.settings;
         let r = self.rect;
         format!(
-            "integrator=path spp={} samples_per_pass={} max_depth={:?} filter={:?} seed={} crop={},{},{},{}",
+            "integrator=path spp={} samples_per_pass={} max_depth={:?} light_sampling={} filter={:?} seed={} crop={},{},{},{}",
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
+            s.light_sampling.name(),
             s.filter,
             s.seed,
             r.x0,
@@ -334,5 +404,84 @@ mod tests {
         let expected = a * e0 / (PI * (1.0 - a));
         let mean = film.mean(0, 0, 16, 16).x;
         assert!((mean - expected).abs() / expected < 0.01, "{mean} vs {expected}");
+    }
+
+    /// A grey floor under a one-sided 1 x 1 quad light at height 1, seen
+    /// straight down at the point under the light's corner.
+    fn floor_under_quad() -> crate::Scene {
+        use crate::light::Light;
+        use crate::scene::{CameraDesc, SceneDesc, TriangleDesc};
+        let camera = CameraDesc {
+            position: Vec3::new(0.0, 0.0, 3.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 40.0,
+            width: 8,
+            height: 8,
+        };
+        let mut d = SceneDesc::empty("floor", camera);
+        let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        d.triangles.push(TriangleDesc {
+            vertices: [
+                Vec3::new(-9.0, -9.0, 0.0),
+                Vec3::new(9.0, -9.0, 0.0),
+                Vec3::new(0.0, 9.0, 0.0),
+            ],
+            normals: None,
+            material: grey,
+        });
+        let (a, b, c, e) = (
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+        );
+        for vertices in [[a, b, c], [a, c, e]] {
+            d.lights.push(Light::Triangle {
+                vertices,
+                radiance: Vec3::splat(2.0),
+                two_sided: false,
+            });
+        }
+        crate::Scene::build(d).unwrap()
+    }
+
+    #[test]
+    fn light_bsdf_and_mis_sampling_agree_with_the_form_factor() {
+        use super::{LightSampling, PathTracer};
+        use crate::integrator::{RadianceEstimator, RayStats};
+        use crate::math::Ray;
+        use crate::sampling::Rng;
+        let scene = floor_under_quad();
+        // Reflected radiance albedo / pi * E, E = L pi F (the rectangle form factor, a = b = 1).
+        let f = 2.0 * (1.0 / 2f64.sqrt()) * (1.0 / 2f64.sqrt()).atan() / (2.0 * std::f64::consts::PI);
+        let expected = 0.5 * 2.0 * f;
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0));
+        let mut errors = vec![];
+        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+            let est = PathTracer {
+                max_depth: Some(1),
+                light_sampling: mode,
+            };
+            let n = 40_000;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            let mut stats = RayStats::default();
+            for i in 0..n {
+                let mut rng = Rng::keyed(3, i, 0);
+                let v = est.li(&scene, &ray, &mut rng, &mut stats).x as f64;
+                sum += v;
+                sum2 += v * v;
+            }
+            let mean = sum / n as f64;
+            let std_err = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            // Within four standard errors (and the estimators really differ).
+            assert!(
+                (mean - expected).abs() < 4.0 * std_err + 1e-4,
+                "{mode:?}: {mean} vs {expected} (standard error {std_err})"
+            );
+            errors.push(std_err);
+        }
+        // Light sampling beats BSDF sampling here, and MIS keeps close to the better one.
+        assert!(errors[1] < errors[2] && errors[0] < 1.5 * errors[1], "{errors:?}");
     }
 }

@@ -87,6 +87,35 @@ impl GatherFilter {
     }
 }
 
+/// How the path tracer finds the light arriving at a non-specular vertex
+/// (Veach 1997, chapter 9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampling {
+    /// Shadow rays and BSDF-sampled rays, weighted by the power heuristic.
+    #[default]
+    Mis,
+    /// Shadow rays only (lights hit by BSDF-sampled rays count nothing).
+    Light,
+    /// BSDF-sampled rays only (no shadow rays).
+    Bsdf,
+}
+
+impl LightSampling {
+    pub const ALL: [LightSampling; 3] = [Self::Mis, Self::Light, Self::Bsdf];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mis => "mis",
+            Self::Light => "light",
+            Self::Bsdf => "bsdf",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
 /// How the photons around a shading point are gathered.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gather {
@@ -182,6 +211,8 @@ pub struct RenderSettings {
     pub spp: u32,
     /// Path tracer: most bounces (1 = direct light only); `None`: unlimited.
     pub max_depth: Option<u32>,
+    /// Path tracer: how direct light is sampled.
+    pub light_sampling: LightSampling,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
@@ -230,6 +261,7 @@ impl RenderSettings {
             ("shadow_samples", Value::Int(self.shadow_samples as u64)),
             ("filter", Value::Name(self.filter.name())),
             ("spp", Value::Int(self.spp as u64)),
+            ("light_sampling", Value::Name(self.light_sampling.name())),
             ("photons", Value::Int(p.photons)),
             ("max_bounces", Value::Int(p.max_bounces as u64)),
             ("store_first_hit", Value::Bool(p.store_first_hit)),
@@ -616,6 +648,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         crop: None,
         spp: int("spp").unwrap_or_default() as u32,
         max_depth: int("max_depth").map(|d| d as u32),
+        light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
         photon: PhotonSettings {
             photons: int("photons").unwrap_or_default(),
             // SPPM converges to the answer only if photon paths are not cut

@@ -8,6 +8,7 @@ use super::{DefaultValue, Kind, Spec};
 const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const GATHER_FILTERS: &[&str] = &["none", "normal", "report"];
+const LIGHT_SAMPLING: &[&str] = &["mis", "light", "bsdf"];
 
 /// Largest count of samples, passes and the like we accept (2^20).
 const MILLION: u64 = 1 << 20;
@@ -62,6 +63,15 @@ pub const SETTINGS: &[Spec] = &[
         doc: "Path tracer: most bounces: 0 = emitted light only, 1 = direct light only",
         in_scene_file: true,
         only_for: &[],
+    },
+    Spec {
+        name: "light_sampling",
+        kind: Kind::Choice(LIGHT_SAMPLING),
+        default: DefaultValue::Name("mis"),
+        doc: "Path tracer: how light reaching a diffuse vertex is found: mis (shadow rays and BSDF-sampled rays, \
+              combined by the power heuristic), light (shadow rays only), bsdf (BSDF-sampled rays only)",
+        in_scene_file: true,
+        only_for: &["path"],
     },
     Spec {
         name: "photons",

@@ -204,7 +204,10 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"no-such.obj\"\n"), 7, "no-such.obj not found (pass --mesh PATH"),
         (format!("{CAMERA}[materials.a]\nalbedo = [2, 0, 0]\n"), 5, "[0, 1]"),
         (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\npower = 1\n"), 5, "missing `radius`"),
-        (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nradius = 1\npower = 1\n"), 5, "position` only"),
+        (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nradius = 1\npower = 1\n"), 5, "`radius` does not apply to a point light"),
+        (format!("{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]\nradiance = [1, 1, 1]\n"), 5, "area is zero"),
+        (format!("{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n"), 5, "give `radiance` or `power`"),
+        (format!("{CAMERA}[[lights]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0]]\nradiance = [1, -1, 1]\n"), 5, "radiance must be >= 0"),
         ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 180\n".into(), 1, "fov_y"),
         (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 7, "ssaa = 0: must be between 1 and 64"),
         (format!("{CAMERA}\n[settings]\nssaa = 2\nthreads = 2\n"), 8, "unknown key `threads`"),
@@ -334,4 +337,31 @@ fn cornell_specular_toml_is_the_builtin_scene() {
     let embedded = builtin::cornell_specular();
     assert_eq!(same_settings(&file.desc), same_settings(&embedded));
     assert_eq!(without_settings(&file.desc), without_settings(&embedded));
+}
+
+#[test]
+fn quad_lights_become_two_triangle_lights_of_the_given_radiance_or_power() {
+    let text = format!(
+        "{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]\n\
+         power = 10\ncolour = [1, 0.5, 0]\ntwo_sided = true\n\
+         [[lights]]\ntype = \"triangle\"\nvertices = [[0, 0, 1], [1, 0, 1], [0, 1, 1]]\nradiance = [3, 3, 3]\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    assert_eq!(d.lights.len(), 3);
+    // Power over both sides of a 2 x 1 quad: L = 10 / (pi 2 2).
+    let l = 10.0 / (std::f32::consts::PI * 4.0);
+    for light in &d.lights[..2] {
+        match light {
+            Light::Triangle {
+                radiance, two_sided, ..
+            } => {
+                assert!((radiance.x - l).abs() < 1e-5 && (radiance.y - 0.5 * l).abs() < 1e-5 && radiance.z == 0.0);
+                assert!(*two_sided);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    let total: f32 = d.lights[..2].iter().map(|l| l.power().x).sum();
+    assert!((total - 10.0).abs() < 1e-4, "{total}");
+    assert!(matches!(d.lights[2], Light::Triangle { two_sided: false, radiance, .. } if radiance == Vec3::splat(3.0)));
 }
