@@ -276,12 +276,11 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
                     translate: s.translate.map_or(Vec3::ZERO, |t| t.0),
                 };
                 transform.validate().map_err(err)?;
-                let (mesh, report) =
-                    load_mesh_timed_from(&mesh_path, files).map_err(|e| match &opts.mesh {
-                        // A path the user gave is reported as given, not at the file's line.
-                        Some(_) => e,
-                        None => missing_mesh(&src, span.clone(), e),
-                    })?;
+                let (mesh, report) = load_mesh_timed_from(&mesh_path, files).map_err(|e| match &opts.mesh {
+                    // A path the user gave is reported as given, not at the file's line.
+                    Some(_) => e,
+                    None => missing_mesh(&src, span.clone(), e),
+                })?;
                 let smooth = s.smooth.unwrap_or(false) || opts.smooth;
                 mesh.add_to_scene(&mut desc, &transform, mat, smooth)?;
                 meshes.push(report);
