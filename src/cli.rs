@@ -238,6 +238,9 @@ pub struct StateFileArgs {
     /// Stop as if interrupted once this many tiles are done (for tests).
     #[arg(long, value_name = "N", hide = true)]
     pub stop_after_tiles: Option<u64>,
+    /// Panic on a worker thread once this many tiles are done (for tests of the panic report).
+    #[arg(long, value_name = "N", hide = true)]
+    pub panic_after_tiles: Option<u64>,
 }
 
 /// Checks the state-file options (the library checks them against the integrator).

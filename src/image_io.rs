@@ -7,6 +7,8 @@ use crate::film::{Film, FrameWindow, PixelRect};
 use crate::math::Vec3;
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 /// Output formats, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,27 +75,104 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
+/// The name of the temporary file a write of `path` goes through:
+/// `.<file name>.<host>.<pid>.<random>.tmp` beside it. Hidden and ending in
+/// `.tmp`, it cannot be taken for output; the host name, process id and
+/// random part keep apart writers on several machines sharing one folder
+/// (parts and photon maps on shared storage), and two writes in one process.
 fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()))
+    let suffix = format!(".{}.{}.{:016x}.tmp", host_name(), std::process::id(), random_part());
+    // File names are limited to 255 bytes: shorten a long target's name, not the suffix.
+    let mut keep = name.len().min(255usize.saturating_sub(1 + suffix.len()));
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    parent_dir(path).join(format!(".{}{suffix}", &name[..keep]))
+}
+
+/// This machine's name as a file name part (`localhost` when unknown).
+fn host_name() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "localhost".to_string());
+    name.chars()
+        .take(64)
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// A number that differs between calls and processes: the standard
+/// library's randomly keyed hasher over the time and a per-process counter.
+fn random_part() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    static CALLS: AtomicU64 = AtomicU64::new(0);
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or_default();
+    h.write_u128(now);
+    h.write_u64(CALLS.fetch_add(1, Ordering::Relaxed));
+    h.finish()
+}
+
+/// Temporary files being written, for [`remove_unfinished_temporary_files`].
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes the temporary files of writes still in progress in this process.
+/// For a program about to exit in the middle of one (the binary's panic
+/// report); never waits for a lock, so it is safe to call from a panic hook.
+pub fn remove_unfinished_temporary_files() {
+    if let Ok(files) = UNFINISHED.try_lock() {
+        for f in files.iter() {
+            let _ = std::fs::remove_file(f);
+        }
+    }
+}
+
+/// A temporary file being written: listed in [`UNFINISHED`] while it lives,
+/// removed (if still there, that is, not renamed) when dropped, unwinding included.
+struct Unfinished(PathBuf);
+
+impl Unfinished {
+    fn new(tmp: PathBuf) -> Self {
+        UNFINISHED.lock().unwrap_or_else(|e| e.into_inner()).push(tmp.clone());
+        Unfinished(tmp)
+    }
+}
+
+impl Drop for Unfinished {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+        UNFINISHED
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|f| *f != self.0);
+    }
 }
 
 /// Writes through `write` into a temporary file, then renames it to `path`.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let tmp = temp_path(path);
-    let result = write(&tmp).and_then(|_| {
-        std::fs::rename(&tmp, path).map_err(|e| Error::Io {
+    let tmp = Unfinished::new(temp_path(path));
+    write(&tmp.0).and_then(|_| {
+        std::fs::rename(&tmp.0, path).map_err(|e| Error::Io {
             path: path.to_path_buf(),
             source: e,
         })
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    })
 }
 
 /// Writes the film in the format its extension names. `exposure` (in stops)
@@ -350,6 +429,44 @@ mod tests {
     fn unknown_extension_and_missing_folder_are_refused() {
         assert!(Format::from_path(Path::new("x.jpg")).is_err());
         assert!(check_writable(Path::new("/nonexistent-folder-xyz/a.png")).is_err());
+    }
+
+    #[test]
+    fn temporary_names_are_unique_hidden_and_beside_the_target() {
+        let target = Path::new("some/folder/render.exr");
+        let (a, b) = (temp_path(target), temp_path(target));
+        assert_ne!(a, b);
+        let pid = format!(".{}.", std::process::id());
+        for t in [&a, &b] {
+            assert_eq!(t.parent(), target.parent(), "{}", t.display());
+            let name = t.file_name().unwrap().to_string_lossy();
+            assert!(name.starts_with(".render.exr.") && name.ends_with(".tmp"), "{name}");
+            assert!(name.contains(&pid) && name.contains(&host_name()), "{name}");
+        }
+        // A bare file name stays in the current folder; a long one is shortened to fit.
+        assert_eq!(temp_path(Path::new("a.png")).parent(), Some(Path::new(".")));
+        let long = "\u{e9}".repeat(200) + ".png";
+        let t = temp_path(Path::new(&long));
+        assert!(t.file_name().unwrap().len() <= 255, "{}", t.display());
+    }
+
+    #[test]
+    fn a_failed_or_panicking_write_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.pfm");
+        let failed = write_atomic(&p, |tmp| {
+            std::fs::write(tmp, b"half").unwrap();
+            Err(Error::InvalidSetting("no".into()))
+        });
+        assert!(failed.is_err());
+        let panicked = std::panic::catch_unwind(|| {
+            let _ = write_atomic(&p, |tmp| {
+                std::fs::write(tmp, b"half").unwrap();
+                panic!("in the middle of a write");
+            });
+        });
+        assert!(panicked.is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! The `raytracer` binary: parse the command line, call the library, and map
-//! every error to one line on stderr and exit status 2.
+//! every error to one line on stderr and exit status 2, and every panic to
+//! one line and exit status 101.
 
 mod cli;
 
@@ -12,8 +13,48 @@ use raytracer::scene::LoadedScene;
 use raytracer::Scene;
 use std::io::IsTerminal;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+/// Exit status after a panic, as Rust's own panic handling gives.
+const EXIT_PANIC: i32 = 101;
+
+/// A panic anywhere, worker threads included, prints one line and ends the
+/// process with status 101 at once: the first panic only, the others wait
+/// for the exit. Outputs are written to hidden temporary files and renamed,
+/// so none is left half-written; the temporary files of writes in progress
+/// are removed.
+fn install_panic_hook() {
+    static PANICKED: AtomicBool = AtomicBool::new(false);
+    std::panic::set_hook(Box::new(|info| {
+        if PANICKED.swap(true, Ordering::SeqCst) {
+            loop {
+                std::thread::park();
+            }
+        }
+        let message = info
+            .payload_as_str()
+            .unwrap_or("a panic without a message")
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        let place = info
+            .location()
+            .map(|l| format!("{}:{}", l.file(), l.line()))
+            .unwrap_or_else(|| "an unknown place".to_string());
+        raytracer::image_io::remove_unfinished_temporary_files();
+        // On a terminal, over the progress bar rather than after it.
+        let clear = if std::io::stderr().is_terminal() {
+            "\r\x1b[2K"
+        } else {
+            ""
+        };
+        eprintln!("{clear}internal error: {message} at {place} (this is a bug in raytracer; please report it)");
+        std::process::exit(EXIT_PANIC);
+    }));
+}
 
 fn main() -> ExitCode {
+    install_panic_hook();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -127,7 +168,14 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
         }
         _ => Ok(()),
     };
-    let tick = || bar.inc(1);
+    let ticks = AtomicU64::new(0);
+    let tick = || {
+        bar.inc(1);
+        let done = ticks.fetch_add(1, Ordering::SeqCst) + 1;
+        if let Some(n) = args.files.panic_after_tiles.filter(|&n| done > n) {
+            panic!("--panic-after-tiles {n}: a panic on a worker thread, as asked");
+        }
+    };
     let out = integrator::render_observed(&scene, &settings, integrator::Progress::new(&tick, &cancel), &on_pass)?;
     bar.finish_and_clear();
     if !out.is_complete() {

@@ -149,12 +149,8 @@ proptest! {
 
 #[test]
 fn agrees_with_brute_force_on_the_bunny() {
-    let desc = match common::cornell_bunny_scene() {
-        Ok(d) => d,
-        Err(e) => {
-            println!("skipping: {e}");
-            return;
-        }
+    let Some(desc) = common::cornell_bunny_scene_or_skip() else {
+        return;
     };
     let tris: Vec<Triangle> = common::world_triangles(&desc)
         .iter()

@@ -303,3 +303,36 @@ fn compare_reports_errors_and_writes_a_diff() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.pfm"));
 }
+
+#[test]
+fn a_panic_on_a_worker_is_one_line_exit_101_and_leaves_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two workers, nine tiles: the hidden option panics on a rayon worker
+    // once two tiles are done, possibly on both workers at once.
+    let out = raytracer(
+        &[
+            "--integrator",
+            "direct",
+            "--width",
+            "96",
+            "--height",
+            "96",
+            "--threads",
+            "2",
+            "--panic-after-tiles",
+            "2",
+            "-o",
+            "out.exr",
+        ],
+        dir.path(),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(101), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("internal error: ") && stderr.contains("--panic-after-tiles 2") && stderr.contains(".rs:"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("bug") && !stderr.contains("panicked"), "{stderr}");
+    assert!(files_in(dir.path()).is_empty(), "left {:?}", files_in(dir.path()));
+}

@@ -48,14 +48,30 @@ fn scene(text: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The committed inputs of one target.
+/// Where the committed inputs live, one folder per target. It is part of
+/// the test: a checkout without it fails rather than testing nothing.
+fn corpus() -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-crashers");
+    assert!(
+        dir.is_dir(),
+        "{} is missing: the committed fuzz inputs are part of this test",
+        dir.display()
+    );
+    dir
+}
+
+/// The committed inputs of one target; its folder must exist.
 fn crashers(target: &str) -> Vec<(PathBuf, Vec<u8>)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fuzz-crashers")
-        .join(target);
+    let dir = corpus().join(target);
     let mut out: Vec<_> = std::fs::read_dir(&dir)
-        .map(|d| d.map(|e| e.unwrap().path()).collect())
-        .unwrap_or_default();
+        .unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}: the committed fuzz inputs are part of this test",
+                dir.display()
+            )
+        })
+        .map(|e| e.unwrap().path())
+        .collect();
     out.sort();
     out.into_iter()
         .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
@@ -107,12 +123,26 @@ fn scene_sizes_beyond_the_limits_are_refused_at_the_camera() {
 
 #[test]
 fn committed_fuzz_inputs_load_or_fail_cleanly() {
+    // Every target folder present is run; obj and ply have findings, so they must be there.
+    let mut targets: Vec<String> = std::fs::read_dir(corpus())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    targets.sort();
+    for needed in ["obj", "ply"] {
+        assert!(
+            targets.iter().any(|t| t == needed),
+            "no {needed} folder in the corpus: {targets:?}"
+        );
+    }
     let mut seen = 0;
-    for (target, run) in [
-        ("obj", obj as fn(&[u8]) -> Result<(), String>),
-        ("ply", ply),
-        ("scene", |b: &[u8]| scene(std::str::from_utf8(b).unwrap_or(""))),
-    ] {
+    for target in &targets {
+        let run: fn(&[u8]) -> Result<(), String> = match target.as_str() {
+            "obj" => obj,
+            "ply" => ply,
+            "scene" => |b: &[u8]| scene(std::str::from_utf8(b).unwrap_or("")),
+            other => panic!("tests/fuzz-crashers/{other}: not a fuzz target (obj, ply, scene)"),
+        };
         for (path, bytes) in crashers(target) {
             // Ok or Err are both fine; a panic fails the test, naming the file.
             let r = std::panic::catch_unwind(|| run(&bytes));
@@ -120,6 +150,7 @@ fn committed_fuzz_inputs_load_or_fail_cleanly() {
             seen += 1;
         }
     }
+    assert!(seen >= 3, "only {seen} committed fuzz inputs");
     println!("{seen} committed fuzz inputs");
 }
 

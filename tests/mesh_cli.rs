@@ -16,10 +16,18 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// The Stanford bunny, when `../shared/assets` has it; without it the test
+/// says it skips, except under CI (`CI` set), where `../shared` is always
+/// there and a missing bunny fails the test.
 fn bunny() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/stanford-bunny.obj");
     if p.is_file() {
         Some(p)
+    } else if std::env::var_os("CI").is_some() {
+        panic!(
+            "{} is absent: under CI (CI is set) the shared assets must be there",
+            p.display()
+        );
     } else {
         println!("skipped: {} is absent", p.display());
         None

@@ -1,7 +1,8 @@
 //! `raytracer view` end to end: without a display it refuses in one line;
 //! under Xvfb it opens, takes keys from xdotool, saves with P, and the saved
 //! pictures follow the moved light. The window test skips, saying why, where
-//! Xvfb or xdotool is missing or the build has no `preview` feature.
+//! Xvfb or xdotool is missing or the build has no `preview` feature; under CI
+//! (`CI` set) missing Xvfb or xdotool fails it instead.
 
 use raytracer::image_io::read_image;
 use raytracer::math::luminance;
@@ -58,6 +59,15 @@ fn view_on_a_display_that_cannot_be_opened_exits_2_with_one_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("error: view: "), "{err}");
+}
+
+/// Says why the window test skips; under CI (`CI` set), where `.ci/run`
+/// installs Xvfb and xdotool, fails it instead.
+fn skip_unless_ci(why: &str) {
+    if std::env::var_os("CI").is_some() {
+        panic!("{why}: under CI (CI is set) the window test must run");
+    }
+    println!("skipped: {why}");
 }
 
 fn on_path(tool: &str) -> bool {
@@ -177,12 +187,10 @@ fn view_under_xvfb_saves_and_follows_the_light() {
         return;
     }
     if !on_path("Xvfb") || !on_path("xdotool") {
-        println!("skipped: Xvfb and xdotool are needed (apt-get install xvfb xdotool)");
-        return;
+        return skip_unless_ci("Xvfb and xdotool are needed (apt-get install xvfb xdotool)");
     }
     let Some((_xvfb, display)) = start_xvfb() else {
-        println!("skipped: Xvfb did not start");
-        return;
+        return skip_unless_ci("Xvfb did not start");
     };
     let dir = tempfile::tempdir().unwrap();
     let logs = tempfile::tempdir().unwrap();

@@ -304,4 +304,43 @@ mod tests {
             "different scene",
         );
     }
+
+    #[test]
+    fn a_resumed_render_reports_the_ticks_of_the_whole_render() {
+        use crate::integrator::{progress_ticks, render_observed, tile_count, CancelToken, Progress};
+        use std::sync::atomic::{AtomicU64, Ordering};
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("render.ckpt");
+        let scene = scene();
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        // Counts the ticks of one render of `files`; returns them and the passes.
+        let ticks_of = |files: StateFiles| {
+            let ticks = AtomicU64::new(0);
+            let tick = || {
+                ticks.fetch_add(1, Ordering::SeqCst);
+            };
+            let out = render_observed(
+                &scene,
+                &path(12, files),
+                Progress::new(&tick, &CancelToken::new()),
+                &|_, _| Ok(()),
+            )
+            .unwrap();
+            (ticks.into_inner(), out.passes)
+        };
+        let stopped = ticks_of(StateFiles {
+            checkpoint: Some(ck.clone()),
+            stop_after_passes: Some(5),
+            ..StateFiles::default()
+        });
+        assert_eq!(stopped, (5 * tile_count(w, h), Some((5, 12))));
+        // The resumed render reports the 5 restored passes, then its own 7.
+        let resumed = ticks_of(StateFiles {
+            resume: Some(ck.clone()),
+            ..StateFiles::default()
+        });
+        let all = progress_ticks(&path(12, StateFiles::default()), w, h);
+        assert_eq!(all, 12 * tile_count(w, h));
+        assert_eq!(resumed, (all, Some((12, 12))));
+    }
 }

@@ -363,11 +363,18 @@ fn ply_header_claiming_more_than_the_file_holds_fails_at_once() {
     assert_error(&write(dir.path(), "long-list.ply", &bytes), "byte offset", "truncated");
 }
 
-/// The Stanford bunny, when `../shared/assets` has it.
+/// The Stanford bunny, when `../shared/assets` has it; without it the test
+/// says it skips, except under CI (`CI` set), where `../shared` is always
+/// there and a missing bunny fails the test.
 pub(crate) fn bunny_path() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/stanford-bunny.obj");
     if p.is_file() {
         Some(p)
+    } else if std::env::var_os("CI").is_some() {
+        panic!(
+            "{} is absent: under CI (CI is set) the shared assets must be there",
+            p.display()
+        );
     } else {
         println!("skipped: {} is absent", p.display());
         None
