@@ -130,7 +130,9 @@ pub fn shadow_rays(desc: &SceneDesc, count: usize) -> RaySet {
     let light = &desc.lights[0];
     let (centre, radius) = match light {
         raytracer::light::Light::Sphere { sphere, .. } => (sphere.centre, sphere.radius),
-        raytracer::light::Light::Point { position, .. } => (*position, 0.0),
+        // The built-in cornell scenes have a sphere light; anything else is
+        // aimed at as a point at its centre.
+        other => (other.position(), 0.0),
     };
     let mut rng = Rng::new(3, 11);
     let rays = (0..count)
