@@ -12,6 +12,7 @@
 //! | [`DiffuseBxdf`], [`DiffuseTransmissionBxdf`] | `diffuse` | pbrt-v4 9.2; its `DiffuseTransmissionBxDF` |
 //! | [`ConductorBxdf`] | `conductor` | pbrt-v4 9.4 (complex Fresnel), 9.6 (Torrance-Sparrow, Trowbridge-Reitz) |
 //! | [`DielectricBxdf`], [`ThinDielectricBxdf`] | `dielectric` | pbrt-v4 9.3, 9.5, 9.7; Walter et al. 2007 |
+//! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
 //! | Fresnel terms | `fresnel` | pbrt-v4 9.3-9.4 |
 //!
@@ -25,6 +26,7 @@
 //! The shading-normal correction for light paths (Veach 1997, 5.3) and
 //! Russian roulette belong to the integrators, not here.
 
+mod coated;
 mod conductor;
 mod dielectric;
 mod diffuse;
@@ -32,6 +34,7 @@ mod frame;
 mod fresnel;
 mod microfacet;
 
+pub use coated::{CoatTable, CoatedDiffuseBxdf};
 pub use conductor::ConductorBxdf;
 pub use dielectric::{DielectricBxdf, ThinDielectricBxdf};
 pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
@@ -217,6 +220,7 @@ pub enum Bxdf {
     Conductor(ConductorBxdf),
     Dielectric(DielectricBxdf),
     ThinDielectric(ThinDielectricBxdf),
+    CoatedDiffuse(CoatedDiffuseBxdf),
 }
 
 impl Bxdf {
@@ -251,6 +255,12 @@ impl Bxdf {
         Bxdf::ThinDielectric(ThinDielectricBxdf::new(eta))
     }
 
+    /// A dielectric coat of index `eta` and absorbing `thickness` (pbrt-v4's
+    /// default: 0.01; 0 for a clear coat) over a Lambertian base `r`.
+    pub fn coated_diffuse(distrib: TrowbridgeReitz, eta: f32, r: Vec3, thickness: f32) -> Self {
+        Bxdf::CoatedDiffuse(CoatedDiffuseBxdf::new(distrib, eta, r, thickness))
+    }
+
     /// The BSDF value for the pair (`wo`, `wi`), without the cosine; zero
     /// for specular lobes.
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
@@ -260,6 +270,7 @@ impl Bxdf {
             Bxdf::Conductor(b) => b.f(wo, wi),
             Bxdf::Dielectric(b) => b.f(wo, wi, mode),
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
+            Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
         }
     }
 
@@ -274,6 +285,7 @@ impl Bxdf {
             Bxdf::Conductor(b) => b.sample_f(wo, u),
             Bxdf::Dielectric(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
+            Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }
@@ -288,6 +300,7 @@ impl Bxdf {
             Bxdf::Conductor(b) => b.pdf(wo, wi),
             Bxdf::Dielectric(b) => b.pdf(wo, wi),
             Bxdf::ThinDielectric(_) => 0.0,
+            Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
         }
     }
 
@@ -298,6 +311,7 @@ impl Bxdf {
             Bxdf::Conductor(b) => b.flags(),
             Bxdf::Dielectric(b) => b.flags(),
             Bxdf::ThinDielectric(b) => b.flags(),
+            Bxdf::CoatedDiffuse(b) => b.flags(),
         }
     }
 }
