@@ -15,6 +15,7 @@
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
 //! | Fresnel terms | `fresnel` | pbrt-v4 9.3-9.4 |
+//! | named metals | `metals` | pbrt-v4's `metal-*-eta/k` spectra, fitted to RGB |
 //!
 //! Conventions (those of pbrt-v4): `wo` and `wi` are unit vectors pointing
 //! away from the surface; `f` is the BSDF value without the cosine; a sampled
@@ -32,7 +33,11 @@ mod dielectric;
 mod diffuse;
 mod frame;
 mod fresnel;
+mod metals;
 mod microfacet;
+
+#[cfg(test)]
+mod spectral_data;
 
 pub use coated::{CoatTable, CoatedDiffuseBxdf};
 pub use conductor::ConductorBxdf;
@@ -40,6 +45,7 @@ pub use dielectric::{DielectricBxdf, ThinDielectricBxdf};
 pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
 pub use frame::Frame;
 pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, reflect, refract};
+pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
 pub use microfacet::TrowbridgeReitz;
 
 use crate::math::{Vec2, Vec3};
