@@ -38,6 +38,8 @@ mod microfacet;
 
 #[cfg(test)]
 mod spectral_data;
+#[cfg(test)]
+mod tests;
 
 pub use coated::{CoatTable, CoatedDiffuseBxdf};
 pub use conductor::ConductorBxdf;
