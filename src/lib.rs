@@ -4,6 +4,7 @@
 //! a [`scene::Scene`] (with its BVH), an integrator renders it into a
 //! [`film::Film`], and [`image_io`] writes the film to disk.
 
+pub mod bsdf;
 pub mod camera;
 pub mod error;
 pub mod film;
