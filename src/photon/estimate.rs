@@ -105,6 +105,11 @@ pub fn irradiance(map: &PhotonMap, g: &Gather, p: Vec3, n: Vec3, admit: Admit, s
 /// Every how many photons one is a site of precomputed irradiance.
 pub const PRECOMPUTE_STRIDE: usize = 4;
 
+/// What the largest precomputed irradiance is stored as (f16 holds up to
+/// 65504 and keeps full precision down to 6e-5: 2^15 leaves headroom above and
+/// nine decades below).
+const SITE_SCALE: f32 = 32768.0;
+
 /// Irradiance estimated once at a subset of the photons and looked up at the
 /// nearest one (Christensen 1999, "Faster photon map global illumination";
 /// Jensen 2001, 9.4). With a wide gather radius (the report's 0.4 finds
@@ -126,18 +131,31 @@ impl PrecomputedIrradiance {
     pub fn build(map: &PhotonMap, g: &Gather, admit: Admit) -> PrecomputedIrradiance {
         use rayon::prelude::*;
         let photons = map.photons();
-        let sites: Vec<Photon> = (0..photons.len())
+        let estimates: Vec<Vec3> = (0..photons.len())
             .into_par_iter()
             .step_by(PRECOMPUTE_STRIDE)
             .map_init(Vec::new, |scratch, i| {
                 let ph = &photons[i];
-                let n = ph.normal();
-                let e = irradiance(map, g, ph.p, n, admit, scratch);
-                Photon::new(ph.p, ph.wi(), n, e, ph.object, ph.is_direct())
+                irradiance(map, g, ph.p, ph.normal(), admit, scratch)
             })
             .collect();
+        // Stored as f16 relative to a unit that puts the largest estimate well
+        // inside f16's range, so that irradiance of any scale (a small light
+        // of radiance 10^6 or a dim one) neither clips nor underflows.
+        let largest = estimates.iter().map(|e| e.max_element()).fold(0.0f32, f32::max);
+        let unit = if largest > 0.0 && largest.is_finite() {
+            largest / SITE_SCALE
+        } else {
+            1.0
+        };
+        let sites: Vec<Photon> = photons
+            .iter()
+            .step_by(PRECOMPUTE_STRIDE)
+            .zip(&estimates)
+            .map(|(ph, e)| Photon::new(ph.p, ph.wi(), ph.normal(), *e / unit, ph.object, ph.is_direct()))
+            .collect();
         PrecomputedIrradiance {
-            sites: PhotonMap::build(sites, 1.0),
+            sites: PhotonMap::build(sites, unit),
             radius: if g.radius.is_finite() {
                 g.radius
             } else {
@@ -167,5 +185,45 @@ impl PrecomputedIrradiance {
 
     pub fn bytes(&self) -> usize {
         self.sites.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    #[test]
+    fn precomputed_irradiance_keeps_any_scale_of_light() {
+        // A unit disc of photons on the plane z = 0, facing +z; the same map
+        // in units of 10^-3 and 10^6 W per stored power.
+        let mut rng = Rng::new(4, 4);
+        let photons: Vec<Photon> = (0..4000)
+            .map(|_| {
+                let u = rng.next_2d();
+                let p = Vec3::new(u.x * 2.0 - 1.0, u.y * 2.0 - 1.0, 0.0);
+                Photon::new(p, Vec3::Z, Vec3::Z, Vec3::splat(1.0), 0, false)
+            })
+            .collect();
+        let g = Gather {
+            radius: 0.2,
+            k: None,
+            cone: false,
+            filter: GatherFilter::None,
+        };
+        for unit in [1e-3f32, 1.0, 1e6] {
+            let map = PhotonMap::build(photons.clone(), unit);
+            let pre = PrecomputedIrradiance::build(&map, &g, Admit::ALL);
+            let mut scratch = vec![];
+            for ph in map.photons().iter().step_by(97) {
+                let full = irradiance(&map, &g, ph.p, Vec3::Z, Admit::ALL, &mut scratch);
+                let near = pre.lookup(ph.p, Vec3::Z, &mut scratch);
+                assert!(full.x > 0.0 && near.x > 0.0);
+                // The nearest site's estimate: the same density within the
+                // photon noise, and never clipped (f16 would stop at 65504).
+                assert!((near.x / full.x - 1.0).abs() < 0.5, "unit {unit}: {near} vs {full}");
+                assert!(near.x > 100.0 * unit, "unit {unit}: {near}");
+            }
+        }
     }
 }
