@@ -305,7 +305,7 @@ fn shapes(
                 let (mesh, report) = load_mesh_timed_from(&mesh_path, files).map_err(|e| match &opts.mesh {
                     // A path the user gave is reported as given, not at the file's line.
                     Some(_) => e,
-                    None => missing_mesh(&src, span.clone(), e),
+                    None => missing_mesh(src, span.clone(), e),
                 })?;
                 let smooth = s.smooth.unwrap_or(false) || opts.smooth;
                 mesh.add_to_scene(desc, &transform, mat, smooth)?;
