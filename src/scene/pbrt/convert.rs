@@ -1096,3 +1096,218 @@ fn reflect(desc: &mut SceneDesc) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{PrimKind, Scene};
+
+    fn convert_text(text: &str, lenient: bool) -> Result<Converted> {
+        let path = Path::new("dir/main.pbrt");
+        let scene = super::super::parse_bytes(path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk)?;
+        convert(&scene, path, lenient)
+    }
+
+    fn ok(text: &str) -> Converted {
+        convert_text(text, false).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// A unit quad in the z = 0 plane at x in [x0, x0 + 1], y in [-0.5, 0.5],
+    /// (p1 - p0) x (p2 - p0) along +z.
+    fn quad(x0: f32) -> String {
+        let x1 = x0 + 1.0;
+        format!(
+            "Shape \"trianglemesh\" \"point3 P\" [ {x0} -0.5 0  {x1} -0.5 0  {x1} 0.5 0  {x0} 0.5 0 ] \
+             \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+        )
+    }
+
+    /// The material name seen at pixel (x, y).
+    fn seen(c: &Converted, x: f32, y: f32) -> Option<String> {
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let ray = scene.camera.generate_ray(x, y);
+        let hit = scene.intersect(&ray, 1e-4, f32::INFINITY)?;
+        (hit.kind != PrimKind::Light).then(|| scene.material_names[hit.material as usize].clone())
+    }
+
+    /// A red quad at world x in [0.5, 1.5] and a green one at [-1.5, -0.5],
+    /// seen from z = -5 looking at the origin; `pre` comes before LookAt.
+    fn two_quads(pre: &str) -> Converted {
+        ok(&format!(
+            "{pre}LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+             MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
+             MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
+             NamedMaterial \"red\"\n{}NamedMaterial \"green\"\n{}",
+            quad(0.5),
+            quad(-1.5)
+        ))
+    }
+
+    #[test]
+    fn image_orientation_follows_pbrt() {
+        // pbrt's LookAt camera has +x (image right) = up x forward: world +x
+        // here, so the quad at +x is on the right of pbrt's picture.
+        let c = two_quads("");
+        assert!(c.mirrored);
+        assert_eq!(seen(&c, 27.0, 10.0).as_deref(), Some("red"));
+        assert_eq!(seen(&c, 13.0, 10.0).as_deref(), Some("green"));
+        // The exporters' `Scale -1 1 1` turns image right to world -x.
+        let c = two_quads("Scale -1 1 1\n");
+        assert!(!c.mirrored);
+        assert_eq!(seen(&c, 27.0, 10.0).as_deref(), Some("green"));
+        assert_eq!(seen(&c, 13.0, 10.0).as_deref(), Some("red"));
+        // Up is up: a quad above the axis is in the upper half.
+        let c = ok(&format!(
+            "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \
+             \"integer xresolution\" [ 20 ] \"integer yresolution\" [ 20 ]\nWorldBegin\nTranslate -0.5 1 0\n{}",
+            quad(0.0)
+        ));
+        assert!(seen(&c, 10.0, 8.0).is_some() && seen(&c, 10.0, 12.0).is_none());
+    }
+
+    #[test]
+    fn fov_spans_the_shorter_axis() {
+        let cam = |w: u32, h: u32| {
+            ok(&format!(
+                "Camera \"perspective\" \"float fov\" [ 60 ]\nFilm \"rgb\" \"integer xresolution\" [ {w} ] \
+                 \"integer yresolution\" [ {h} ]\nWorldBegin\n"
+            ))
+            .desc
+            .camera
+        };
+        assert!((cam(200, 100).fov_y_deg - 60.0).abs() < 1e-4);
+        let tall = cam(100, 200).fov_y_deg;
+        let expected = 2.0 * (2.0 * 30f32.to_radians().tan()).atan().to_degrees();
+        assert!((tall - expected).abs() < 1e-3, "{tall} vs {expected}");
+        let c = cam(100, 200);
+        assert_eq!((c.width, c.height), (100, 200));
+    }
+
+    fn light_normal(text: &str) -> Vec3 {
+        let c = ok(&format!(
+            "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\n{text}AttributeEnd\n"
+        ));
+        assert!(c.desc.triangles.is_empty(), "an emitter is the light only");
+        assert_eq!(c.desc.lights.len(), 2);
+        let Light::Triangle { vertices: v, .. } = c.desc.lights[0] else {
+            panic!("not a triangle light")
+        };
+        let n = crate::light::triangle_normal(&v);
+        // Undo the reflection the identity camera implies.
+        if c.mirrored {
+            Vec3::new(-n.x, n.y, n.z)
+        } else {
+            n
+        }
+    }
+
+    #[test]
+    fn area_lights_emit_on_pbrts_side() {
+        let z = Vec3::Z;
+        assert!(light_normal(&quad(0.0)).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{}", quad(0.0))).abs_diff_eq(-z, 1e-6));
+        // A transformation that swaps handedness turns the triangle's cross
+        // product, and pbrt turns it back: the normal as transformed.
+        let flip_z = "Scale 1 1 -1\n";
+        assert!(light_normal(&format!("{flip_z}{}", quad(0.0))).abs_diff_eq(-z, 1e-6));
+        assert!(light_normal(&format!("Scale 1 -1 1\n{}", quad(0.0))).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{flip_z}{}", quad(0.0))).abs_diff_eq(z, 1e-6));
+        // Normals N decide where given (ReverseOrientation turns them).
+        let with_n = quad(0.0).replace("\"integer", "\"normal N\" [ 0 0 -1 0 0 -1 0 0 -1 0 0 -1 ] \"integer");
+        assert!(light_normal(&with_n).abs_diff_eq(-z, 1e-6));
+        assert!(light_normal(&format!("{flip_z}{with_n}")).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{with_n}")).abs_diff_eq(z, 1e-6));
+    }
+
+    #[test]
+    fn light_power_and_scale() {
+        let c = ok(&format!(
+            "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"float scale\" [ 2 ] \
+             \"bool twosided\" true\n{}AttributeEnd\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"float power\" [ 10 ]\n\
+             Translate 0 0 1\nShape \"sphere\" \"float radius\" [ 0.5 ]\nAttributeEnd\n\
+             LightSource \"point\" \"rgb I\" [ 1 1 1 ] \"point3 from\" [ 0 3 0 ]\n",
+            quad(0.0)
+        ));
+        let Light::Triangle {
+            radiance, two_sided, ..
+        } = c.desc.lights[1]
+        else {
+            panic!()
+        };
+        assert_eq!((radiance, two_sided), (Vec3::new(2.0, 4.0, 6.0), true));
+        let Light::Sphere { sphere, power } = c.desc.lights[3] else {
+            panic!("{:?}", c.desc.lights)
+        };
+        assert!((sphere.radius - 0.5).abs() < 1e-6);
+        assert!(power.abs_diff_eq(Vec3::splat(10.0), 1e-4), "{power}");
+        let Light::Point { power, position } = c.desc.lights[0] else {
+            panic!()
+        };
+        assert!(power.abs_diff_eq(Vec3::splat(4.0 * PI), 1e-4) && position.y == 3.0);
+    }
+
+    #[test]
+    fn materials_and_settings() {
+        let c = ok(&format!(
+            "Integrator \"path\" \"integer maxdepth\" [ 7 ]\nSampler \"zsobol\" \"integer pixelsamples\" [ 32 ]\n\
+             PixelFilter \"box\"\nWorldBegin\nMaterial \"dielectric\" \"float eta\" [ 1.33 ]\n{}\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.3 0.4 ] \"float bogus\" [ 1 ]\nShape \"sphere\"\n",
+            quad(0.0)
+        ));
+        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| *m).collect();
+        assert!(mats.contains(&Material::Glass { ior: 1.33 }));
+        assert!(mats.contains(&Material::diffuse(0.2, 0.3, 0.4)));
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("max_depth").map(|v| v.0), Some(Value::Int(7)));
+        assert_eq!(s.get("spp").map(|v| v.0), Some(Value::Int(32)));
+        assert_eq!(s.get("integrator").map(|v| v.0), Some(Value::Name("path")));
+        assert_eq!(s.get("filter").map(|v| v.0), Some(Value::Name("box")));
+        assert_eq!(
+            s.get("spp").map(|v| v.1.clone()),
+            Some(Origin::SceneFile {
+                path: "dir/main.pbrt".into(),
+                line: 2
+            })
+        );
+        assert!(
+            c.warnings.iter().any(|w| w.contains("\"float bogus\" is not used")),
+            "{:?}",
+            c.warnings
+        );
+        // pbrt's defaults where the file says nothing.
+        let d = ok("WorldBegin\n").desc.settings;
+        assert_eq!(d.preset.get("spp").map(|v| v.0), Some(Value::Int(16)));
+        assert_eq!(d.preset.get("max_depth").map(|v| v.0), Some(Value::Int(5)));
+        assert_eq!(d.preset.get("filter").map(|v| v.0), Some(Value::Name("gaussian")));
+    }
+
+    #[test]
+    fn unsupported_features_are_one_error_unless_lenient() {
+        let text = format!(
+            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"conductor\"\nNamedMaterial \"cu\"\n{}\
+             Shape \"disk\"\nLightSource \"spot\"\nLightSource \"distant\"\nLightSource \"infinite\"\n",
+            quad(0.0)
+        );
+        let e = convert_text(&text, false).unwrap_err().to_string();
+        assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
+        assert!(
+            e.contains("dir/main.pbrt:5: shape \"disk\"") && e.contains("and 1 more"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        let c = convert_text(&text, true).unwrap();
+        assert_eq!(
+            c.desc.materials,
+            vec![("cu".to_string(), Material::diffuse(0.5, 0.5, 0.5))]
+        );
+        assert_eq!(c.desc.triangles.len(), 2);
+        let w = c.warnings.join("\n");
+        assert!(
+            w.contains("--lenient: 1 materials") && w.contains("--lenient: 1 unsupported shapes"),
+            "{w}"
+        );
+        assert!(w.contains("--lenient: 3 unsupported lights"), "{w}");
+    }
+}
