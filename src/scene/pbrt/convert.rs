@@ -737,6 +737,10 @@ impl<'a> Conv<'a> {
                 two_sided,
             })
         };
+        if e.is_none() {
+            // Its shapes are drawn without emission.
+            self.skipped_lights += 1;
+        }
         self.emissions.insert(index, e);
         Ok(e)
     }
