@@ -88,8 +88,8 @@ pub struct ViewArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Built-in scene (cornell, cornell-bunny, cornell-final, cornell-specular) or a TOML scene file
-    /// (a path ending in .toml, or any existing file that is not a built-in name).
+    /// Built-in scene (cornell, cornell-bunny, cornell-final, cornell-specular), a TOML scene file (a path ending
+    /// in .toml, or any existing file that is not a built-in name) or a pbrt-v4 scene (.pbrt, .pbrt.gz).
     #[arg(long, default_value = "cornell", value_name = "NAME|FILE")]
     pub scene: String,
     /// Mesh file (.obj or .ply): the Stanford bunny for cornell-bunny and cornell-final, or a replacement for the
@@ -99,6 +99,10 @@ pub struct SceneArgs {
     /// Smooth-shade meshes with their vertex normals when the file has them [default: off, flat shading].
     #[arg(long)]
     pub smooth: bool,
+    /// pbrt-v4 scenes: render despite unsupported features (unknown materials become grey diffuse, unsupported
+    /// shapes and lights are skipped), with a warning per kind [default: off, such a scene is refused].
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -277,6 +281,7 @@ pub fn load_scene(args: &SceneArgs) -> Result<LoadedScene> {
     let opts = LoadOptions {
         mesh: args.mesh.clone(),
         smooth: args.smooth,
+        lenient: args.lenient,
     };
     Ok(raytracer::scene::load(&args.scene, &opts)?)
 }

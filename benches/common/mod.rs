@@ -27,6 +27,7 @@ pub fn cornell_bunny_scene() -> Result<SceneDesc, String> {
     let opts = LoadOptions {
         mesh: Some(path),
         smooth: false,
+        lenient: false,
     };
     match raytracer::scene::builtin::by_name("cornell-bunny", &opts) {
         Ok(Some(l)) => Ok(l.desc),

@@ -116,6 +116,7 @@ mod tests {
             let opts = LoadOptions {
                 mesh: WITH_MESH.contains(name).then(|| "unused.obj".into()),
                 smooth: false,
+                lenient: false,
             };
             match by_name(name, &opts) {
                 Ok(Some(l)) => assert_eq!(l.desc.name, *name),
@@ -182,6 +183,7 @@ mod tests {
         let opts = LoadOptions {
             mesh: Some(path),
             smooth: false,
+            lenient: false,
         };
         let mut desc = by_name("cornell-bunny", &opts).unwrap().unwrap().desc;
         let n = 64;

@@ -25,6 +25,9 @@ pub struct LoadOptions {
     pub mesh: Option<PathBuf>,
     /// Interpolate vertex normals where a mesh file has them.
     pub smooth: bool,
+    /// pbrt-v4 scenes: render what is supported, replacing or skipping the
+    /// rest with a warning, instead of refusing the scene.
+    pub lenient: bool,
 }
 
 /// A scene description and what loading its meshes took.
@@ -34,11 +37,16 @@ pub struct LoadedScene {
     pub meshes: Vec<MeshReport>,
 }
 
-/// Loads a scene given as a built-in name or a TOML file. A path ending in
-/// `.toml` is always a file; otherwise a built-in name wins over a file of
-/// the same name (write `./NAME` for the file).
+/// Loads a scene given as a built-in name, a TOML file or a pbrt-v4 file
+/// (a path ending in `.pbrt` or `.pbrt.gz`). A path ending in `.toml` is
+/// always a file; otherwise a built-in name wins over a file of the same
+/// name (write `./NAME` for the file).
 pub fn load(spec: &str, opts: &LoadOptions) -> Result<LoadedScene> {
     let path = Path::new(spec);
+    let lower = spec.to_ascii_lowercase();
+    if lower.ends_with(".pbrt") || lower.ends_with(".pbrt.gz") {
+        return pbrt::convert::load(path, opts);
+    }
     let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if is_toml {
         return file::load(path, opts);

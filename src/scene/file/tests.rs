@@ -235,6 +235,7 @@ fn mesh_option_replaces_the_one_mesh_path() {
     let opts = LoadOptions {
         mesh: Some(obj.clone()),
         smooth: false,
+        lenient: false,
     };
     let s = parse(Path::new("x.toml"), &text, &opts).unwrap();
     assert_eq!(s.desc.triangles.len(), 1);
@@ -250,6 +251,7 @@ fn cornell_bunny_toml_is_the_builtin_scene() {
     let opts = LoadOptions {
         mesh: Some(bunny),
         smooth: false,
+        lenient: false,
     };
     let file = load(&scenes_dir().join("cornell-bunny.toml"), &opts).unwrap();
     let embedded = builtin::by_name("cornell-bunny", &opts).unwrap().unwrap();
@@ -275,6 +277,7 @@ fn smooth_passes_vertex_normals_on_only_when_asked() {
         let opts = LoadOptions {
             mesh: None,
             smooth: smooth_opt,
+            lenient: false,
         };
         parse(&dir.path().join("s.toml"), &text, &opts).unwrap().desc.triangles[0].normals
     };

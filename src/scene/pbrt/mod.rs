@@ -24,6 +24,7 @@
 //! listed in [`PbrtScene::unsupported`] for the converter to decide.
 
 mod builder;
+pub mod convert;
 pub mod error;
 mod ir;
 pub mod lexer;

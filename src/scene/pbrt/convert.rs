@@ -1,0 +1,1317 @@
+//! From a [`PbrtScene`] to this renderer's [`SceneDesc`], for the subset the
+//! renderer supports (see `docs/pbrt.md`): a perspective pinhole camera,
+//! diffuse and smooth dielectric materials, diffuse area lights on triangle
+//! meshes and full spheres, point lights, triangle meshes and full spheres,
+//! and the film, sampler, filter and integrator as recommended settings.
+//!
+//! What the scene uses and the renderer cannot render is collected, each at
+//! its place (`file:line: ...`), and refused as one error; with `lenient`,
+//! unsupported materials become grey diffuse, unsupported shapes and lights
+//! are skipped, and one warning per kind says how many. Parameters no
+//! conversion read are warnings, as in pbrt-v4.
+//!
+//! # Conventions
+//!
+//! * Camera: pbrt-v4's camera space is left-handed (+x right in the image,
+//!   +y up, +z forward) and `fov` spans the shorter image axis. The
+//!   position and axes come from `world_from_camera`. This renderer's image
+//!   right is `forward x up`; when pbrt's image right (camera +x in world
+//!   space) is the opposite, pbrt's picture is the mirror image of ours, and
+//!   the whole scene is reflected across the camera's vertical plane (the
+//!   plane through the camera spanned by its forward and up axes). The
+//!   camera is unchanged by that reflection and sees exactly pbrt's picture.
+//! * One-sided area lights emit on the side of pbrt's surface normal: for a
+//!   mesh with normals `N`, the side of the normals (turned by
+//!   `ReverseOrientation`, as pbrt-v4's `TriangleMesh` does); otherwise the
+//!   side of `cross(p1 - p0, p2 - p0)` in world space, turned when
+//!   [`Shape::flips_normals`]. Light triangles are ordered to emit there.
+//! * A diffuse area light's `power` is met per shape as pbrt-v4 does it: a
+//!   mesh is one light per triangle there, so each triangle emits `power`.
+
+use super::error::Loc;
+use super::ir::{Geometry, PbrtScene, Shape};
+use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
+use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
+use crate::error::{Error, Result};
+use crate::geometry::Sphere;
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Vec3;
+use crate::scene::mesh::MeshReport;
+use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use crate::settings::{Layer, Origin, SceneSettings, Value};
+use glam::Mat4;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::f32::consts::PI;
+use std::path::Path;
+
+/// How many unsupported places an error lists before "and N more".
+const LISTED: usize = 4;
+
+/// Reads a pbrt-v4 scene file and converts it. The report in
+/// `LoadedScene::meshes` names the scene file and carries the warnings.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
+    let start = std::time::Instant::now();
+    if let Some(m) = &opts.mesh {
+        return Err(Error::InvalidSetting(format!(
+            "--mesh {}: a pbrt-v4 scene names its own meshes",
+            m.display()
+        )));
+    }
+    let scene = super::load(path)?;
+    let converted = convert(&scene, path, opts.lenient)?;
+    let mut vertices = 0;
+    let mut has_normals = false;
+    for s in &scene.shapes {
+        if let Geometry::Mesh(m) = &s.geometry {
+            vertices += m.positions.len();
+            has_normals |= m.normals.is_some();
+        }
+    }
+    let report = MeshReport {
+        path: path.to_path_buf(),
+        vertices,
+        triangles: scene.triangle_count(),
+        has_normals,
+        seconds: start.elapsed().as_secs_f64(),
+        warnings: converted.warnings,
+    };
+    Ok(LoadedScene {
+        desc: converted.desc,
+        meshes: vec![report],
+    })
+}
+
+/// A converted scene and what the conversion has to say.
+#[derive(Clone, Debug)]
+pub struct Converted {
+    pub desc: SceneDesc,
+    /// One line each, without a `warning: ` prefix.
+    pub warnings: Vec<String>,
+    /// Whether the scene was reflected to show pbrt's (mirrored) picture.
+    pub mirrored: bool,
+}
+
+/// What kind of thing an unsupported feature is, for `--lenient`'s summary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Kind {
+    Material,
+    Shape,
+    Light,
+    Other,
+}
+
+#[derive(Clone, Debug)]
+struct Problem {
+    loc: Loc,
+    message: String,
+    kind: Kind,
+}
+
+/// A diffuse area light, read once for all its shapes.
+#[derive(Clone, Copy, Debug)]
+struct Emission {
+    /// Radiance before `power` scaling (`L` times `scale`).
+    radiance: Vec3,
+    /// `power`, when given (> 0).
+    power: Option<f32>,
+    two_sided: bool,
+}
+
+/// Converts a scene; `path` (the top-level file) names it. Unsupported
+/// features are an error unless `lenient`.
+pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converted> {
+    let name = path
+        .file_name()
+        .map(|s| {
+            s.to_string_lossy()
+                .trim_end_matches(".gz")
+                .trim_end_matches(".pbrt")
+                .to_string()
+        })
+        .unwrap_or_default();
+    let mut c = Conv {
+        scene,
+        problems: vec![],
+        warnings: vec![],
+        materials: HashMap::new(),
+        emissions: HashMap::new(),
+        read: vec![],
+        skipped_shapes: HashSet::new(),
+        replaced_materials: 0,
+        skipped_shapes_count: 0,
+        skipped_lights: 0,
+        dropped_light_triangles: 0,
+        black_emitters: 0,
+    };
+    let (camera, mirror) = c.camera()?;
+    let mut desc = SceneDesc::empty(&name, camera);
+    desc.settings = c.settings()?;
+    c.lights(&mut desc)?;
+    c.shapes(&mut desc)?;
+    for n in &scene.warnings {
+        c.warnings.push(format!("{}: {}", n.loc.file_line(), n.message));
+    }
+    for n in &scene.unsupported {
+        let kind = if c.skipped_shapes.contains(&n.loc) {
+            Kind::Shape
+        } else {
+            Kind::Other
+        };
+        c.problems.push(Problem {
+            loc: n.loc.clone(),
+            message: n.message.clone(),
+            kind,
+        });
+    }
+    c.report_unused();
+    if c.dropped_light_triangles > 0 {
+        c.warnings.push(format!(
+            "{} emitting triangles of zero area dropped",
+            c.dropped_light_triangles
+        ));
+    }
+    if c.black_emitters > 0 {
+        c.warnings.push(format!(
+            "{} emitting shapes have a material that reflects light; emitters here reflect nothing",
+            c.black_emitters
+        ));
+    }
+    if !c.problems.is_empty() {
+        if !lenient {
+            return Err(c.error());
+        }
+        c.lenient_summary();
+    }
+    if mirror {
+        reflect(&mut desc);
+    }
+    Ok(Converted {
+        desc,
+        warnings: c.warnings,
+        mirrored: mirror,
+    })
+}
+
+struct Conv<'a> {
+    scene: &'a PbrtScene,
+    problems: Vec<Problem>,
+    warnings: Vec<String>,
+    /// pbrt material index -> this scene's material index.
+    materials: HashMap<usize, u32>,
+    /// Area light index -> its emission (None: unsupported, reported).
+    emissions: HashMap<usize, Option<Emission>>,
+    /// Parameter lists whose unused entries are reported (supported
+    /// directives only).
+    read: Vec<&'a Params>,
+    skipped_shapes: HashSet<Loc>,
+    replaced_materials: usize,
+    skipped_shapes_count: usize,
+    skipped_lights: usize,
+    dropped_light_triangles: usize,
+    black_emitters: usize,
+}
+
+fn origin(loc: &Loc) -> Origin {
+    Origin::SceneFile {
+        path: loc.file.as_ref().clone(),
+        line: loc.line as usize,
+    }
+}
+
+/// The place of a parameter if given, else of its directive.
+fn place<'p>(params: &'p Params, name: &str, directive: &'p Loc) -> &'p Loc {
+    params.loc_of(name).unwrap_or(directive)
+}
+
+impl<'a> Conv<'a> {
+    fn problem(&mut self, kind: Kind, loc: &Loc, message: impl Into<String>) {
+        self.problems.push(Problem {
+            loc: loc.clone(),
+            message: message.into(),
+            kind,
+        });
+    }
+
+    fn warn(&mut self, loc: &Loc, message: impl AsRef<str>) {
+        self.warnings.push(format!("{}: {}", loc.file_line(), message.as_ref()));
+    }
+
+    /// The error listing every unsupported place, on one line.
+    fn error(&self) -> Error {
+        let mut problems = self.problems.clone();
+        problems.sort_by(|a, b| (a.loc.file.as_ref(), a.loc.line).cmp(&(b.loc.file.as_ref(), b.loc.line)));
+        problems.dedup_by(|a, b| a.loc.file == b.loc.file && a.loc.line == b.loc.line && a.message == b.message);
+        let first = &problems[0];
+        let mut message = first.message.clone();
+        for p in problems.iter().skip(1).take(LISTED - 1) {
+            message += &format!("; {}: {}", p.loc.file_line(), p.message);
+        }
+        if problems.len() > LISTED {
+            message += &format!("; and {} more", problems.len() - LISTED);
+        }
+        message += " (not supported: --lenient renders the rest)";
+        Error::Syntax {
+            path: first.loc.file.as_ref().clone(),
+            line: first.loc.line as usize,
+            message,
+        }
+    }
+
+    /// With `--lenient`: one warning per kind of substitution.
+    fn lenient_summary(&mut self) {
+        let first = |k: Kind| {
+            self.problems
+                .iter()
+                .find(|p| p.kind == k)
+                .map(|p| format!("{}: {}", p.loc.file_line(), p.message))
+                .unwrap_or_default()
+        };
+        let others = self.problems.iter().filter(|p| p.kind == Kind::Other).count();
+        let lines = [
+            (
+                self.replaced_materials,
+                "materials of unsupported types replaced by grey diffuse (0.5)",
+                first(Kind::Material),
+            ),
+            (
+                self.skipped_shapes_count,
+                "unsupported shapes skipped",
+                first(Kind::Shape),
+            ),
+            (self.skipped_lights, "unsupported lights skipped", first(Kind::Light)),
+            (others, "unsupported features ignored", first(Kind::Other)),
+        ];
+        for (n, what, example) in lines {
+            if n > 0 {
+                self.warnings.push(format!("--lenient: {n} {what} (first: {example})"));
+            }
+        }
+    }
+
+    fn report_unused(&mut self) {
+        // Shapes of one instance share their parameters: each list once.
+        let mut seen = HashSet::new();
+        let mut groups: BTreeMap<(String, String), (Loc, usize)> = BTreeMap::new();
+        let mut order = vec![];
+        for params in &self.read {
+            if !seen.insert(*params as *const Params) {
+                continue;
+            }
+            for p in params.unused() {
+                let key = (p.ty.name().to_string(), p.name.clone());
+                match groups.get_mut(&key) {
+                    Some(g) => g.1 += 1,
+                    None => {
+                        groups.insert(key.clone(), (p.loc.clone(), 1));
+                        order.push(key);
+                    }
+                }
+            }
+        }
+        for key in order {
+            let (loc, n) = &groups[&key];
+            let more = if *n > 1 {
+                format!(" (and {} more places)", n - 1)
+            } else {
+                String::new()
+            };
+            self.warn(loc, format!("parameter \"{} {}\" is not used{more}", key.0, key.1));
+        }
+    }
+
+    // ---- camera and film ---------------------------------------------------
+
+    /// The camera and film, and whether pbrt's picture is our mirror image.
+    fn camera(&mut self) -> Result<(CameraDesc, bool)> {
+        let scene = self.scene;
+        let film = &scene.film;
+        let film_loc = film.loc.clone().unwrap_or_else(|| self.default_loc());
+        if film.ty != "rgb" {
+            self.problem(
+                Kind::Other,
+                &film_loc,
+                format!("Film \"{}\" is not supported (only \"rgb\")", film.ty),
+            );
+        }
+        let fp = &film.params;
+        let width = fp.get_int("xresolution", 1280)?;
+        let height = fp.get_int("yresolution", 720)?;
+        if width <= 0 || height <= 0 {
+            return Err(located(
+                &film_loc,
+                format!("Film: resolution {width}x{height} must be positive"),
+            ));
+        }
+        let (width, height) = (width as u32, height as u32);
+        crate::limits::check_resolution(width, height).map_err(|m| located(&film_loc, format!("Film: {m}")))?;
+        fp.mark_used("filename", super::ParamType::String);
+        fp.mark_used("savefp16", super::ParamType::Bool);
+        fp.mark_used("diagonal", super::ParamType::Float);
+        for p in ["cropwindow", "pixelbounds"] {
+            if fp.has(p) {
+                self.problem(
+                    Kind::Other,
+                    place(fp, p, &film_loc),
+                    format!("Film: \"{p}\" is not supported"),
+                );
+                fp.mark_used(p, super::ParamType::Float);
+                fp.mark_used(p, super::ParamType::Integer);
+            }
+        }
+        if fp.get_float("iso", 100.0)? != 100.0 || fp.get_float("exposuretime", 1.0)? != 1.0 {
+            self.problem(
+                Kind::Other,
+                &film_loc,
+                "Film: \"iso\" and \"exposuretime\" other than 100 and 1 are not supported",
+            );
+        }
+        if fp.get_string_or("sensor", "cie1931")? != "cie1931" || fp.get_float("whitebalance", 0.0)? != 0.0 {
+            self.problem(
+                Kind::Other,
+                &film_loc,
+                "Film: camera sensors and white balance are not supported",
+            );
+        }
+        self.read.push(fp);
+
+        let cam = &scene.camera;
+        let cam_loc = cam.loc.clone().unwrap_or_else(|| self.default_loc());
+        if cam.ty != "perspective" {
+            self.problem(
+                Kind::Other,
+                &cam_loc,
+                format!("Camera \"{}\" is not supported (only \"perspective\")", cam.ty),
+            );
+        }
+        let cp = &cam.params;
+        let fov = cp.get_float("fov", 90.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(located(
+                &cam_loc,
+                format!("Camera: fov {fov} must be in (0, 180) degrees"),
+            ));
+        }
+        let window = cam.screen_window(width, height)?;
+        let frame = width as f32 / height as f32;
+        let default = if frame > 1.0 {
+            [-frame, frame, -1.0, 1.0]
+        } else {
+            [-1.0, 1.0, -1.0 / frame, 1.0 / frame]
+        };
+        if window
+            .iter()
+            .zip(default)
+            .any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0))
+        {
+            let p = if cp.has("screenwindow") {
+                "screenwindow"
+            } else {
+                "frameaspectratio"
+            };
+            self.problem(
+                Kind::Other,
+                place(cp, p, &cam_loc),
+                format!("Camera: a \"{p}\" other than the film's is not supported"),
+            );
+        }
+        if cp.get_float("lensradius", 0.0)? > 0.0 {
+            self.warn(
+                place(cp, "lensradius", &cam_loc),
+                "Camera: \"lensradius\" > 0: rendered as a pinhole camera",
+            );
+        }
+        cp.mark_used("focaldistance", super::ParamType::Float);
+        cp.mark_used("shutteropen", super::ParamType::Float);
+        cp.mark_used("shutterclose", super::ParamType::Float);
+        self.read.push(cp);
+
+        // pbrt's camera axes in world space.
+        let m = cam.world_from_camera;
+        let position = m.transform_point3(Vec3::ZERO);
+        let x = m.transform_vector3(Vec3::X);
+        let y = m.transform_vector3(Vec3::Y);
+        let z = m.transform_vector3(Vec3::Z);
+        let (lx, ly, lz) = (x.length(), y.length(), z.length());
+        let orthogonal = x.dot(y).abs() <= 1e-4 * lx * ly
+            && x.dot(z).abs() <= 1e-4 * lx * lz
+            && y.dot(z).abs() <= 1e-4 * ly * lz
+            && (lx - ly).abs() <= 1e-4 * lx.max(ly)
+            && m.row(3).abs_diff_eq(glam::Vec4::W, 1e-6);
+        if !(orthogonal && lx > 0.0 && lz > 0.0 && position.is_finite()) {
+            return Err(located(
+                &cam_loc,
+                "Camera: the camera transformation shears, scales x and y differently or projects: not supported",
+            ));
+        }
+        let (forward, up) = (z / lz, y / ly);
+        // pbrt's ray through screen point (sx, sy) goes along sx t X + sy t Y + Z.
+        let tan = (fov.to_radians() * 0.5).tan() * lx / lz;
+        let tan_y = if width >= height {
+            tan
+        } else {
+            tan * height as f32 / width as f32
+        };
+        let fov_y_deg = 2.0 * tan_y.atan().to_degrees();
+        let mirror = forward.cross(up).dot(x) < 0.0;
+        Ok((
+            CameraDesc {
+                position,
+                look_at: position + forward,
+                up,
+                fov_y_deg,
+                width,
+                height,
+            },
+            mirror,
+        ))
+    }
+
+    /// Where defaults "are": line 1 of the top-level file.
+    fn default_loc(&self) -> Loc {
+        let file = self.scene.files.first().cloned().unwrap_or_default();
+        Loc::new(std::sync::Arc::new(file), 1, 1)
+    }
+
+    // ---- settings ----------------------------------------------------------
+
+    /// The render settings the file asks for (scene layer) and pbrt-v4's
+    /// defaults for what it does not say (preset layer).
+    fn settings(&mut self) -> Result<SceneSettings> {
+        let scene = self.scene;
+        let mut out = SceneSettings::default();
+        let defaults = Origin::Preset("pbrt-v4 defaults".into());
+        let mut set = |c: &mut Self, given: Option<&Loc>, name: &str, value: Value| {
+            let (layer, o) = match given {
+                Some(l) => (&mut out.scene_file, origin(l)),
+                None => (&mut out.preset, defaults.clone()),
+            };
+            if let Err(e) = set_in(layer, name, value, o) {
+                let loc = given.cloned().unwrap_or_else(|| c.default_loc());
+                c.problem(Kind::Other, &loc, e);
+            }
+        };
+
+        // Sampler.
+        let s = &scene.sampler;
+        let sp = &s.params;
+        let spp = if s.ty == "stratified" {
+            sp.get_int("xsamples", 4)? as i64 * sp.get_int("ysamples", 4)? as i64
+        } else {
+            sp.get_int("pixelsamples", 16)? as i64
+        };
+        let spp_loc = sp
+            .loc_of("pixelsamples")
+            .or(sp.loc_of("xsamples"))
+            .or(s.loc.as_ref())
+            .cloned();
+        set(self, spp_loc.as_ref(), "spp", Value::Int(spp.max(0) as u64));
+        let seed = sp.get_int("seed", 0)?;
+        if let Some(l) = sp.loc_of("seed").cloned() {
+            set(self, Some(&l), "seed", Value::Int(seed.max(0) as u64));
+        }
+        for (name, ty) in [
+            ("jitter", super::ParamType::Bool),
+            ("randomization", super::ParamType::String),
+        ] {
+            sp.mark_used(name, ty);
+        }
+        self.read.push(sp);
+
+        // Pixel filter.
+        let f = &scene.filter;
+        let fp = &f.params;
+        let floc = f.loc.clone().unwrap_or_else(|| self.default_loc());
+        let (ours, default_radius) = match f.ty.as_str() {
+            "box" => ("box", 0.5),
+            "triangle" => ("tent", 2.0),
+            "gaussian" => ("gaussian", 1.5),
+            other => {
+                self.warn(
+                    &floc,
+                    format!("PixelFilter \"{other}\" is not supported: the gaussian filter is used"),
+                );
+                ("gaussian", 1.5)
+            }
+        };
+        let xr = fp.get_float("xradius", default_radius)?;
+        let yr = fp.get_float("yradius", default_radius)?;
+        let sigma = fp.get_float("sigma", 0.5)?;
+        let ours_radius = match ours {
+            "box" => 0.5,
+            "tent" => 1.0,
+            _ => 1.5,
+        };
+        let known = f.ty == ours || f.ty == "triangle";
+        if known && (xr != ours_radius || yr != ours_radius || (ours == "gaussian" && sigma != 0.5)) {
+            {
+                self.warn(
+                    &floc,
+                    format!(
+                        "PixelFilter \"{}\" of radius {xr} x {yr}{}: rendered with radius {ours_radius}{}",
+                        f.ty,
+                        if ours == "gaussian" {
+                            format!(", sigma {sigma}")
+                        } else {
+                            String::new()
+                        },
+                        if ours == "gaussian" { ", sigma 0.5" } else { "" }
+                    ),
+                );
+            }
+        }
+        for n in ["B", "C", "tau"] {
+            fp.mark_used(n, super::ParamType::Float);
+        }
+        set(self, f.loc.as_ref(), "filter", Value::Name(ours));
+        self.read.push(fp);
+
+        // Integrator.
+        let i = &scene.integrator;
+        let ip = &i.params;
+        let iloc = i.loc.clone().unwrap_or_else(|| self.default_loc());
+        let depth_loc = ip.loc_of("maxdepth").cloned();
+        let max_depth = ip.get_int("maxdepth", 5)?;
+        match i.ty.as_str() {
+            "path" | "volpath" | "bdpt" | "mlt" | "simplepath" | "simplevolpath" | "randomwalk" | "lightpath" => {
+                set(self, i.loc.as_ref(), "integrator", Value::Name("path"));
+                set(
+                    self,
+                    depth_loc.as_ref().or(i.loc.as_ref()),
+                    "max_depth",
+                    Value::Int(max_depth.max(0) as u64),
+                );
+            }
+            "sppm" => {
+                set(self, i.loc.as_ref(), "integrator", Value::Name("sppm"));
+                let passes = ip.get_int("iterations", ip.get_int("numiterations", 64)?)?;
+                let at = |n: &str| ip.loc_of(n).cloned();
+                let passes_loc = at("iterations").or(at("numiterations"));
+                set(self, passes_loc.as_ref(), "passes", Value::Int(passes.max(0) as u64));
+                let photons = ip.get_int("photonsperiteration", -1)?;
+                let photons = if photons > 0 {
+                    photons as u64
+                } else {
+                    self.scene_pixels()
+                };
+                set(self, at("photonsperiteration").as_ref(), "photons", Value::Int(photons));
+                let radius = ip.get_float("radius", 1.0)?;
+                set(self, at("radius").as_ref(), "gather_radius", Value::Real(radius));
+                set(
+                    self,
+                    depth_loc.as_ref(),
+                    "max_bounces",
+                    Value::Int(max_depth.clamp(1, 100) as u64),
+                );
+                if !(1..=100).contains(&max_depth) {
+                    self.warn(
+                        &iloc,
+                        format!("Integrator \"sppm\": maxdepth {max_depth} clamped to 1..100"),
+                    );
+                }
+                ip.mark_used("seed", super::ParamType::Integer);
+            }
+            other => {
+                self.problem(Kind::Other, &iloc, format!("Integrator \"{other}\" is not supported"));
+                set(self, Some(&iloc), "integrator", Value::Name("path"));
+            }
+        }
+        for (n, t) in [
+            ("regularize", super::ParamType::Bool),
+            ("lightsampler", super::ParamType::String),
+        ] {
+            if ip.has(n) {
+                self.warn(place(ip, n, &iloc), format!("Integrator: \"{n}\" is ignored"));
+                ip.mark_used(n, t);
+            }
+        }
+        self.read.push(ip);
+        for o in &scene.options {
+            self.warn(&o.loc, format!("Option \"{}\" is ignored", o.name));
+        }
+        Ok(out)
+    }
+
+    fn scene_pixels(&self) -> u64 {
+        let p = &self.scene.film.params;
+        let w = p.get_int("xresolution", 1280).unwrap_or(1280).max(1) as u64;
+        let h = p.get_int("yresolution", 720).unwrap_or(720).max(1) as u64;
+        w * h
+    }
+
+    // ---- lights ------------------------------------------------------------
+
+    fn lights(&mut self, desc: &mut SceneDesc) -> Result<()> {
+        let scene = self.scene;
+        for l in &scene.lights {
+            let p = &l.params;
+            match l.ty.as_str() {
+                "point" => {
+                    let Some(i) = self.light_colour(p, "I", &l.loc)? else {
+                        self.skipped_lights += 1;
+                        continue;
+                    };
+                    let scale = p.get_float("scale", 1.0)?;
+                    let from = p.get_point3("from", Vec3::ZERO)?;
+                    let position = l.world_from_light.transform_point3(from);
+                    let mut power = i * scale * 4.0 * PI;
+                    let phi = p.get_float("power", -1.0)?;
+                    if phi > 0.0 {
+                        power = i * scale * phi;
+                    }
+                    desc.lights.push(Light::Point { position, power });
+                    self.read.push(p);
+                }
+                other => {
+                    self.problem(Kind::Light, &l.loc, format!("light \"{other}\" is not supported"));
+                    self.skipped_lights += 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A light's colour parameter as RGB (pbrt's default: the colour space's
+    /// illuminant, white); None when unsupported (reported).
+    fn light_colour(&mut self, p: &Params, name: &str, loc: &Loc) -> Result<Option<Vec3>> {
+        let Some(v) = p.get_spectrum(name)? else {
+            return Ok(Some(Vec3::ONE));
+        };
+        let at = place(p, name, loc).clone();
+        if let Some(cs) = colour_space(p, name) {
+            self.problem(
+                Kind::Light,
+                &at,
+                format!("\"{name}\": rgb in colour space \"{cs}\" is not supported"),
+            );
+            return Ok(None);
+        }
+        let rgb = match &v {
+            // Normalised to luminance 1 by pbrt, D65 is white in sRGB.
+            SpectrumValue::Named(n) if n == "stdillum-D65" => Some(Vec3::ONE),
+            _ => v.light_rgb(),
+        };
+        match rgb {
+            Some(c) if c.is_finite() && c.min_element() >= 0.0 => Ok(Some(c)),
+            Some(c) => Err(located(
+                &at,
+                format!("\"{name}\" {c:?}: must be finite and not negative"),
+            )),
+            None => {
+                self.problem(Kind::Light, &at, format!("\"{name}\": this spectrum is not supported"));
+                Ok(None)
+            }
+        }
+    }
+
+    fn emission(&mut self, index: usize) -> Result<Option<Emission>> {
+        if let Some(e) = self.emissions.get(&index) {
+            return Ok(*e);
+        }
+        let scene = self.scene;
+        let al = &scene.area_lights[index];
+        let p = &al.params;
+        let e = if al.ty != "diffuse" {
+            self.problem(
+                Kind::Light,
+                &al.loc,
+                format!("AreaLightSource \"{}\" is not supported", al.ty),
+            );
+            None
+        } else if p.has("filename") {
+            self.problem(
+                Kind::Light,
+                place(p, "filename", &al.loc),
+                "AreaLightSource: an emission image is not supported",
+            );
+            None
+        } else {
+            let colour = self.light_colour(p, "L", &al.loc)?;
+            let scale = p.get_float("scale", 1.0)?;
+            let two_sided = p.get_bool("twosided", false)?;
+            let power = p.get_float("power", -1.0)?;
+            self.read.push(p);
+            colour.map(|c| Emission {
+                radiance: c * scale,
+                power: (power > 0.0).then_some(power),
+                two_sided,
+            })
+        };
+        if e.is_none() {
+            // Its shapes are drawn without emission.
+            self.skipped_lights += 1;
+        }
+        self.emissions.insert(index, e);
+        Ok(e)
+    }
+
+    // ---- materials -----------------------------------------------------------
+
+    fn material(&mut self, desc: &mut SceneDesc, index: usize) -> Result<u32> {
+        if let Some(&i) = self.materials.get(&index) {
+            return Ok(i);
+        }
+        let scene = self.scene;
+        let m = &scene.materials[index];
+        let loc = m.loc.clone().unwrap_or_else(|| self.default_loc());
+        let name = match (&m.name, &m.loc) {
+            (Some(n), _) => n.clone(),
+            (None, Some(l)) => format!("{} ({})", m.ty, l.file_line()),
+            (None, None) => "default".into(),
+        };
+        let converted = match convert_material(&m.ty, &m.params, &loc)? {
+            Ok(mat) => {
+                self.read.push(&m.params);
+                mat
+            }
+            Err(why) => {
+                let what = match &m.name {
+                    Some(n) => format!("material \"{n}\" ({why})"),
+                    None => format!("material ({why})"),
+                };
+                self.problem(Kind::Material, &loc, what);
+                self.replaced_materials += 1;
+                Material::diffuse(0.5, 0.5, 0.5)
+            }
+        };
+        let i = desc.material(&name, converted);
+        self.materials.insert(index, i);
+        Ok(i)
+    }
+
+    // ---- shapes --------------------------------------------------------------
+
+    fn skip_shape(&mut self, shape: &Shape) {
+        self.skipped_shapes.insert(shape.loc.clone());
+        self.skipped_shapes_count += 1;
+    }
+
+    fn shapes(&mut self, desc: &mut SceneDesc) -> Result<()> {
+        let scene = self.scene;
+        for shape in &scene.shapes {
+            let p: &Params = &shape.params;
+            match &shape.geometry {
+                Geometry::Other => {
+                    self.skip_shape(shape);
+                    continue;
+                }
+                Geometry::Disk(d) => {
+                    if !d.is_partial() {
+                        self.problem(Kind::Shape, &shape.loc, "shape \"disk\" is not supported");
+                    }
+                    self.skip_shape(shape);
+                    continue;
+                }
+                Geometry::Sphere(s) if s.is_partial() => {
+                    self.skip_shape(shape);
+                    continue;
+                }
+                _ => {}
+            }
+            match p.get_float_or_texture("alpha")? {
+                Some(FloatOrTexture::Value(a)) if a >= 1.0 => {}
+                None => {}
+                Some(_) => {
+                    self.problem(
+                        Kind::Shape,
+                        place(p, "alpha", &shape.loc),
+                        "\"alpha\" cut-outs are not supported",
+                    );
+                    self.skip_shape(shape);
+                    continue;
+                }
+            }
+            let emission = match shape.area_light {
+                Some(i) => self.emission(i)?,
+                None => None,
+            };
+            if let (Some(_), Some(m)) = (emission, scene.materials.get(shape.material)) {
+                if reflects(m) {
+                    self.black_emitters += 1;
+                }
+            }
+            let m = shape.world_from_object;
+            match &shape.geometry {
+                Geometry::Mesh(mesh) => {
+                    let world: Vec<Vec3> = mesh.positions.iter().map(|&v| m.project_point3(v)).collect();
+                    let normal_matrix = m.inverse().transpose();
+                    let sign = if shape.reverse_orientation { -1.0 } else { 1.0 };
+                    let normals: Option<Vec<Vec3>> = mesh.normals.as_ref().map(|ns| {
+                        ns.iter()
+                            .map(|&n| normal_matrix.transform_vector3(n).normalize_or_zero() * sign)
+                            .collect()
+                    });
+                    if let Some(e) = emission {
+                        let flip = shape.flips_normals();
+                        for t in &mesh.triangles {
+                            let [a, b, c] = t.map(|i| world[i as usize]);
+                            let cross = (b - a).cross(c - a);
+                            let area = 0.5 * cross.length();
+                            if !(area > 0.0 && area.is_finite()) {
+                                self.dropped_light_triangles += 1;
+                                continue;
+                            }
+                            let side = match &normals {
+                                Some(ns) => t.iter().map(|&i| ns[i as usize]).sum::<Vec3>(),
+                                None if flip => -cross,
+                                None => cross,
+                            };
+                            let vertices = if side.dot(cross) < 0.0 { [a, c, b] } else { [a, b, c] };
+                            let sides = if e.two_sided { 2.0 } else { 1.0 };
+                            let radiance = match e.power {
+                                Some(phi) => e.radiance * (phi / (sides * area * PI)),
+                                None => e.radiance,
+                            };
+                            desc.lights.push(Light::Triangle {
+                                vertices,
+                                radiance,
+                                two_sided: e.two_sided,
+                            });
+                        }
+                    } else {
+                        let material = self.material(desc, shape.material)?;
+                        for t in &mesh.triangles {
+                            desc.triangles.push(TriangleDesc {
+                                vertices: t.map(|i| world[i as usize]),
+                                normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
+                                material,
+                            });
+                        }
+                    }
+                }
+                Geometry::Sphere(s) => {
+                    let Some((centre, scale)) = similarity(m) else {
+                        self.problem(
+                            Kind::Shape,
+                            &shape.loc,
+                            "a sphere under a transformation other than rotation, uniform scale and translation is not supported",
+                        );
+                        self.skip_shape(shape);
+                        continue;
+                    };
+                    let sphere = Sphere {
+                        centre,
+                        radius: s.radius.abs() * scale,
+                    };
+                    if let Some(e) = emission {
+                        if shape.flips_normals() && !e.two_sided {
+                            self.problem(
+                                Kind::Light,
+                                &shape.loc,
+                                "a sphere light emitting inwards (ReverseOrientation) is not supported",
+                            );
+                            self.skipped_lights += 1;
+                            continue;
+                        }
+                        let area = 4.0 * PI * sphere.radius * sphere.radius;
+                        let sides = if e.two_sided { 2.0 } else { 1.0 };
+                        let radiance = match e.power {
+                            Some(phi) => e.radiance * (phi / (sides * area * PI)),
+                            None => e.radiance,
+                        };
+                        desc.lights.push(Light::Sphere {
+                            sphere,
+                            power: radiance * PI * area,
+                        });
+                    } else {
+                        let material = self.material(desc, shape.material)?;
+                        desc.spheres.push(SphereDesc { sphere, material });
+                    }
+                }
+                _ => unreachable!("skipped above"),
+            }
+            self.read.push(p);
+        }
+        Ok(())
+    }
+}
+
+fn set_in(layer: &mut Layer, name: &str, value: Value, o: Origin) -> std::result::Result<(), String> {
+    layer.set(name, value, o).map_err(|e| e.to_string())
+}
+
+fn located(loc: &Loc, message: impl Into<String>) -> Error {
+    Error::Syntax {
+        path: loc.file.as_ref().clone(),
+        line: loc.line as usize,
+        message: message.into(),
+    }
+}
+
+/// The colour space of an `rgb` parameter when it is not sRGB.
+fn colour_space(p: &Params, name: &str) -> Option<String> {
+    let param: &Param = p.get(name)?;
+    (param.ty == super::ParamType::Rgb && &*param.color_space != "srgb").then(|| param.color_space.to_string())
+}
+
+/// Whether a material (as pbrt would render it) reflects any light.
+fn reflects(m: &super::ir::Material) -> bool {
+    match m.ty.as_str() {
+        "diffuse" => match m.params.get("reflectance") {
+            None => true,
+            Some(p) => p
+                .spectra()
+                .iter()
+                .any(|s| s.to_rgb().is_none_or(|c| c.max_element() > 0.0)),
+        },
+        _ => true,
+    }
+}
+
+/// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`).
+fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Result<Material, String>> {
+    for (n, what) in [("displacement", "displacement"), ("normalmap", "normal maps")] {
+        if p.has(n) {
+            return Ok(Err(format!("{what} are not supported")));
+        }
+    }
+    match ty {
+        "diffuse" => {
+            let albedo = match p.get_spectrum_or_texture("reflectance")? {
+                None => Vec3::splat(0.5),
+                Some(SpectrumOrTexture::Texture(t)) => {
+                    return Ok(Err(format!(
+                        "a textured reflectance (texture \"{t}\") is not supported"
+                    )));
+                }
+                Some(SpectrumOrTexture::Value(v)) => {
+                    if let Some(cs) = colour_space(p, "reflectance") {
+                        return Ok(Err(format!("rgb in colour space \"{cs}\" is not supported")));
+                    }
+                    match reflectance_rgb(&v) {
+                        Some(c) => c,
+                        None => return Ok(Err("a reflectance given as this spectrum is not supported".into())),
+                    }
+                }
+            };
+            if !albedo.is_finite() {
+                return Err(located(loc, "diffuse: \"reflectance\" must be finite"));
+            }
+            Ok(Ok(Material::Diffuse {
+                albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE),
+            }))
+        }
+        "dielectric" => {
+            let eta = match p.get("eta") {
+                None => 1.5,
+                Some(e) if e.ty == super::ParamType::Float => p.get_float("eta", 1.5)?,
+                Some(_) => match p.get_spectrum("eta")? {
+                    Some(SpectrumValue::Sampled(s))
+                        if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
+                    {
+                        s.value[0]
+                    }
+                    _ => {
+                        return Ok(Err(
+                            "an \"eta\" that varies with wavelength (dispersion) is not supported".into(),
+                        ))
+                    }
+                },
+            };
+            if !(eta.is_finite() && eta > 0.0) {
+                return Err(located(
+                    loc,
+                    format!("dielectric: \"eta\" {eta} must be a positive number"),
+                ));
+            }
+            let remap = p.get_bool("remaproughness", true)?;
+            let mut alpha: f32 = 0.0;
+            let r = p.get_float_or_texture("roughness")?;
+            for n in ["uroughness", "vroughness"] {
+                let v = match p.get_float_or_texture(n)?.or(r.clone()) {
+                    None => 0.0,
+                    Some(FloatOrTexture::Value(v)) => v,
+                    Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured roughness is not supported".into())),
+                };
+                let a = if remap { v.max(0.0).sqrt() } else { v };
+                alpha = alpha.max(a);
+            }
+            // pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth.
+            if alpha >= 1e-3 {
+                return Ok(Err("a rough dielectric is not supported".into()));
+            }
+            Ok(Ok(Material::Glass { ior: eta }))
+        }
+        other => Ok(Err(format!("type \"{other}\" is not supported"))),
+    }
+}
+
+/// A reflectance spectrum's RGB: an `rgb` as given; a sampled spectrum's
+/// colour divided by that of the constant spectrum 1 (so a constant
+/// reflectance is that grey).
+fn reflectance_rgb(v: &SpectrumValue) -> Option<Vec3> {
+    match v {
+        SpectrumValue::Rgb(c) => Some(*c),
+        SpectrumValue::Sampled(s) => {
+            let white = xyz_to_linear_srgb(spectrum_to_xyz(|_| 1.0));
+            Some(s.to_rgb() / white)
+        }
+        _ => None,
+    }
+}
+
+/// Centre and scale of a transformation that is a rotation (or
+/// reflection) times a uniform scale plus a translation.
+fn similarity(m: Mat4) -> Option<(Vec3, f32)> {
+    if !m.row(3).abs_diff_eq(glam::Vec4::W, 1e-6) {
+        return None;
+    }
+    let axes = [Vec3::X, Vec3::Y, Vec3::Z].map(|a| m.transform_vector3(a));
+    let s = axes[0].length();
+    let tol = 1e-4 * s;
+    let ok = s > 0.0
+        && axes.iter().all(|a| (a.length() - s).abs() <= tol)
+        && axes[0].dot(axes[1]).abs() <= tol * s
+        && axes[0].dot(axes[2]).abs() <= tol * s
+        && axes[1].dot(axes[2]).abs() <= tol * s;
+    let centre = m.transform_point3(Vec3::ZERO);
+    (ok && centre.is_finite() && s.is_finite()).then_some((centre, s))
+}
+
+/// Reflects the scene across the camera's vertical plane (through the
+/// camera, spanned by forward and up): the camera then sees pbrt's mirror
+/// image of our convention. Triangles keep the side they face.
+fn reflect(desc: &mut SceneDesc) {
+    let c = &desc.camera;
+    let forward = (c.look_at - c.position).normalize();
+    let n = forward.cross(c.up).normalize();
+    let o = c.position;
+    let point = |p: Vec3| p - 2.0 * (p - o).dot(n) * n;
+    let vector = |v: Vec3| v - 2.0 * v.dot(n) * n;
+    for t in &mut desc.triangles {
+        let [a, b, c] = t.vertices.map(point);
+        t.vertices = [a, c, b];
+        if let Some(ns) = &mut t.normals {
+            let [a, b, c] = ns.map(vector);
+            *ns = [a, c, b];
+        }
+    }
+    for s in &mut desc.spheres {
+        s.sphere.centre = point(s.sphere.centre);
+    }
+    for l in &mut desc.lights {
+        match l {
+            Light::Sphere { sphere, .. } => sphere.centre = point(sphere.centre),
+            Light::Point { position, .. } => *position = point(*position),
+            Light::Triangle { vertices, .. } => {
+                let [a, b, c] = vertices.map(point);
+                *vertices = [a, c, b];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{PrimKind, Scene};
+
+    fn convert_text(text: &str, lenient: bool) -> Result<Converted> {
+        let path = Path::new("dir/main.pbrt");
+        let scene = super::super::parse_bytes(path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk)?;
+        convert(&scene, path, lenient)
+    }
+
+    fn ok(text: &str) -> Converted {
+        convert_text(text, false).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// A unit quad in the z = 0 plane at x in [x0, x0 + 1], y in [-0.5, 0.5],
+    /// (p1 - p0) x (p2 - p0) along +z.
+    fn quad(x0: f32) -> String {
+        let x1 = x0 + 1.0;
+        format!(
+            "Shape \"trianglemesh\" \"point3 P\" [ {x0} -0.5 0  {x1} -0.5 0  {x1} 0.5 0  {x0} 0.5 0 ] \
+             \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+        )
+    }
+
+    /// The material name seen at pixel (x, y).
+    fn seen(c: &Converted, x: f32, y: f32) -> Option<String> {
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let ray = scene.camera.generate_ray(x, y);
+        let hit = scene.intersect(&ray, 1e-4, f32::INFINITY)?;
+        (hit.kind != PrimKind::Light).then(|| scene.material_names[hit.material as usize].clone())
+    }
+
+    /// A red quad at world x in [0.5, 1.5] and a green one at [-1.5, -0.5],
+    /// seen from z = -5 looking at the origin; `pre` comes before LookAt.
+    fn two_quads(pre: &str) -> Converted {
+        ok(&format!(
+            "{pre}LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+             MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
+             MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
+             NamedMaterial \"red\"\n{}NamedMaterial \"green\"\n{}",
+            quad(0.5),
+            quad(-1.5)
+        ))
+    }
+
+    #[test]
+    fn image_orientation_follows_pbrt() {
+        // pbrt's LookAt camera has +x (image right) = up x forward: world +x
+        // here, so the quad at +x is on the right of pbrt's picture.
+        let c = two_quads("");
+        assert!(c.mirrored);
+        assert_eq!(seen(&c, 27.0, 10.0).as_deref(), Some("red"));
+        assert_eq!(seen(&c, 13.0, 10.0).as_deref(), Some("green"));
+        // The exporters' `Scale -1 1 1` turns image right to world -x.
+        let c = two_quads("Scale -1 1 1\n");
+        assert!(!c.mirrored);
+        assert_eq!(seen(&c, 27.0, 10.0).as_deref(), Some("green"));
+        assert_eq!(seen(&c, 13.0, 10.0).as_deref(), Some("red"));
+        // Up is up: a quad above the axis is in the upper half.
+        let c = ok(&format!(
+            "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \
+             \"integer xresolution\" [ 20 ] \"integer yresolution\" [ 20 ]\nWorldBegin\nTranslate -0.5 1 0\n{}",
+            quad(0.0)
+        ));
+        assert!(seen(&c, 10.0, 8.0).is_some() && seen(&c, 10.0, 12.0).is_none());
+    }
+
+    #[test]
+    fn fov_spans_the_shorter_axis() {
+        let cam = |w: u32, h: u32| {
+            ok(&format!(
+                "Camera \"perspective\" \"float fov\" [ 60 ]\nFilm \"rgb\" \"integer xresolution\" [ {w} ] \
+                 \"integer yresolution\" [ {h} ]\nWorldBegin\n"
+            ))
+            .desc
+            .camera
+        };
+        assert!((cam(200, 100).fov_y_deg - 60.0).abs() < 1e-4);
+        let tall = cam(100, 200).fov_y_deg;
+        let expected = 2.0 * (2.0 * 30f32.to_radians().tan()).atan().to_degrees();
+        assert!((tall - expected).abs() < 1e-3, "{tall} vs {expected}");
+        let c = cam(100, 200);
+        assert_eq!((c.width, c.height), (100, 200));
+    }
+
+    fn light_normal(text: &str) -> Vec3 {
+        let c = ok(&format!(
+            "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\n{text}AttributeEnd\n"
+        ));
+        assert!(c.desc.triangles.is_empty(), "an emitter is the light only");
+        assert_eq!(c.desc.lights.len(), 2);
+        let Light::Triangle { vertices: v, .. } = c.desc.lights[0] else {
+            panic!("not a triangle light")
+        };
+        let n = crate::light::triangle_normal(&v);
+        // Undo the reflection the identity camera implies.
+        if c.mirrored {
+            Vec3::new(-n.x, n.y, n.z)
+        } else {
+            n
+        }
+    }
+
+    #[test]
+    fn area_lights_emit_on_pbrts_side() {
+        let z = Vec3::Z;
+        assert!(light_normal(&quad(0.0)).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{}", quad(0.0))).abs_diff_eq(-z, 1e-6));
+        // A transformation that swaps handedness turns the triangle's cross
+        // product, and pbrt turns it back: the normal as transformed.
+        let flip_z = "Scale 1 1 -1\n";
+        assert!(light_normal(&format!("{flip_z}{}", quad(0.0))).abs_diff_eq(-z, 1e-6));
+        assert!(light_normal(&format!("Scale 1 -1 1\n{}", quad(0.0))).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{flip_z}{}", quad(0.0))).abs_diff_eq(z, 1e-6));
+        // Normals N decide where given (ReverseOrientation turns them).
+        let with_n = quad(0.0).replace("\"integer", "\"normal N\" [ 0 0 -1 0 0 -1 0 0 -1 0 0 -1 ] \"integer");
+        assert!(light_normal(&with_n).abs_diff_eq(-z, 1e-6));
+        assert!(light_normal(&format!("{flip_z}{with_n}")).abs_diff_eq(z, 1e-6));
+        assert!(light_normal(&format!("ReverseOrientation\n{with_n}")).abs_diff_eq(z, 1e-6));
+    }
+
+    #[test]
+    fn light_power_and_scale() {
+        let c = ok(&format!(
+            "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"float scale\" [ 2 ] \
+             \"bool twosided\" true\n{}AttributeEnd\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"float power\" [ 10 ]\n\
+             Translate 0 0 1\nShape \"sphere\" \"float radius\" [ 0.5 ]\nAttributeEnd\n\
+             LightSource \"point\" \"rgb I\" [ 1 1 1 ] \"point3 from\" [ 0 3 0 ]\n",
+            quad(0.0)
+        ));
+        let Light::Triangle {
+            radiance, two_sided, ..
+        } = c.desc.lights[1]
+        else {
+            panic!()
+        };
+        assert_eq!((radiance, two_sided), (Vec3::new(2.0, 4.0, 6.0), true));
+        let Light::Sphere { sphere, power } = c.desc.lights[3] else {
+            panic!("{:?}", c.desc.lights)
+        };
+        assert!((sphere.radius - 0.5).abs() < 1e-6);
+        assert!(power.abs_diff_eq(Vec3::splat(10.0), 1e-4), "{power}");
+        let Light::Point { power, position } = c.desc.lights[0] else {
+            panic!()
+        };
+        assert!(power.abs_diff_eq(Vec3::splat(4.0 * PI), 1e-4) && position.y == 3.0);
+    }
+
+    #[test]
+    fn materials_and_settings() {
+        let c = ok(&format!(
+            "Integrator \"path\" \"integer maxdepth\" [ 7 ]\nSampler \"zsobol\" \"integer pixelsamples\" [ 32 ]\n\
+             PixelFilter \"box\"\nWorldBegin\nMaterial \"dielectric\" \"float eta\" [ 1.33 ]\n{}\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.3 0.4 ] \"float bogus\" [ 1 ]\nShape \"sphere\"\n",
+            quad(0.0)
+        ));
+        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| *m).collect();
+        assert!(mats.contains(&Material::Glass { ior: 1.33 }));
+        assert!(mats.contains(&Material::diffuse(0.2, 0.3, 0.4)));
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("max_depth").map(|v| v.0), Some(Value::Int(7)));
+        assert_eq!(s.get("spp").map(|v| v.0), Some(Value::Int(32)));
+        assert_eq!(s.get("integrator").map(|v| v.0), Some(Value::Name("path")));
+        assert_eq!(s.get("filter").map(|v| v.0), Some(Value::Name("box")));
+        assert_eq!(
+            s.get("spp").map(|v| v.1.clone()),
+            Some(Origin::SceneFile {
+                path: "dir/main.pbrt".into(),
+                line: 2
+            })
+        );
+        assert!(
+            c.warnings.iter().any(|w| w.contains("\"float bogus\" is not used")),
+            "{:?}",
+            c.warnings
+        );
+        // pbrt's defaults where the file says nothing.
+        let d = ok("WorldBegin\n").desc.settings;
+        assert_eq!(d.preset.get("spp").map(|v| v.0), Some(Value::Int(16)));
+        assert_eq!(d.preset.get("max_depth").map(|v| v.0), Some(Value::Int(5)));
+        assert_eq!(d.preset.get("filter").map(|v| v.0), Some(Value::Name("gaussian")));
+    }
+
+    #[test]
+    fn unsupported_features_are_one_error_unless_lenient() {
+        let text = format!(
+            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"conductor\"\nNamedMaterial \"cu\"\n{}\
+             Shape \"disk\"\nLightSource \"spot\"\nLightSource \"distant\"\nLightSource \"infinite\"\n",
+            quad(0.0)
+        );
+        let e = convert_text(&text, false).unwrap_err().to_string();
+        assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
+        assert!(
+            e.contains("dir/main.pbrt:5: shape \"disk\"") && e.contains("and 1 more"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        let c = convert_text(&text, true).unwrap();
+        assert_eq!(
+            c.desc.materials,
+            vec![("cu".to_string(), Material::diffuse(0.5, 0.5, 0.5))]
+        );
+        assert_eq!(c.desc.triangles.len(), 2);
+        let w = c.warnings.join("\n");
+        assert!(
+            w.contains("--lenient: 1 materials") && w.contains("--lenient: 1 unsupported shapes"),
+            "{w}"
+        );
+        assert!(w.contains("--lenient: 3 unsupported lights"), "{w}");
+    }
+}
