@@ -17,6 +17,8 @@
 #     is requeued by `scontrol requeue`, as a preempted job is. Both resume
 #     from their checkpoints, and the merge must again equal the
 #     single-machine render.
+#  3. SCENE=../shared/bitterli/cornell-box/scene-v4.pbrt ./submit.sh 2 ...:
+#     a pbrt-v4 scene in two bands, merged, equal to the single render.
 # Exits non-zero, saying what differed, on any failure. KEEP=1 keeps the
 # temporary folder (configuration, daemon logs, job logs, images).
 set -euo pipefail
@@ -276,4 +278,20 @@ leftover=$(ls parts/*.ckpt parts/*.partial.exr 2>/dev/null || true)
 cmp reference.exr render.exr || fail "the merged image of the resumed bands differs from the single-machine render"
 at() { grep -o 'interrupted: [0-9]*/64' "logs/band-$1.log" | cut -d' ' -f2; }
 say "2. band 1 stopped after $(at 1) passes and resubmitted, band 0 requeued after $(at 0); both resumed; merged image == single-machine render"
+# --- 3. A pbrt-v4 scene on the farm: SCENE=path/to/scene.pbrt.
+pbrt=$repo/../shared/bitterli/cornell-box/scene-v4.pbrt
+if [ -f "$pbrt" ]; then
+    run_dir pbrt
+    opts=(--width 64 --height 64 --spp 8)
+    say "3. SCENE=${pbrt#"$repo/"} CPUS_PER_TASK=1 MEM=1G ./submit.sh 2 ${opts[*]}"
+    SBATCH_PARTITION=$partition SCENE=$pbrt CPUS_PER_TASK=1 MEM=1G ./submit.sh 2 "${opts[@]}" >submit.out
+    reference --scene "$pbrt" "${opts[@]}"
+    wait_for render.exr 60
+    cmp reference.exr render.exr || fail "the merged pbrt-v4 render differs from the single-machine render"
+    say "3. merged image == single-machine render of the pbrt-v4 scene, after $(elapsed)"
+elif [ -n "${CI:-}" ]; then
+    fail "$pbrt is missing"
+else
+    say "3. skipped: $pbrt is missing"
+fi
 say "passed in $(elapsed)"
