@@ -2,8 +2,9 @@
 //! and decorrelated between shading points. Indirect light is not estimated.
 
 use super::{RadianceEstimator, RayStats};
+use crate::light::LightSample;
 use crate::material::Transport;
-use crate::math::{offset_origin, Ray, Vec3};
+use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
 
@@ -67,32 +68,47 @@ pub fn irradiance(scene: &Scene, hit: &Hit, wo: Vec3, n: u32, rng: &mut Rng, sta
     let ng = hit.ng * flip;
     let ns = hit.ns * flip;
     let mut e = Vec3::ZERO;
-    for (li, light) in scene.lights.iter().enumerate() {
+    for li in 0..scene.lights.len() {
         let shift = rng.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
             let u = hammersley_shifted(i, n, shift);
-            let Some(ls) = light.sample_li(hit.p, u) else {
-                continue;
-            };
-            let cos = ns.dot(ls.wi);
-            if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
-                continue;
-            }
-            // Aim from the offset origin at the sampled point itself: a ray
-            // parallel to wi would meet a sphere light short of it and the
-            // light would shadow itself.
-            let o = offset_origin(hit.p, ng, ls.wi);
-            let to_light = hit.p + ls.wi * ls.dist - o;
-            let dist = to_light.length();
-            stats.shadow_rays += 1;
-            if !scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32) {
+            if let Some((ls, cos)) = unoccluded_light_sample(scene, hit.p, ng, ns, li, u, stats) {
                 sum += ls.weight * cos;
             }
         }
         e += sum / n as f32;
     }
     e
+}
+
+/// One shadow ray towards light `li`, sampled with `u`, from the point `p`
+/// whose geometric and shading normals `ng`, `ns` face the viewer: the light
+/// sample and the cosine at `p`, when the light is above both normals and
+/// nothing blocks it.
+pub fn unoccluded_light_sample(
+    scene: &Scene,
+    p: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    li: usize,
+    u: Vec2,
+    stats: &mut RayStats,
+) -> Option<(LightSample, f32)> {
+    let ls = scene.lights[li].sample_li(p, u)?;
+    let cos = ns.dot(ls.wi);
+    if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+        return None;
+    }
+    // Aim from the offset origin at the sampled point itself: a ray parallel
+    // to wi would meet a sphere light short of it and the light would shadow
+    // itself.
+    let o = offset_origin(p, ng, ls.wi);
+    let to_light = p + ls.wi * ls.dist - o;
+    let dist = to_light.length();
+    stats.shadow_rays += 1;
+    let blocked = scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32);
+    (!blocked).then_some((ls, cos))
 }
 
 #[cfg(test)]

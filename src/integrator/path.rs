@@ -30,6 +30,7 @@
 //! between passes and resumed (`integrator::checkpoint`).
 
 use super::checkpoint::{self, Buffer};
+use super::direct::unoccluded_light_sample;
 use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect};
 use crate::material::Transport;
@@ -149,20 +150,9 @@ fn direct_light(scene: &Scene, hit: &Hit, wo: Vec3, mis: bool, rng: &mut Rng, st
     let mut e = Vec3::ZERO;
     for (li, light) in scene.lights.iter().enumerate() {
         let u = rng.next_2d();
-        let Some(ls) = light.sample_li(hit.p, u) else {
+        let Some((ls, cos)) = unoccluded_light_sample(scene, hit.p, ng, ns, li, u, stats) else {
             continue;
         };
-        let cos = ns.dot(ls.wi);
-        if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
-            continue;
-        }
-        let o = offset_origin(hit.p, ng, ls.wi);
-        let to_light = hit.p + ls.wi * ls.dist - o;
-        let dist = to_light.length();
-        stats.shadow_rays += 1;
-        if scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32) {
-            continue;
-        }
         let w = if mis {
             power_heuristic(
                 light.pdf_li_hit(hit.p, ls.wi, hit.p + ls.wi * ls.dist),
