@@ -298,6 +298,26 @@ pub fn uniform_triangle(v: &[Vec3; 3], u: Vec2) -> Vec3 {
     v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
 }
 
+// Placeholders until infinite, distant and spot lights exist: no light here
+// is a delta but the point light, and none is infinite.
+impl Light {
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Light::Point { .. })
+    }
+
+    pub fn is_infinite(&self) -> bool {
+        false
+    }
+
+    pub fn le_escaped(&self, _dir: Vec3) -> Vec3 {
+        Vec3::ZERO
+    }
+
+    pub fn pdf_li_escaped(&self, _p: Vec3, _dir: Vec3) -> f32 {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

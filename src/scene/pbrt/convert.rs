@@ -874,6 +874,7 @@ impl<'a> Conv<'a> {
                             desc.triangles.push(TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
+                                uvs: None,
                                 material,
                             });
                         }
@@ -987,9 +988,8 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             if !albedo.is_finite() {
                 return Err(located(loc, "diffuse: \"reflectance\" must be finite"));
             }
-            Ok(Ok(Material::Diffuse {
-                albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE),
-            }))
+            let a = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+            Ok(Ok(Material::diffuse(a.x, a.y, a.z)))
         }
         "dielectric" => {
             let eta = match p.get("eta") {
@@ -1030,7 +1030,7 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             if alpha >= 1e-3 {
                 return Ok(Err("a rough dielectric is not supported".into()));
             }
-            Ok(Ok(Material::Glass { ior: eta }))
+            Ok(Ok(Material::glass(eta)))
         }
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
     }
@@ -1260,8 +1260,8 @@ mod tests {
              Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.3 0.4 ] \"float bogus\" [ 1 ]\nShape \"sphere\"\n",
             quad(0.0)
         ));
-        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| *m).collect();
-        assert!(mats.contains(&Material::Glass { ior: 1.33 }));
+        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| m.clone()).collect();
+        assert!(mats.contains(&Material::glass(1.33)));
         assert!(mats.contains(&Material::diffuse(0.2, 0.3, 0.4)));
         let s = &c.desc.settings.scene_file;
         assert_eq!(s.get("max_depth").map(|v| v.0), Some(Value::Int(7)));
