@@ -68,7 +68,7 @@ pub fn compare_below(img: &Film, reference: &Film, max_luminance: f32) -> Option
 /// `None` otherwise. A reference is often rendered larger than the images
 /// judged against it.
 pub fn downsample_to(reference: &Film, width: u32, height: u32) -> Option<Film> {
-    if width == 0 || height == 0 || reference.width % width != 0 || reference.height % height != 0 {
+    if width == 0 || height == 0 || !reference.width.is_multiple_of(width) || !reference.height.is_multiple_of(height) {
         return None;
     }
     let k = reference.width / width;
