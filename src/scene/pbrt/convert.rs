@@ -1087,7 +1087,7 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             };
             let eta = p.get_float("eta", 1.5)?;
             let thickness = p.get_float("thickness", 0.01)?;
-            if !(eta.is_finite() && eta > 0.0) || !(thickness.is_finite() && thickness >= 0.0) {
+            if !(eta.is_finite() && eta > 0.0 && thickness.is_finite() && thickness >= 0.0) {
                 return Err(located(
                     loc,
                     "coateddiffuse: \"eta\" must be positive and \"thickness\" not negative",
