@@ -159,11 +159,24 @@ mod tests {
 
     #[test]
     fn bright_reference_pixels_can_be_left_out() {
-        let reference = film(&[1.0, 100.0]);
-        let img = film(&[1.0, 50.0]);
+        // The bright pixel and its neighbour (the light's edge) are left out.
+        let reference = film(&[1.0, 1.0, 1.0, 100.0]);
+        let img = film(&[1.0, 1.0, 7.0, 50.0]);
         assert!(compare(&img, &reference).unwrap().rmse > 1.0);
         let e = compare_below(&img, &reference, 10.0).unwrap();
         assert_eq!((e.rmse, e.rel_mse, e.luminance_ratio), (0.0, 0.0, 1.0));
+    }
+
+    #[test]
+    fn references_of_a_multiple_of_the_size_are_box_filtered() {
+        let big = Film {
+            width: 4,
+            height: 2,
+            pixels: [1.0, 3.0, 0.0, 0.0, 1.0, 3.0, 8.0, 0.0].map(Vec3::splat).to_vec(),
+        };
+        let small = downsample_to(&big, 2, 1).unwrap();
+        assert_eq!(small.pixels, vec![Vec3::splat(2.0), Vec3::splat(2.0)]);
+        assert!(downsample_to(&big, 3, 1).is_none() && downsample_to(&big, 2, 2).is_none());
     }
 
     #[test]

@@ -278,7 +278,12 @@ fn compare_reports_errors_and_writes_a_diff() {
     let mut b = small.to_vec();
     b.extend_from_slice(&["--seed", "3"]);
     render_pfm(dir.path(), "b.exr", &b);
-    render_pfm(dir.path(), "c.pfm", &["--width", "16", "--height", "16", "--ssaa", "1"]);
+    render_pfm(dir.path(), "c.pfm", &["--width", "24", "--height", "24", "--ssaa", "1"]);
+    render_pfm(
+        dir.path(),
+        "half.pfm",
+        &["--width", "16", "--height", "16", "--ssaa", "1"],
+    );
 
     let same = raytracer(&["compare", "a.pfm", "a.pfm"], dir.path());
     let text = String::from_utf8_lossy(&same.stdout);
@@ -296,6 +301,13 @@ fn compare_reports_errors_and_writes_a_diff() {
         image::open(dir.path().join("d.png")).unwrap().to_rgb8().dimensions(),
         (32, 32)
     );
+
+    // A reference twice the size is box-filtered down to the image's.
+    // (The filtering itself is tested in `metrics`; one sample a pixel of a
+    // visible light is too noisy here to say more than that it ran.)
+    let half = raytracer(&["compare", "half.pfm", "a.pfm"], dir.path());
+    assert!(half.status.success(), "{}", String::from_utf8_lossy(&half.stderr));
+    assert!(String::from_utf8_lossy(&half.stdout).contains("luminance_ratio"));
 
     let mismatch = raytracer(&["compare", "c.pfm", "a.pfm"], dir.path());
     assert_eq!(mismatch.status.code(), Some(2));

@@ -1430,7 +1430,7 @@ mod tests {
     #[test]
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
-            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"conductor\"\nNamedMaterial \"cu\"\n{}\
+            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"hair\"\nNamedMaterial \"cu\"\n{}\
              Shape \"disk\"\nLightSource \"spot\"\nLightSource \"distant\"\nLightSource \"infinite\"\n",
             quad(0.0)
         );
