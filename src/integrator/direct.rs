@@ -104,10 +104,16 @@ pub fn unoccluded_light_sample(
     // to wi would meet a sphere light short of it and the light would shadow
     // itself.
     let o = offset_origin(p, ng, ls.wi);
-    let to_light = p + ls.wi * ls.dist - o;
-    let dist = to_light.length();
+    // A light at infinity (dist = inf) is unoccluded if nothing at all is in the way.
+    let (d, t_max) = if ls.dist.is_finite() {
+        let to_light = p + ls.wi * ls.dist - o;
+        let dist = to_light.length();
+        (to_light / dist, dist * (1.0 - 1e-4))
+    } else {
+        (ls.wi, f32::INFINITY)
+    };
     stats.shadow_rays += 1;
-    let blocked = scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32);
+    let blocked = scene.occluded_before_light(&Ray::new(o, d), 0.0, t_max, li as u32);
     (!blocked).then_some((ls, cos))
 }
 

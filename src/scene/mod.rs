@@ -128,7 +128,11 @@ impl SceneDesc {
 
     /// Sets the radius of every sphere light; 0 turns them into point lights.
     pub fn set_light_radius(&mut self, radius: f32) {
-        for l in &mut self.lights {
+        for l in self
+            .lights
+            .iter_mut()
+            .filter(|l| matches!(l, Light::Sphere { .. } | Light::Point { .. } | Light::Triangle { .. }))
+        {
             let (position, power) = (l.position(), l.power());
             *l = if radius > 0.0 {
                 Light::Sphere {
@@ -205,6 +209,8 @@ pub struct Scene {
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
     pub bvh_build_seconds: f64,
+    /// Indices of the infinite lights.
+    infinite_lights: Vec<u32>,
 }
 
 impl Scene {
@@ -304,9 +310,14 @@ impl Scene {
                     });
                     normals.push(None);
                 }
-                Light::Point { .. } => {}
+                // Point, spot and distant lights have no surface; infinite
+                // lights are seen by the rays that escape (`infinite_lights`).
+                Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => {}
             }
         }
+        let infinite_lights = (0..lights.len() as u32)
+            .filter(|&i| matches!(lights[i as usize], Light::Infinite { .. }))
+            .collect();
 
         if tris.len() > Bvh::MAX_TRIANGLES {
             return Err(Error::Scene(format!(
@@ -321,7 +332,7 @@ impl Scene {
         let triangles = bvh.order.iter().map(|&i| tris[i as usize]).collect();
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
-        Ok(Scene {
+        let mut scene = Scene {
             name: desc.name.clone(),
             camera,
             materials,
@@ -335,7 +346,29 @@ impl Scene {
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
-        })
+            infinite_lights,
+        };
+        // Lights at infinity reach the scene through its bounding sphere.
+        let bounds = scene.bounds();
+        let world = if bounds.is_empty() {
+            Sphere {
+                centre: Vec3::ZERO,
+                radius: 0.0,
+            }
+        } else {
+            Sphere {
+                centre: bounds.centre(),
+                radius: 0.5 * bounds.extent().length(),
+            }
+        };
+        scene.lights.iter_mut().for_each(|l| l.set_scene_bounds(world));
+        Ok(scene)
+    }
+
+    /// Indices of the lights that shine on rays leaving the scene (whose
+    /// `le_escaped` is not zero): the infinite lights.
+    pub fn infinite_lights(&self) -> &[u32] {
+        &self.infinite_lights
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -450,7 +483,7 @@ impl Scene {
         }
         light.move_to(position);
         if let Some(l) = self.desc.lights.get_mut(index) {
-            *l = *light;
+            *l = light.clone();
         }
         for s in &mut self.spheres {
             if s.light == Some(index as u32) {
@@ -469,7 +502,7 @@ impl Scene {
         for s in &self.spheres {
             b = b.union(&s.sphere.bounds());
         }
-        for l in &self.lights {
+        for l in self.lights.iter().filter(|l| !l.is_infinite()) {
             b.grow(l.position());
         }
         b
