@@ -159,7 +159,9 @@ impl EnvMap {
                 if phi < 0.0 {
                     phi += 2.0 * PI;
                 }
-                Vec2::new(phi / (2.0 * PI), w.z.clamp(-1.0, 1.0).acos() / PI)
+                // atan2 rather than acos(z): exact near the poles.
+                let theta = Vec2::new(w.x, w.y).length().atan2(w.z);
+                Vec2::new(phi / (2.0 * PI), theta / PI)
             }
         }
     }
@@ -196,7 +198,7 @@ impl EnvMap {
         match self.mapping {
             EnvMapping::Octahedral => pdf_uv / (4.0 * PI),
             EnvMapping::LatLong => {
-                let sin_t = (1.0 - w.z * w.z).max(0.0).sqrt();
+                let sin_t = Vec2::new(w.x, w.y).length();
                 if sin_t == 0.0 {
                     0.0
                 } else {
