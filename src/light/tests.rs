@@ -570,3 +570,76 @@ fn distant_light_is_parallel_and_at_infinity() {
         }
     }
 }
+
+#[test]
+fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
+    use crate::integrator::{direct::irradiance, RayStats};
+    use crate::material::Material;
+    use crate::scene::{CameraDesc, Scene, SceneDesc, TriangleDesc};
+    let camera = CameraDesc {
+        position: Vec3::new(0.0, -1.0, -3.0),
+        look_at: Vec3::ZERO,
+        up: Vec3::new(0.0, -1.0, 0.0),
+        fov_y_deg: 40.0,
+        width: 16,
+        height: 16,
+    };
+    let quad = |desc: &mut SceneDesc, [a, b, c, d]: [Vec3; 4]| {
+        for vertices in [[a, b, c], [a, c, d]] {
+            desc.triangles.push(TriangleDesc {
+                vertices,
+                normals: None,
+                material: 0,
+            });
+        }
+    };
+    // A floor at y = 0 (world y points down: the sky is at -y), lit by a
+    // uniform sky and a distant light slanting down along +y.
+    let d = Vec3::new(0.0, 1.0, 0.6).normalize();
+    let scene_with = |blocker: bool| {
+        let mut desc = SceneDesc::empty("sky", camera.clone());
+        desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        let floor = [(-2.0, -2.0), (2.0, -2.0), (2.0, 2.0), (-2.0, 2.0)].map(|(x, z)| Vec3::new(x, 0.0, z));
+        quad(&mut desc, floor);
+        if blocker {
+            // A small roof at height 0.5 over x in [0.5, 1.5]: in the distant light's way from
+            // (1, 0, 0.3), tiny in the sky seen from (-1, 0, 0).
+            let roof = [(0.5, -0.2), (1.5, -0.2), (1.5, 0.2), (0.5, 0.2)].map(|(x, z)| Vec3::new(x, -0.5, z));
+            quad(&mut desc, roof);
+        }
+        desc.lights
+            .push(Light::infinite(Vec3::splat(0.7), None, Mat3::IDENTITY));
+        desc.lights.push(Light::distant(d, Vec3::splat(2.0)));
+        Scene::build(desc).unwrap()
+    };
+    let e_at = |scene: &Scene, x: f32, z: f32| {
+        let ray = Ray::new(Vec3::new(x, -1.0, z), Vec3::Y);
+        let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        assert!(hit.p.y.abs() < 1e-4, "{hit:?}");
+        let mut rng = Rng::new(3, 1);
+        let mut stats = RayStats::default();
+        let n = 4000;
+        let mut e = Vec3::ZERO;
+        for _ in 0..n {
+            e += irradiance(scene, &hit, -ray.d, 4, &mut rng, &mut stats);
+        }
+        e.x / n as f32
+    };
+    let sky = PI * 0.7;
+    let sun = 2.0 * d.y;
+    let open = scene_with(false);
+    assert_eq!(open.infinite_lights(), &[0]);
+    let e = e_at(&open, -1.0, 0.0);
+    assert!((e - (sky + sun)).abs() < 0.01 * (sky + sun), "{e} vs {}", sky + sun);
+    // Under the roof, the distant light is blocked; the sky nearly all there.
+    let roofed = scene_with(true);
+    let shade = Vec3::new(1.0, 0.0, 0.3);
+    assert!(roofed.occluded(&Ray::new(shade, -d), 1e-3, f32::INFINITY));
+    let e = e_at(&roofed, shade.x, shade.z);
+    assert!(
+        e < sky && e > 0.6 * sky,
+        "{e}: the sun is blocked, most of the sky is not"
+    );
+    let e_far = e_at(&roofed, -1.0, 0.0);
+    assert!((e_far - (sky + sun)).abs() < 0.02 * (sky + sun), "{e_far}");
+}
