@@ -21,6 +21,7 @@ pub mod sampling;
 pub mod scene;
 pub mod settings;
 pub mod state_file;
+pub mod texture;
 pub mod viewer;
 
 pub use error::{Error, Result};

@@ -335,14 +335,15 @@ fn compare(args: &cli::CompareArgs) -> Result<()> {
     use anyhow::{bail, Context};
     use raytracer::image_io::{read_image, write_atomic, Format};
     let img = read_image(&args.image)?;
-    let reference = read_image(&args.reference)?;
+    let full = read_image(&args.reference)?;
+    let reference = raytracer::metrics::downsample_to(&full, img.width, img.height).unwrap_or(full);
     let max_luminance = args.max_luminance.unwrap_or(f32::INFINITY);
     if max_luminance.is_nan() || max_luminance < 0.0 {
         bail!("--max-luminance {max_luminance}: must be a non-negative number");
     }
     let Some(e) = raytracer::metrics::compare_below(&img, &reference, max_luminance) else {
         bail!(
-            "{} is {}x{} but {} is {}x{}",
+            "{} is {}x{} but {} is {}x{}, not an integer multiple of it",
             args.image.display(),
             img.width,
             img.height,

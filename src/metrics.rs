@@ -24,16 +24,26 @@ pub fn compare(img: &Film, reference: &Film) -> Option<ImageError> {
 }
 
 /// [`compare`] over the pixels whose reference luminance is at most
-/// `max_luminance`. A visible light is hundreds of times brighter than the
-/// room and identical in every integrator, so it would otherwise dominate
-/// the RMSE and pull the luminance ratio towards 1.
+/// `max_luminance` and whose neighbours' is too (a one-pixel border around
+/// every brighter pixel is left out). A visible light is hundreds of times
+/// brighter than the room and identical in every integrator, so it would
+/// otherwise dominate the RMSE and pull the luminance ratio towards 1; the
+/// pixels on its edge mix it with the room in proportions that the slightest
+/// shift of a pixel filter changes, so they would dominate instead.
 pub fn compare_below(img: &Film, reference: &Film, max_luminance: f32) -> Option<ImageError> {
     if img.width != reference.width || img.height != reference.height {
         return None;
     }
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let bright: Vec<bool> = reference.pixels.iter().map(|p| luminance(*p) > max_luminance).collect();
+    let left_out = |x: usize, y: usize| {
+        let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
+        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
+        (y0..=y1).any(|yy| (x0..=x1).any(|xx| bright[yy * w + xx]))
+    };
     let (mut se, mut rel, mut li, mut lr, mut kept) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
-    for (a, b) in img.pixels.iter().zip(&reference.pixels) {
-        if luminance(*b) > max_luminance {
+    for (i, (a, b)) in img.pixels.iter().zip(&reference.pixels).enumerate() {
+        if left_out(i % w, i / w) {
             continue;
         }
         kept += 1;
@@ -51,6 +61,37 @@ pub fn compare_below(img: &Film, reference: &Film, max_luminance: f32) -> Option
         rel_mse: rel / n,
         luminance_ratio: if lr > 0.0 { li / lr } else { f64::NAN },
     })
+}
+
+/// `reference` box-filtered down to `width` x `height`, when its size is
+/// the same integer multiple of that in both directions (1 included);
+/// `None` otherwise. A reference is often rendered larger than the images
+/// judged against it.
+pub fn downsample_to(reference: &Film, width: u32, height: u32) -> Option<Film> {
+    if width == 0 || height == 0 || !reference.width.is_multiple_of(width) || !reference.height.is_multiple_of(height) {
+        return None;
+    }
+    let k = reference.width / width;
+    if reference.height / height != k {
+        return None;
+    }
+    if k == 1 {
+        return Some(reference.clone());
+    }
+    let mut out = Film::new(width, height);
+    let scale = 1.0 / (k * k) as f32;
+    for y in 0..height {
+        for x in 0..width {
+            let mut sum = Vec3::ZERO;
+            for dy in 0..k {
+                for dx in 0..k {
+                    sum += reference.get(x * k + dx, y * k + dy);
+                }
+            }
+            out.pixels[(y * width + x) as usize] = sum * scale;
+        }
+    }
+    Some(out)
 }
 
 /// A false-colour picture of the per-pixel relative error: black where the

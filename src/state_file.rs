@@ -23,7 +23,6 @@
 
 use crate::error::{Error, Result};
 use crate::light::Light;
-use crate::material::Material;
 use crate::math::Vec3;
 use crate::scene::SceneDesc;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -78,25 +77,9 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
     let mut h = Fnv64::default();
     h.u32(desc.materials.len() as u32);
     for (_, m) in &desc.materials {
-        match *m {
-            Material::Diffuse { albedo } => {
-                h.u32(0);
-                h.vec3(albedo);
-            }
-            Material::Emissive { albedo, le } => {
-                h.u32(1);
-                h.vec3(albedo);
-                h.vec3(le);
-            }
-            Material::Mirror { reflectance } => {
-                h.u32(2);
-                h.vec3(reflectance);
-            }
-            Material::Glass { ior } => {
-                h.u32(3);
-                h.f32(ior);
-            }
-        }
+        // The Debug form lists every parameter, floats in their shortest
+        // exact decimal form: equal strings, equal materials.
+        h.bytes(format!("{m:?}").as_bytes());
     }
     h.u32(desc.triangles.len() as u32);
     for t in &desc.triangles {
@@ -107,6 +90,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 ns.iter().for_each(|&v| h.vec3(v));
             }
             None => h.u32(0),
+        }
+        if let Some(uv) = t.uvs {
+            h.u32(2);
+            uv.iter().for_each(|&c| h.vec3(c.extend(0.0)));
         }
         h.u32(t.material);
     }

@@ -45,6 +45,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         d.triangles.push(TriangleDesc {
             vertices: v,
             normals: None,
+            uvs: None,
             material: m,
         });
     }

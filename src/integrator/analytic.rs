@@ -73,6 +73,7 @@ pub fn closed_box(albedo: f32, light: Light) -> Scene {
             d.triangles.push(TriangleDesc {
                 vertices: t.map(c),
                 normals: None,
+                uvs: None,
                 material: m,
             });
         }
@@ -95,8 +96,9 @@ pub fn furnace_with_balls(wall: Material, balls: &[(Vec3, f32, Material)], size:
         },
         material: m,
     });
-    for (i, &(centre, radius, material)) in balls.iter().enumerate() {
-        let m = d.material(&format!("ball{i}"), material);
+    for (i, (centre, radius, material)) in balls.iter().enumerate() {
+        let (centre, radius) = (*centre, *radius);
+        let m = d.material(&format!("ball{i}"), material.clone());
         d.spheres.push(SphereDesc {
             sphere: Sphere { centre, radius },
             material: m,

@@ -1,9 +1,16 @@
-//! Direct lighting: shadow rays to every light, stratified over the light
-//! and decorrelated between shading points. Indirect light is not estimated.
+//! Direct lighting, and what every integrator shares about light arriving at
+//! a surface: shadow rays (`unoccluded_light_sample`), direct light at a
+//! vertex from all lights (`direct_radiance`) or from one light chosen by
+//! power with multiple importance sampling (`sample_direct`), and the walk of
+//! a camera path through specular and glossy surfaces to the vertices where a
+//! diffuse lobe lets density estimates take over (`walk_camera_path`).
+//!
+//! The `direct` integrator walks the camera path like the photon mappers and
+//! estimates only the direct light at its diffuse vertices.
 
 use super::{RadianceEstimator, RayStats};
+use crate::bsdf::{Bsdf, TransportMode};
 use crate::light::LightSample;
-use crate::material::Transport;
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{hammersley_shifted, Rng};
 use crate::scene::{Hit, Scene};
@@ -13,108 +20,233 @@ pub struct DirectLighting {
     pub shadow_samples: u32,
 }
 
-/// Specular bounces a camera ray may take before it gives up.
+/// Specular and glossy bounces a camera ray may take before it gives up.
 pub const MAX_SPECULAR_DEPTH: u32 = 16;
 
 impl RadianceEstimator for DirectLighting {
     fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let Some((hit, wo, beta)) = first_diffuse_hit(scene, *ray, rng, stats) else {
-            return Vec3::ZERO;
-        };
-        if let Some(l) = hit.light {
-            return beta * scene.lights[l as usize].le(wo);
-        }
-        let m = scene.material(hit.material);
-        beta * (m.le() + m.f() * irradiance(scene, &hit, wo, self.shadow_samples, rng, stats))
+        walk_camera_path(scene, *ray, rng, stats, |v, rng, stats| {
+            (direct_radiance(scene, v, self.shadow_samples, rng, stats), true)
+        })
     }
 }
 
-/// Follows a camera ray through mirrors and glass to its first diffuse (or
-/// emitting) surface: the hit, the direction back along the ray, and the
-/// throughput of the specular chain.
-pub fn first_diffuse_hit(
+/// The power heuristic's weight of a sample drawn with density `a` against
+/// one drawn with density `b` (Veach 1997, 9.2.4, beta = 2).
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// A camera-path vertex whose BSDF has a diffuse lobe.
+pub struct DiffuseVertex {
+    pub hit: Hit,
+    /// Unit direction back along the incoming ray.
+    pub wo: Vec3,
+    pub bsdf: Bsdf,
+    /// Throughput of the path from the camera to here.
+    pub beta: Vec3,
+}
+
+/// Walks a camera path from `ray` and returns the light it brings back, apart
+/// from what `at_diffuse` estimates. Specular and glossy vertices are path
+/// traced: at a glossy one, one light sample by power with multiple importance
+/// sampling; emission found by a BSDF-sampled ray counts with its MIS weight
+/// (whole after a specular bounce or from the camera), environment light too.
+/// At a vertex with a diffuse lobe `at_diffuse` returns the radiance it
+/// estimates there (the caller's estimators: direct light by shadow rays,
+/// photon density), to be multiplied by the throughput, and whether the walk
+/// may go on; it goes on only along the BSDF's specular lobes (a smooth
+/// coat's reflection), which no estimate at the vertex covers.
+pub fn walk_camera_path(
     scene: &Scene,
     mut ray: Ray,
     rng: &mut Rng,
     stats: &mut RayStats,
-) -> Option<(Hit, Vec3, Vec3)> {
+    mut at_diffuse: impl FnMut(&DiffuseVertex, &mut Rng, &mut RayStats) -> (Vec3, bool),
+) -> Vec3 {
+    let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
+    // How the last direction was chosen: `None` when specular (or the camera's).
+    let mut from: Option<(Vec3, f32)> = None;
     for depth in 0..=MAX_SPECULAR_DEPTH {
         if depth > 0 {
             stats.other_rays += 1;
         }
-        let hit = scene.intersect(&ray, 0.0, f32::INFINITY)?;
+        let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
+            l += beta * escaped_radiance(scene, &ray, from);
+            break;
+        };
         let wo = -ray.d;
-        let m = scene.material(hit.material);
-        if hit.light.is_some() || !m.is_specular() {
-            return Some((hit, wo, beta));
+        if let Some(li) = hit.light {
+            l += beta * emitted_radiance(scene, li as usize, &ray, &hit, from);
+            break;
         }
-        let s = m.sample_specular(wo, hit.ng, rng.next_f32(), Transport::Radiance)?;
-        beta *= s.weight;
-        ray = Ray::new(offset_origin(hit.p, hit.ng, s.wi), s.wi);
+        let m = scene.material(hit.material);
+        l += beta * m.le();
+        let bsdf = m.bsdf(&hit.surface(), wo);
+        let flags = bsdf.flags();
+        if flags.is_empty() {
+            break;
+        }
+        let mut only_specular = false;
+        if flags.is_diffuse() {
+            let v = DiffuseVertex { hit, wo, bsdf, beta };
+            let (lv, go_on) = at_diffuse(&v, rng, stats);
+            l += beta * lv;
+            if !go_on || !flags.is_specular() {
+                break;
+            }
+            only_specular = true;
+        } else if flags.is_glossy() {
+            l += beta * sample_direct(scene, &hit, wo, &bsdf, true, rng, stats);
+        }
+        let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+            break;
+        };
+        if only_specular && !bs.is_specular() {
+            break;
+        }
+        if !hit.keeps_side(wo, bs.wi, bs.flags) {
+            break;
+        }
+        beta *= bs.f * (bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            break;
+        }
+        from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
     }
-    None
+    l
 }
 
-/// Direct irradiance at a hit from all lights, seen from the side `wo` faces:
-/// E = (1/N) sum Li cos / pdf over N stratified light samples per light.
-/// Multiply by a BRDF value to get reflected radiance.
-pub fn irradiance(scene: &Scene, hit: &Hit, wo: Vec3, n: u32, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+/// Radiance from the environment along a ray that left the scene, weighted
+/// against light sampling when the ray was BSDF-sampled at `from` (the vertex
+/// and the sampling density).
+pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(Vec3, f32)>) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    for &i in scene.infinite_lights() {
+        let light = &scene.lights[i as usize];
+        let le = light.le_escaped(ray.d);
+        let w = match from {
+            None => 1.0,
+            Some((p, pdf)) => power_heuristic(pdf, scene.light_pmf(i as usize) * light.pdf_li_escaped(p, ray.d)),
+        };
+        l += le * w;
+    }
+    l
+}
+
+/// Radiance of light `li` where `ray` hit it, weighted as `escaped_radiance`.
+pub fn emitted_radiance(scene: &Scene, li: usize, ray: &Ray, hit: &Hit, from: Option<(Vec3, f32)>) -> Vec3 {
+    let light = &scene.lights[li];
+    let le = light.le(-ray.d);
+    match from {
+        None => le,
+        Some((p, pdf)) => le * power_heuristic(pdf, scene.light_pmf(li) * light.pdf_li_hit(p, ray.d, hit.p)),
+    }
+}
+
+/// Direct light reflected towards `wo` at a vertex from one light chosen by
+/// power and one sample on it, weighted against BSDF sampling by the power
+/// heuristic when `mis` (else weight 1).
+pub fn sample_direct(
+    scene: &Scene,
+    hit: &Hit,
+    wo: Vec3,
+    bsdf: &Bsdf,
+    mis: bool,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Vec3 {
+    let (uc, u) = (rng.next_f32(), rng.next_2d());
+    let Some((li, pmf)) = scene.pick_light(uc) else {
+        return Vec3::ZERO;
+    };
+    let Some(ls) = unoccluded_light_sample(scene, hit, wo, bsdf, li, u, stats) else {
+        return Vec3::ZERO;
+    };
+    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.z).abs();
+    let light = &scene.lights[li];
+    let w = if mis && !light.is_delta() {
+        let pdf_light = if ls.dist.is_finite() {
+            light.pdf_li_hit(hit.p, ls.wi, hit.p + ls.wi * ls.dist)
+        } else {
+            light.pdf_li_escaped(hit.p, ls.wi)
+        };
+        power_heuristic(pmf * pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance))
+    } else {
+        1.0
+    };
+    f * ls.weight * (w / pmf)
+}
+
+/// Direct light reflected towards the vertex's `wo` from every light, `n`
+/// stratified samples each: (1/N) sum f Li |cos| / pdf.
+pub fn direct_radiance(scene: &Scene, v: &DiffuseVertex, n: u32, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
     if n == 0 {
         return Vec3::ZERO;
     }
-    // Two-sided surfaces: shade the side the viewer is on.
-    let flip = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-    let ng = hit.ng * flip;
-    let ns = hit.ns * flip;
-    let mut e = Vec3::ZERO;
+    let mut l = Vec3::ZERO;
     for li in 0..scene.lights.len() {
         let shift = rng.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
             let u = hammersley_shifted(i, n, shift);
-            if let Some((ls, cos)) = unoccluded_light_sample(scene, hit.p, ng, ns, li, u, stats) {
-                sum += ls.weight * cos;
+            if let Some(ls) = unoccluded_light_sample(scene, &v.hit, v.wo, &v.bsdf, li, u, stats) {
+                let f = v.bsdf.f(v.wo, ls.wi, TransportMode::Radiance);
+                sum += f * ls.weight * ls.wi.dot(v.bsdf.frame.z).abs();
             }
         }
-        e += sum / n as f32;
+        l += sum / n as f32;
     }
-    e
+    l
 }
 
-/// One shadow ray towards light `li`, sampled with `u`, from the point `p`
-/// whose geometric and shading normals `ng`, `ns` face the viewer: the light
-/// sample and the cosine at `p`, when the light is above both normals and
-/// nothing blocks it.
+/// One shadow ray towards light `li`, sampled with `u`, from a hit seen from
+/// `wo`: the light sample, when the BSDF can scatter light from there
+/// (reflection on the viewer's side, transmission on the other; the geometric
+/// and shading normals must agree) and nothing blocks it.
 pub fn unoccluded_light_sample(
     scene: &Scene,
-    p: Vec3,
-    ng: Vec3,
-    ns: Vec3,
+    hit: &Hit,
+    wo: Vec3,
+    bsdf: &Bsdf,
     li: usize,
     u: Vec2,
     stats: &mut RayStats,
-) -> Option<(LightSample, f32)> {
-    let ls = scene.lights[li].sample_li(p, u)?;
-    let cos = ns.dot(ls.wi);
-    if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+) -> Option<LightSample> {
+    let ls = scene.lights[li].sample_li(hit.p, u)?;
+    let flags = bsdf.flags();
+    let geo_same = (ls.wi.dot(hit.ng) > 0.0) == (wo.dot(hit.ng) > 0.0);
+    let shade_same = (ls.wi.dot(bsdf.frame.z) > 0.0) == (wo.dot(bsdf.frame.z) > 0.0);
+    let allowed = if geo_same {
+        flags.is_reflective() && shade_same
+    } else {
+        flags.is_transmissive() && !shade_same
+    };
+    if !allowed || ls.wi.dot(hit.ng) == 0.0 {
         return None;
     }
     // Aim from the offset origin at the sampled point itself: a ray parallel
     // to wi would meet a sphere light short of it and the light would shadow
     // itself.
-    let o = offset_origin(p, ng, ls.wi);
-    // A light at infinity (dist = inf) is unoccluded if nothing at all is in the way.
-    let (d, t_max) = if ls.dist.is_finite() {
-        let to_light = p + ls.wi * ls.dist - o;
-        let dist = to_light.length();
-        (to_light / dist, dist * (1.0 - 1e-4))
-    } else {
-        (ls.wi, f32::INFINITY)
-    };
+    let o = offset_origin(hit.p, hit.ng, ls.wi);
     stats.shadow_rays += 1;
-    let blocked = scene.occluded_before_light(&Ray::new(o, d), 0.0, t_max, li as u32);
-    (!blocked).then_some((ls, cos))
+    let blocked = if ls.dist.is_finite() {
+        let to_light = hit.p + ls.wi * ls.dist - o;
+        let dist = to_light.length();
+        scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32)
+    } else {
+        scene.occluded(&Ray::new(o, ls.wi), 0.0, f32::INFINITY)
+    };
+    (!blocked).then_some(ls)
 }
 
 #[cfg(test)]
@@ -133,13 +265,24 @@ mod tests {
         let p = Vec3::new(0.0, -1.0, -0.7);
         let ray = Ray::new(Vec3::new(0.0, 0.0, -0.7), (p - Vec3::new(0.3, 0.0, -0.7)).normalize());
         let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let wo = -ray.d;
+        let bsdf = scene.material(hit.material).bsdf(&hit.surface(), wo);
+        let v = DiffuseVertex {
+            hit,
+            wo,
+            bsdf,
+            beta: Vec3::ONE,
+        };
         let mut rng = Rng::new(1, 2);
         let mut stats = RayStats::default();
         let n = 2000;
-        let e: Vec3 = (0..n)
-            .map(|_| irradiance(&scene, &hit, -ray.d, 4, &mut rng, &mut stats))
+        let l: Vec3 = (0..n)
+            .map(|_| direct_radiance(&scene, &v, 4, &mut rng, &mut stats))
             .sum::<Vec3>()
             / n as f32;
+        // Reflected radiance = albedo / pi * E.
+        let albedo = bsdf.f(wo, bsdf.frame.z, TransportMode::Radiance) * PI;
+        let e = l * PI / albedo;
         let cos_d2 = (hit.p - Vec3::new(0.0, -0.5, -0.7)).normalize().y.abs()
             / (hit.p - Vec3::new(0.0, -0.5, -0.7)).length_squared();
         let expected = 14.0 * PI / (4.0 * PI) * cos_d2;

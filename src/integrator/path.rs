@@ -1,23 +1,24 @@
-//! Reference path tracer: the unbiased estimate the photon mapper is measured
-//! against.
+//! Reference path tracer: the unbiased estimate every other integrator is
+//! measured against.
 //!
-//! pbrt-v4's `PathIntegrator` (13.4) for Lambertian, mirror and glass
-//! surfaces: at every diffuse vertex, next-event estimation to the lights (one
-//! shadow ray per light), then a cosine-distributed bounce (throughput *=
-//! albedo). The light a path finds at a diffuse vertex is sampled twice, by
-//! the shadow ray and by the bounce when it hits a light, and the two are
-//! combined by multiple importance sampling with the power heuristic (Veach
-//! 1997, 9.2): the shadow ray's sample weighted p_light^2 / (p_light^2 +
-//! p_bsdf^2), the bounce's p_bsdf^2 / (p_bsdf^2 + p_light^2), both densities
-//! in solid angle at the vertex. `light_sampling` can keep either one alone
-//! (weight 1), for comparisons. At a mirror or glass vertex the BSDF is a
-//! delta, so there is no next-event estimation (a shadow ray cannot hit the
-//! one direction it reflects); the specular direction is sampled (Fresnel
-//! chooses reflection or refraction) and the throughput takes the sample's
-//! weight. From the third vertex on, Russian roulette with survival
-//! probability min(max throughput, 0.95). A light hit by a camera ray, or
-//! right after a specular bounce, gives its whole Le. Emissive surfaces are
-//! not sampled by shadow rays, so their Le counts wherever a path hits them.
+//! pbrt-v4's `PathIntegrator` (13.4). At every vertex whose BSDF has a
+//! diffuse or glossy lobe, next-event estimation: one light chosen in
+//! proportion to its power, one point on it, one shadow ray. Then the BSDF is
+//! sampled for the next direction and the throughput takes f |cos| / pdf. The
+//! light a path finds at such a vertex is sampled twice, by the shadow ray and
+//! by the BSDF-sampled ray when it hits a light (or leaves the scene towards
+//! an environment light), and the two are combined by multiple importance
+//! sampling with the power heuristic (Veach 1997, 9.2), both densities in
+//! solid angle at the vertex (the light's times the probability of choosing
+//! it). `light_sampling` can keep either one alone (weight 1), for
+//! comparisons. After a specular bounce there is no next-event estimation (a
+//! shadow ray cannot hit the one direction a delta lobe scatters into), so a
+//! light hit then, or by a camera ray, gives its whole Le. From the third
+//! vertex on, Russian roulette on the throughput times the square of the
+//! relative index of refraction crossed (so that radiance compressed by
+//! refraction into glass is not killed for it), with survival probability at
+//! most 0.95. Emissive surfaces are not sampled by shadow rays, so their Le
+//! counts wherever a path hits them.
 //!
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
@@ -30,13 +31,13 @@
 //! between passes and resumed (`integrator::checkpoint`).
 
 use super::checkpoint::{self, Buffer};
-use super::direct::unoccluded_light_sample;
+use super::direct::{emitted_radiance, escaped_radiance, sample_direct};
 use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use crate::bsdf::TransportMode;
 use crate::film::{Film, PixelRect};
-use crate::material::Transport;
-use crate::math::{offset_origin, to_world, Ray, Vec3};
-use crate::sampling::{cosine_hemisphere, Rng};
-use crate::scene::{Hit, Scene};
+use crate::math::{offset_origin, Ray, Vec3};
+use crate::sampling::Rng;
+use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
 
 /// A render is cut into at most this many passes.
@@ -54,44 +55,32 @@ pub struct PathTracer {
     pub light_sampling: LightSampling,
 }
 
-/// The power heuristic's weight of a sample drawn with density `a` against
-/// one drawn with density `b` (Veach 1997, 9.2.4, beta = 2).
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
-}
-
 impl RadianceEstimator for PathTracer {
     fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         let mut ray = *camera_ray;
         let mut depth = 0;
-        // Whether the last bounce was specular: then no shadow ray counted the light it may hit.
-        let mut specular = false;
-        // Where the last diffuse bounce left from, and its solid-angle density.
-        let mut bounce_from = (Vec3::ZERO, 0.0f32);
-        while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
+        // Squared relative indices of refraction crossed, for the roulette.
+        let mut eta_scale = 1.0f32;
+        // Where the last non-specular bounce left from and its density; `None`
+        // after a specular bounce or for the camera ray (no light sample competed).
+        let mut from: Option<(Vec3, f32)> = None;
+        // Emission found by a BSDF-sampled ray: MIS-weighted, or all or nothing.
+        let weigh = |from: Option<(Vec3, f32)>| match (from, self.light_sampling) {
+            (None, _) | (_, LightSampling::Mis) => (from, 1.0),
+            (Some(_), LightSampling::Bsdf) => (None, 1.0),
+            (Some(_), LightSampling::Light) => (None, 0.0),
+        };
+        loop {
+            let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
+                let (from, w) = weigh(from);
+                l += beta * escaped_radiance(scene, &ray, from) * w;
+                break;
+            };
             if let Some(li) = hit.light {
-                let light = &scene.lights[li as usize];
-                let le = light.le(-ray.d);
-                if depth == 0 || specular {
-                    l += beta * le;
-                } else {
-                    let (p, pdf_bsdf) = bounce_from;
-                    let w = match self.light_sampling {
-                        LightSampling::Light => 0.0,
-                        LightSampling::Bsdf => 1.0,
-                        LightSampling::Mis => power_heuristic(pdf_bsdf, light.pdf_li_hit(p, ray.d, hit.p)),
-                    };
-                    l += beta * le * w;
-                }
+                let (from, w) = weigh(from);
+                l += beta * emitted_radiance(scene, li as usize, &ray, &hit, from) * w;
                 break;
             }
             let m = scene.material(hit.material);
@@ -102,68 +91,41 @@ impl RadianceEstimator for PathTracer {
             }
             let wo = -ray.d;
             depth += 1;
-            let (origin, d) = if m.is_specular() {
-                let Some(s) = m.sample_specular(wo, hit.ng, rng.next_f32(), Transport::Radiance) else {
-                    break;
-                };
-                beta *= s.weight;
-                specular = true;
-                (offset_origin(hit.p, hit.ng, s.wi), s.wi)
-            } else {
-                // Next-event estimation.
-                if self.light_sampling != LightSampling::Bsdf {
-                    let mis = self.light_sampling == LightSampling::Mis;
-                    l += beta * m.f() * direct_light(scene, &hit, wo, mis, rng, stats);
-                }
-                // Bounce: f cos / pdf = albedo for a cosine-distributed direction.
-                let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-                let (ng, ns) = (hit.ng * side, hit.ns * side);
-                let d = to_world(cosine_hemisphere(rng.next_2d()), ns);
-                if d.dot(ng) <= 0.0 {
-                    break;
-                }
-                beta *= m.albedo();
-                specular = false;
-                bounce_from = (hit.p, ns.dot(d).max(0.0) * std::f32::consts::FRAC_1_PI);
-                (offset_origin(hit.p, ng, d), d)
+            let bsdf = m.bsdf(&hit.surface(), wo);
+            let flags = bsdf.flags();
+            if flags.is_empty() {
+                break;
+            }
+            if flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf {
+                let mis = self.light_sampling == LightSampling::Mis;
+                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, rng, stats);
+            }
+            let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+                break;
             };
+            if !hit.keeps_side(wo, bs.wi, bs.flags) {
+                break;
+            }
+            beta *= bs.f * (bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
+            if !beta.is_finite() || beta.max_element() <= 0.0 {
+                break;
+            }
+            if bs.is_transmission() {
+                eta_scale *= bs.eta * bs.eta;
+            }
+            from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
             if depth >= ROULETTE_DEPTH {
-                let q = beta.max_element().min(MAX_SURVIVAL);
+                let q = (beta * eta_scale).max_element().min(MAX_SURVIVAL);
                 if rng.next_f32() >= q {
                     break;
                 }
                 beta /= q;
             }
             stats.other_rays += 1;
-            ray = Ray::new(origin, d);
+            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
         }
         l
     }
-}
-
-/// Irradiance at a diffuse vertex from one shadow ray per light (multiply by
-/// the BRDF), each weighted against the cosine-distributed bounce that could
-/// have found the same light when `mis` (else weight 1).
-fn direct_light(scene: &Scene, hit: &Hit, wo: Vec3, mis: bool, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-    let flip = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-    let (ng, ns) = (hit.ng * flip, hit.ns * flip);
-    let mut e = Vec3::ZERO;
-    for (li, light) in scene.lights.iter().enumerate() {
-        let u = rng.next_2d();
-        let Some((ls, cos)) = unoccluded_light_sample(scene, hit.p, ng, ns, li, u, stats) else {
-            continue;
-        };
-        let w = if mis {
-            power_heuristic(
-                light.pdf_li_hit(hit.p, ls.wi, hit.p + ls.wi * ls.dist),
-                cos * std::f32::consts::FRAC_1_PI,
-            )
-        } else {
-            1.0
-        };
-        e += ls.weight * cos * w;
-    }
-    e
 }
 
 /// The path tracer's render in passes: the per-pixel sums of the samples so far.
@@ -364,12 +326,8 @@ mod tests {
                 le,
             },
             &[
-                (Vec3::new(-0.15, 0.0, 0.75), 0.15, Material::Glass { ior: 1.5 }),
-                (
-                    Vec3::new(0.15, 0.0, 0.75),
-                    0.12,
-                    Material::Mirror { reflectance: Vec3::ONE },
-                ),
+                (Vec3::new(-0.15, 0.0, 0.75), 0.15, Material::glass(1.5)),
+                (Vec3::new(0.15, 0.0, 0.75), 0.12, Material::mirror(Vec3::ONE)),
             ],
             16,
         );
@@ -418,6 +376,7 @@ mod tests {
                 Vec3::new(0.0, 9.0, 0.0),
             ],
             normals: None,
+            uvs: None,
             material: grey,
         });
         let (a, b, c, e) = (

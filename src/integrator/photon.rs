@@ -29,10 +29,10 @@
 //! `--store-first-hit`, `--gather-radius`, `--gather-k`, `--cone-filter`,
 //! `--gather-filter`, `--final-gather`, `--caustic-photons`, `--caustic-radius`.
 
-use super::direct::{first_diffuse_hit, irradiance, MAX_SPECULAR_DEPTH};
+use super::direct::{direct_radiance, walk_camera_path, DiffuseVertex, MAX_SPECULAR_DEPTH};
 use super::{RadianceEstimator, RayStats};
+use crate::bsdf::{Bsdf, Bxdf, TransportMode};
 use crate::error::Result;
-use crate::material::Transport;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
 use crate::photon::estimate::{self, PrecomputedIrradiance};
 use crate::photon::file;
@@ -51,7 +51,8 @@ pub struct PhotonMapping<'a> {
     pub caustic_radius: f32,
     pub shadow_samples: u32,
     pub final_gather: u32,
-    /// Irradiance precomputed at the map's photons, read instead of gathering.
+    /// Irradiance precomputed at the map's photons, read instead of gathering
+    /// on Lambertian surfaces (irradiance is all a Lambertian BRDF needs).
     pub precomputed: Option<&'a PrecomputedIrradiance>,
 }
 
@@ -70,19 +71,33 @@ fn facing(hit: &Hit, wo: Vec3) -> Vec3 {
 }
 
 impl PhotonMapping<'_> {
-    /// Global-map photon irradiance at a hit, on the side `wo` faces.
-    fn photon_irradiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, admit: Admit) -> Vec3 {
+    /// Reflected radiance towards `wo` from the photons of `map` near a hit
+    /// whose BSDF is `bsdf`. A Lambertian BRDF needs only the irradiance
+    /// (precomputed, when it was); any other BSDF weighs each photon by
+    /// f(wo, wi) (Jensen 2001, 7.1).
+    fn photon_radiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, bsdf: &Bsdf, admit: Admit, g: &Gather) -> Vec3 {
         let n = facing(hit, wo);
-        SCRATCH.with(|s| match self.precomputed {
-            // Built with the admission this integrator reads the map with.
-            Some(pre) => pre.lookup(hit.p, n, &mut s.borrow_mut()),
-            None => estimate::irradiance(map, &self.gather, hit.p, n, admit, &mut s.borrow_mut()),
+        SCRATCH.with(|s| {
+            let scratch = &mut s.borrow_mut();
+            if let Bxdf::Diffuse(d) = bsdf.bxdf {
+                let e = match self.precomputed {
+                    // Built with the admission this integrator reads the global map with.
+                    Some(pre) if std::ptr::eq(map, self.map.unwrap_or(map)) && g == &self.gather => {
+                        pre.lookup(hit.p, n, scratch)
+                    }
+                    _ => estimate::irradiance(map, g, hit.p, n, admit, scratch),
+                };
+                return e * d.r * std::f32::consts::FRAC_1_PI;
+            }
+            estimate::radiance(map, g, hit.p, n, admit, scratch, |wi| {
+                bsdf.f(wo, wi, TransportMode::Radiance)
+            })
         })
     }
 
-    /// Caustic irradiance at a hit from the caustic map: a plain fixed-radius
-    /// estimate with its own, smaller radius.
-    fn caustic_irradiance(&self, hit: &Hit, wo: Vec3) -> Vec3 {
+    /// Caustic radiance from the caustic map: a plain fixed-radius estimate
+    /// with its own, smaller radius.
+    fn caustic_radiance(&self, v: &DiffuseVertex) -> Vec3 {
         let Some(map) = self.caustics else {
             return Vec3::ZERO;
         };
@@ -92,88 +107,104 @@ impl PhotonMapping<'_> {
             cone: false,
             filter: self.gather.filter,
         };
-        let n = facing(hit, wo);
-        SCRATCH.with(|s| estimate::irradiance(map, &g, hit.p, n, Admit::ALL, &mut s.borrow_mut()))
+        self.photon_radiance(map, &v.hit, v.wo, &v.bsdf, Admit::ALL, &g)
     }
 
-    /// Indirect irradiance at `hit` by final gathering: the mean radiance
-    /// brought back by cosine-distributed rays, times pi. Gather rays go on
-    /// through mirrors and glass to a diffuse surface.
+    /// Indirect light reflected at a diffuse vertex, by final gathering: rays
+    /// leave it (cosine-distributed and stratified on a Lambertian surface,
+    /// else sampled from the BSDF's non-specular lobes) and bring back the
+    /// global map's radiance estimate where they reach a surface with a
+    /// diffuse lobe, through specular and glossy surfaces.
     fn final_gather(
         &self,
         scene: &Scene,
         map: &PhotonMap,
-        hit: &Hit,
-        wo: Vec3,
+        v: &DiffuseVertex,
         rng: &mut Rng,
         stats: &mut RayStats,
     ) -> Vec3 {
-        let side = if hit.ng.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-        let (ng, ns) = (hit.ng * side, hit.ns * side);
+        let hit = &v.hit;
         let n = self.final_gather;
         let shift = rng.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
-            let d = to_world(cosine_hemisphere(hammersley_shifted(i, n, shift)), ns);
-            if d.dot(ng) <= 0.0 {
+            let u = hammersley_shifted(i, n, shift);
+            let (d, weight, lobe) = if let Bxdf::Diffuse(dif) = v.bsdf.bxdf {
+                // f cos / pdf = albedo for a cosine-distributed direction.
+                (to_world(cosine_hemisphere(u), v.bsdf.frame.z), dif.r, v.bsdf.flags())
+            } else {
+                let Some(bs) = v.bsdf.sample_f(v.wo, rng.next_f32(), u, TransportMode::Radiance) else {
+                    continue;
+                };
+                if bs.is_specular() {
+                    continue;
+                }
+                (bs.wi, bs.f * (bs.wi.dot(v.bsdf.frame.z).abs() / bs.pdf), bs.flags)
+            };
+            if d.dot(hit.ng) == 0.0 || !hit.keeps_side(v.wo, d, lobe) {
                 continue;
             }
             stats.other_rays += 1;
-            let mut ray = Ray::new(offset_origin(hit.p, ng, d), d);
-            let mut beta = Vec3::ONE;
+            let mut ray = Ray::new(offset_origin(hit.p, hit.ng, d), d);
+            let mut beta = weight;
             for depth in 0..=MAX_SPECULAR_DEPTH {
                 let Some(y) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
                     break;
                 };
                 if let Some(l) = y.light {
                     // Shadow rays counted this light, or the caustic map did
-                    // when it came through mirrors or glass.
+                    // when it came through specular or glossy surfaces.
                     if self.shadow_samples == 0 && depth == 0 {
-                        sum += scene.lights[l as usize].le(-ray.d);
+                        sum += beta * scene.lights[l as usize].le(-ray.d);
                     }
                     break;
                 }
                 let m = scene.material(y.material);
-                if m.is_specular() {
-                    let Some(s) = m.sample_specular(-ray.d, y.ng, rng.next_f32(), Transport::Radiance) else {
-                        break;
-                    };
-                    beta *= s.weight;
-                    stats.other_rays += 1;
-                    ray = Ray::new(offset_origin(y.p, y.ng, s.wi), s.wi);
-                    continue;
+                let wo = -ray.d;
+                let bsdf = m.bsdf(&y.surface(), wo);
+                let flags = bsdf.flags();
+                if flags.is_diffuse() {
+                    sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));
+                    break;
                 }
-                sum += beta * (m.le() + m.f() * self.photon_irradiance(map, &y, -ray.d, Admit::ALL));
-                break;
+                let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+                    break;
+                };
+                if !y.keeps_side(wo, bs.wi, bs.flags) {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
+                stats.other_rays += 1;
+                ray = Ray::new(offset_origin(y.p, y.ng, bs.wi), bs.wi);
             }
         }
-        // E = integral L cos = pi * mean(L) under the pdf cos / pi.
-        sum * (std::f32::consts::PI / n as f32)
+        sum / n as f32
     }
-}
 
-impl RadianceEstimator for PhotonMapping<'_> {
-    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let Some((hit, wo, beta)) = first_diffuse_hit(scene, *ray, rng, stats) else {
-            return Vec3::ZERO;
-        };
-        if let Some(l) = hit.light {
-            return beta * scene.lights[l as usize].le(wo);
-        }
-        let m = scene.material(hit.material);
-        let mut e = irradiance(scene, &hit, wo, self.shadow_samples, rng, stats) + self.caustic_irradiance(&hit, wo);
+    /// Light reflected at a camera path's diffuse vertex: direct by shadow
+    /// rays, caustics by the caustic map, the rest by the global map.
+    fn shade(&self, scene: &Scene, v: &DiffuseVertex, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+        let mut l = direct_radiance(scene, v, self.shadow_samples, rng, stats) + self.caustic_radiance(v);
         if let Some(map) = self.map {
-            e += if self.final_gather > 0 {
-                self.final_gather(scene, map, &hit, wo, rng, stats)
+            l += if self.final_gather > 0 {
+                self.final_gather(scene, map, v, rng, stats)
             } else {
                 let admit = Admit {
                     direct: self.shadow_samples == 0,
                     caustic: false,
                 };
-                self.photon_irradiance(map, &hit, wo, admit)
+                self.photon_radiance(map, &v.hit, v.wo, &v.bsdf, admit, &self.gather)
             };
         }
-        beta * (m.le() + m.f() * e)
+        l
+    }
+}
+
+impl RadianceEstimator for PhotonMapping<'_> {
+    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+        walk_camera_path(scene, *ray, rng, stats, |v, rng, stats| {
+            (self.shade(scene, v, rng, stats), true)
+        })
     }
 }
 

@@ -37,8 +37,9 @@
 //! interrupted part way leaves them as they were before it.
 
 use super::checkpoint::{self, Buffer};
-use super::direct::{first_diffuse_hit, irradiance};
+use super::direct::{direct_radiance, walk_camera_path};
 use super::{RayStats, RenderSettings};
+use crate::bsdf::{Bsdf, TransportMode};
 use crate::error::{Error, Result};
 use crate::film::{Film, PixelRect};
 use crate::math::Vec3;
@@ -65,14 +66,16 @@ struct PixelState {
     tau: Vec3,
 }
 
-/// This pass's visible point of a pixel.
+/// This pass's visible point of a pixel: the first vertex of its camera path
+/// whose BSDF has a diffuse lobe.
 #[derive(Clone, Copy, Debug)]
 struct VisiblePoint {
     p: Vec3,
-    /// Unit normal on the side the camera ray arrived from.
-    n: Vec3,
-    /// Throughput of the specular chain times the Lambertian BRDF.
-    beta_f: Vec3,
+    /// Unit direction back towards the camera.
+    wo: Vec3,
+    bsdf: Bsdf,
+    /// Throughput of the camera path up to here.
+    beta: Vec3,
 }
 
 /// Seed of pass `pass`'s photons, apart from every other pass's.
@@ -323,7 +326,9 @@ impl checkpoint::Progressive for Progressive<'_> {
 }
 
 /// Traces the pixel's camera ray to its visible point, adding the light it
-/// sees directly to the pixel's direct sum; `None` when no photon can add to it.
+/// finds on the way (seen directly, through specular surfaces, reflected by
+/// glossy ones) and the direct light at the visible point to the pixel's
+/// direct sum; `None` when no photon can add to it.
 fn visible_point(
     scene: &Scene,
     settings: &RenderSettings,
@@ -332,21 +337,22 @@ fn visible_point(
     stats: &mut RayStats,
     px: &mut PixelState,
 ) -> Option<VisiblePoint> {
-    let (hit, wo, beta) = first_diffuse_hit(scene, ray, rng, stats)?;
-    if let Some(l) = hit.light {
-        px.direct += beta * scene.lights[l as usize].le(wo);
-        return None;
-    }
-    let m = scene.material(hit.material);
-    let e = irradiance(scene, &hit, wo, settings.shadow_samples, rng, stats);
-    let l = beta * (m.le() + m.f() * e);
+    let mut vp = None;
+    let l = walk_camera_path(scene, ray, rng, stats, |v, rng, stats| {
+        vp = Some(VisiblePoint {
+            p: v.hit.p,
+            wo: v.wo,
+            bsdf: v.bsdf,
+            beta: v.beta,
+        });
+        // pbrt-v4's SPPM: the path ends at its visible point.
+        (direct_radiance(scene, v, settings.shadow_samples, rng, stats), false)
+    });
     // A NaN or infinite sample would poison the pixel; drop it.
     if l.is_finite() {
         px.direct += l;
     }
-    let n = if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng };
-    let beta_f = beta * m.f();
-    (beta_f.max_element() > 0.0 && beta_f.is_finite()).then_some(VisiblePoint { p: hit.p, n, beta_f })
+    vp.filter(|vp| vp.beta.max_element() > 0.0 && vp.beta.is_finite())
 }
 
 /// Gathers the pass's photons at the visible point and shrinks the radius.
@@ -355,9 +361,12 @@ fn update(px: &mut PixelState, vp: &VisiblePoint, map: &PhotonMap, admit: Admit,
     let mut phi = Vec3::ZERO;
     let mut m = 0u32;
     map.for_each_within(vp.p, r2, |_, ph| {
-        if admit.accepts(ph) && ph.arrived_from(vp.n) {
-            phi += ph.power();
-            m += 1;
+        if admit.accepts(ph) {
+            let f = vp.bsdf.f(vp.wo, ph.wi(), TransportMode::Radiance);
+            if f != Vec3::ZERO {
+                phi += f * ph.power();
+                m += 1;
+            }
         }
     });
     if m == 0 {
@@ -365,7 +374,7 @@ fn update(px: &mut PixelState, vp: &VisiblePoint, map: &PhotonMap, admit: Admit,
     }
     let n_new = px.n + alpha * m as f32;
     let ratio = n_new / (px.n + m as f32);
-    px.tau = (px.tau + vp.beta_f * phi * map.unit) * ratio;
+    px.tau = (px.tau + vp.beta * phi * map.unit) * ratio;
     px.r *= ratio.sqrt();
     px.n = n_new;
 }

@@ -573,7 +573,8 @@ fn distant_light_is_parallel_and_at_infinity() {
 
 #[test]
 fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
-    use crate::integrator::{direct::irradiance, RayStats};
+    use crate::integrator::direct::{direct_radiance, DiffuseVertex};
+    use crate::integrator::RayStats;
     use crate::material::Material;
     use crate::scene::{CameraDesc, Scene, SceneDesc, TriangleDesc};
     let camera = CameraDesc {
@@ -589,6 +590,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
             desc.triangles.push(TriangleDesc {
                 vertices,
                 normals: None,
+                uvs: None,
                 material: 0,
             });
         }
@@ -620,10 +622,19 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         let mut stats = RayStats::default();
         let n = 4000;
         let mut e = Vec3::ZERO;
+        let wo = -ray.d;
+        let bsdf = scene.material(hit.material).bsdf(&hit.surface(), wo);
+        let v = DiffuseVertex {
+            hit,
+            wo,
+            bsdf,
+            beta: Vec3::ONE,
+        };
         for _ in 0..n {
-            e += irradiance(scene, &hit, -ray.d, 4, &mut rng, &mut stats);
+            e += direct_radiance(scene, &v, 4, &mut rng, &mut stats);
         }
-        e.x / n as f32
+        // Reflected by albedo 0.5: radiance = 0.5 / pi * irradiance.
+        e.x / n as f32 * PI / 0.5
     };
     let sky = PI * 0.7;
     let sun = 2.0 * d.y;

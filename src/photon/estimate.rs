@@ -102,6 +102,66 @@ pub fn irradiance(map: &PhotonMap, g: &Gather, p: Vec3, n: Vec3, admit: Admit, s
     sum * (map.unit / (norm * PI * r2))
 }
 
+/// Photon radiance estimate at `p` for any BSDF: sum f(wi_p) Phi_p / (pi r^2)
+/// over the photons within the fixed radius (or the k nearest), `f` giving
+/// the BSDF value (towards the viewer) for a photon that came from `wi_p`.
+/// Photons whose `f` is zero (from a side the BSDF does not scatter from)
+/// count for nothing; with `GatherFilter` the surfaces' normals must agree
+/// up to orientation, so that light transmitted from the other side counts.
+pub fn radiance(
+    map: &PhotonMap,
+    g: &Gather,
+    p: Vec3,
+    n: Vec3,
+    admit: Admit,
+    scratch: &mut Vec<Neighbour>,
+    f: impl Fn(Vec3) -> Vec3,
+) -> Vec3 {
+    let min_cos = g.filter.min_cos();
+    let accept =
+        |ph: &Photon| admit.accepts(ph) && (g.filter == GatherFilter::None || ph.normal().dot(n).abs() > min_cos);
+    let weight = |d2: f32, r: f32| {
+        if g.cone {
+            1.0 - d2.sqrt() / (CONE_K * r)
+        } else {
+            1.0
+        }
+    };
+    let (sum, r2) = match g.k {
+        None => {
+            let r2 = g.radius * g.radius;
+            let mut sum = Vec3::ZERO;
+            map.for_each_within(p, r2, |_, ph| {
+                if accept(ph) {
+                    sum += f(ph.wi()) * ph.power() * weight((ph.p - p).length_squared(), g.radius);
+                }
+            });
+            (sum, r2)
+        }
+        Some(k) => {
+            let mut r2 = map.k_nearest(p, k as usize, g.radius * g.radius, accept, scratch);
+            if !r2.is_finite() {
+                r2 = scratch.iter().map(|nb| nb.d2).fold(0.0, f32::max);
+            }
+            let r = r2.sqrt();
+            let ph = map.photons();
+            let sum = scratch
+                .iter()
+                .map(|nb| {
+                    let ph = &ph[nb.index as usize];
+                    f(ph.wi()) * ph.power() * weight(nb.d2, r)
+                })
+                .fold(Vec3::ZERO, |a, b| a + b);
+            (sum, r2)
+        }
+    };
+    if r2.is_nan() || r2 <= 0.0 || sum == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let norm = if g.cone { 1.0 - 2.0 / (3.0 * CONE_K) } else { 1.0 };
+    sum * (map.unit / (norm * PI * r2))
+}
+
 /// Every how many photons one is a site of precomputed irradiance.
 pub const PRECOMPUTE_STRIDE: usize = 4;
 

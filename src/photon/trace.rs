@@ -26,9 +26,9 @@
 
 use super::map::Photon;
 use super::PhotonSettings;
-use crate::material::Transport;
-use crate::math::{offset_origin, to_world, Ray, Vec3};
-use crate::sampling::{cosine_hemisphere, Rng};
+use crate::bsdf::TransportMode;
+use crate::math::{offset_origin, Ray, Vec3};
+use crate::sampling::Rng;
 use crate::scene::Scene;
 use rayon::prelude::*;
 
@@ -149,66 +149,66 @@ fn trace_chunk(
             for (s, c) in arrived.iter_mut().zip(power.to_array()) {
                 *s += c as f64 * em.unit as f64;
             }
+            // Towards where the photon came from (pbrt's wo on a light path).
             let wi = -ray.d;
             let m = scene.material(hit.material);
-            if m.is_specular() {
-                // Reflect or refract; photons are never stored on a delta BSDF.
-                let Some(s) = m.sample_specular(wi, hit.ng, rng.next_f32(), Transport::Importance) else {
-                    break;
-                };
-                let p = s.weight.max_element().min(1.0);
-                if settings.roulette && p < 1.0 {
-                    if rng.next_f32() >= p {
-                        break;
-                    }
-                    power *= s.weight / p;
-                } else {
-                    power *= s.weight;
-                }
-                if power.max_element() <= 0.0 {
-                    break;
-                }
-                specular += 1;
-                ray = Ray::new(offset_origin(hit.p, hit.ng, s.wi), s.wi);
-                continue;
-            }
-            // Store on the side the photon arrived from.
-            let side = if hit.ng.dot(wi) < 0.0 { -1.0 } else { 1.0 };
-            let (ng, ns) = (hit.ng * side, hit.ns * side);
-            let first = diffuse == 0;
-            let caustic = first && specular > 0;
-            match keep {
-                Keep::Caustics => {
-                    if caustic {
-                        photons.push(Photon::new(hit.p, wi, ng, power, hit.object, false).caustic());
-                    }
-                    break;
-                }
-                Keep::Global => {
-                    // Caustic first hits too: shadow rays cannot reach them.
-                    if !first || caustic || settings.store_first_hit {
-                        let ph = Photon::new(hit.p, wi, ng, power, hit.object, first && !caustic);
-                        photons.push(if caustic { ph.caustic() } else { ph });
-                    }
-                }
-            }
-            // Reflect: Russian roulette on the albedo, then a cosine-distributed direction.
-            let albedo = m.albedo();
-            if settings.roulette {
-                let p = albedo.max_element();
-                if rng.next_f32() >= p {
-                    break;
-                }
-                power *= albedo / p;
-            } else {
-                power *= albedo;
-            }
-            let d = to_world(cosine_hemisphere(rng.next_2d()), ns);
-            if d.dot(ng) <= 0.0 || power.max_element() <= 0.0 {
+            let bsdf = m.bsdf(&hit.surface(), wi);
+            let flags = bsdf.flags();
+            if flags.is_empty() {
                 break;
             }
-            diffuse += 1;
-            ray = Ray::new(offset_origin(hit.p, ng, d), d);
+            if flags.is_diffuse() {
+                // Store on the side the photon arrived from.
+                let ng = if hit.ng.dot(wi) < 0.0 { -hit.ng } else { hit.ng };
+                let first = diffuse == 0;
+                let caustic = first && specular > 0;
+                match keep {
+                    Keep::Caustics => {
+                        if caustic {
+                            photons.push(Photon::new(hit.p, wi, ng, power, hit.object, false).caustic());
+                        }
+                        break;
+                    }
+                    Keep::Global => {
+                        // Caustic first hits too: shadow rays cannot reach them.
+                        if !first || caustic || settings.store_first_hit {
+                            let ph = Photon::new(hit.p, wi, ng, power, hit.object, first && !caustic);
+                            photons.push(if caustic { ph.caustic() } else { ph });
+                        }
+                    }
+                }
+            }
+            let Some(bs) = bsdf.sample_f(wi, rng.next_f32(), rng.next_2d(), TransportMode::Importance) else {
+                break;
+            };
+            if !hit.keeps_side(wi, bs.wi, bs.flags) {
+                break;
+            }
+            // Veach (1997, 5.3): with shading normals, the adjoint BSDF
+            // carries |wi . ns| |wo . ng| / (|wi . ng| |wo . ns|).
+            let ns = bsdf.frame.z;
+            let correction = (wi.dot(ns) * bs.wi.dot(hit.ng) / (wi.dot(hit.ng) * bs.wi.dot(ns))).abs();
+            let scatter = bs.f * (bs.wi.dot(ns).abs() / bs.pdf) * if correction.is_finite() { correction } else { 0.0 };
+            if settings.roulette {
+                // Survive with the ratio of new to old power (at most 1), so
+                // that surviving photons keep comparable powers (Jensen 2001, 5.2).
+                let p = scatter.max_element().min(1.0);
+                if p <= 0.0 || rng.next_f32() >= p {
+                    break;
+                }
+                power *= scatter / p;
+            } else {
+                power *= scatter;
+            }
+            if !power.is_finite() || power.max_element() <= 0.0 {
+                break;
+            }
+            if bs.flags.is_diffuse() {
+                diffuse += 1;
+            } else {
+                specular += 1;
+            }
+            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
         }
     }
     (photons, per_hit, rays)
@@ -342,7 +342,7 @@ pub fn trace_caustics(scene: &Scene, settings: &PhotonSettings, seed: u64) -> Ph
         power_per_hit: vec![[0.0; 3]; settings.max_bounces as usize],
         rays: 0,
     };
-    if wanted == 0 || !scene.materials.iter().any(|m| m.is_specular()) {
+    if wanted == 0 || !scene.materials.iter().any(|m| m.is_caustic_caster()) {
         return out;
     }
     let Some(em) = Emitter::new(scene, 1) else {

@@ -177,7 +177,7 @@ impl Mesh {
                 (Some(m), _) => m,
                 (None, Some(albedo)) => {
                     let name = format!("{stem}/{}", part.material.as_deref().unwrap_or(&part.name));
-                    desc.material(&name, Material::Diffuse { albedo: *albedo })
+                    desc.material(&name, Material::diffuse(albedo.x, albedo.y, albedo.z))
                 }
                 (None, None) => {
                     return Err(Error::Parse {
@@ -203,6 +203,7 @@ impl Mesh {
                 desc.triangles.push(TriangleDesc {
                     vertices: [p[a], p[b], p[c]],
                     normals,
+                    uvs: None,
                     material: m,
                 });
             }

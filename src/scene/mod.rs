@@ -8,12 +8,14 @@ pub mod mesh;
 pub mod pbrt;
 pub mod transform;
 
+use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::{Bvh, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
-use crate::math::{Ray, Vec3};
+use crate::material::SurfacePoint;
+use crate::math::{Ray, Vec2, Vec3};
 pub use crate::settings::SceneSettings;
 use mesh::MeshReport;
 use std::path::{Path, PathBuf};
@@ -80,6 +82,9 @@ pub struct CameraDesc {
 pub struct TriangleDesc {
     pub vertices: [Vec3; 3],
     pub normals: Option<[Vec3; 3]>,
+    /// Texture coordinates per vertex; without them a triangle's are pbrt's
+    /// default (0, 0), (1, 0), (1, 1).
+    pub uvs: Option<[Vec2; 3]>,
     pub material: u32,
 }
 
@@ -157,6 +162,27 @@ pub enum PrimKind {
     Light,
 }
 
+impl Hit {
+    /// Whether a direction `wi` scattered from `wo` leaves on the side of the
+    /// geometric surface its lobe says (reflection: the side of `wo`):
+    /// shading normals must not let light leak through a surface.
+    pub fn keeps_side(&self, wo: Vec3, wi: Vec3, lobe: BxdfFlags) -> bool {
+        let same = (wi.dot(self.ng) > 0.0) == (wo.dot(self.ng) > 0.0);
+        same != lobe.is_transmissive()
+    }
+
+    /// What the hit's material needs to build its BSDF.
+    pub fn surface(&self) -> SurfacePoint {
+        SurfacePoint {
+            p: self.p,
+            uv: self.uv,
+            ng: self.ng,
+            ns: self.ns,
+            dpdu: self.dpdu,
+        }
+    }
+}
+
 /// A ray's closest hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -166,6 +192,10 @@ pub struct Hit {
     pub ng: Vec3,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// The surface's dp/du (not normalised), for anisotropic BSDFs.
+    pub dpdu: Vec3,
     pub material: u32,
     /// Object id: the triangle's index in the description, or
     /// triangle count + sphere index for spheres.
@@ -199,18 +229,22 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
     pub lights: Vec<Light>,
+    /// Cumulative light powers (largest channel) for choosing one light in
+    /// proportion to its power; the last entry is the total.
+    light_cdf: Vec<f32>,
+    /// Indices of the infinite lights.
+    infinite_lights: Vec<u32>,
     pub bvh: Bvh,
     /// Triangles in BVH order.
     triangles: Vec<Triangle>,
     info: Vec<TriInfo>,
     vertex_normals: Vec<Option<[Vec3; 3]>>,
+    vertex_uvs: Vec<Option<[Vec2; 3]>>,
     spheres: Vec<SphereObject>,
     /// Triangles dropped for zero area or non-finite coordinates.
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
     pub bvh_build_seconds: f64,
-    /// Indices of the infinite lights.
-    infinite_lights: Vec<u32>,
 }
 
 impl Scene {
@@ -226,6 +260,7 @@ impl Scene {
         let mut tris = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::with_capacity(desc.triangles.len());
         let mut normals = Vec::with_capacity(desc.triangles.len());
+        let mut uvs = Vec::with_capacity(desc.triangles.len());
         let mut dropped = 0;
         for (i, t) in desc.triangles.iter().enumerate() {
             if t.material >= nmat {
@@ -253,6 +288,7 @@ impl Scene {
                 t.normals
                     .filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0)),
             );
+            uvs.push(t.uvs.filter(|uv| uv.iter().all(|c| c.is_finite())));
         }
         let mut lights = desc.lights.clone();
         let mut spheres: Vec<SphereObject> = desc
@@ -274,7 +310,7 @@ impl Scene {
             }
         }
         let black = nmat;
-        let mut materials: Vec<Material> = desc.materials.iter().map(|(_, m)| *m).collect();
+        let mut materials: Vec<Material> = desc.materials.iter().map(|(_, m)| m.clone()).collect();
         let mut names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
         materials.push(Material::diffuse(0.0, 0.0, 0.0));
         names.push("<light>".into());
@@ -309,6 +345,7 @@ impl Scene {
                         light: Some(i as u32),
                     });
                     normals.push(None);
+                    uvs.push(None);
                 }
                 // Point, spot and distant lights have no surface; infinite
                 // lights are seen by the rays that escape (`infinite_lights`).
@@ -332,21 +369,24 @@ impl Scene {
         let triangles = bvh.order.iter().map(|&i| tris[i as usize]).collect();
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
+        let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
         let mut scene = Scene {
             name: desc.name.clone(),
             camera,
             materials,
             material_names: names,
             lights,
+            light_cdf: vec![],
+            infinite_lights,
             bvh,
             triangles,
             info,
             vertex_normals,
+            vertex_uvs,
             spheres,
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
-            infinite_lights,
         };
         // Lights at infinity reach the scene through its bounding sphere.
         let bounds = scene.bounds();
@@ -362,6 +402,15 @@ impl Scene {
             }
         };
         scene.lights.iter_mut().for_each(|l| l.set_scene_bounds(world));
+        // Their power depends on it: lights are chosen by power only now.
+        scene.light_cdf = scene
+            .lights
+            .iter()
+            .scan(0.0f32, |acc, l| {
+                *acc += l.power().max_element().max(0.0);
+                Some(*acc)
+            })
+            .collect();
         Ok(scene)
     }
 
@@ -369,6 +418,36 @@ impl Scene {
     /// `le_escaped` is not zero): the infinite lights.
     pub fn infinite_lights(&self) -> &[u32] {
         &self.infinite_lights
+    }
+
+    /// Chooses a light in proportion to its power: its index and the
+    /// probability of that choice; `None` when no light emits.
+    pub fn pick_light(&self, u: f32) -> Option<(usize, f32)> {
+        let total = *self.light_cdf.last()?;
+        if total <= 0.0 || !total.is_finite() {
+            return None;
+        }
+        let target = u * total;
+        let i = self
+            .light_cdf
+            .partition_point(|&c| c <= target)
+            .min(self.light_cdf.len() - 1);
+        // Skip lights of no power that share the cumulative value.
+        let i = (i..self.light_cdf.len()).find(|&j| self.light_pmf(j) > 0.0)?;
+        Some((i, self.light_pmf(i)))
+    }
+
+    /// The probability that `pick_light` chooses light `i`.
+    pub fn light_pmf(&self, i: usize) -> f32 {
+        let Some(&total) = self.light_cdf.last() else {
+            return 0.0;
+        };
+        let before = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
+        if total > 0.0 {
+            (self.light_cdf[i] - before) / total
+        } else {
+            0.0
+        }
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -412,11 +491,14 @@ impl Scene {
                 }
                 None => inf.normal,
             };
+            let (uv, dpdu) = self.triangle_uv(idx, u, v);
             Some(Hit {
                 t: best_t,
                 p,
                 ng: inf.normal,
                 ns,
+                uv,
+                dpdu,
                 material: inf.material,
                 object: inf.object,
                 kind: if inf.light.is_some() {
@@ -429,11 +511,20 @@ impl Scene {
         } else {
             let s = &self.spheres[idx];
             let n = (p - s.sphere.centre) / s.sphere.radius;
+            // pbrt-v4's sphere parametrisation about the z axis.
+            let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
+            let uv = Vec2::new(
+                phi / std::f32::consts::TAU,
+                1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+            );
+            let dpdu = Vec3::new(-n.y, n.x, 0.0) * (std::f32::consts::TAU * s.sphere.radius);
             Some(Hit {
                 t: best_t,
                 p,
                 ng: n,
                 ns: n,
+                uv,
+                dpdu,
                 material: s.material,
                 object: (self.desc.triangles.len() + idx) as u32,
                 kind: if s.light.is_some() {
@@ -444,6 +535,27 @@ impl Scene {
                 light: s.light,
             })
         }
+    }
+
+    /// Texture coordinates and dp/du at barycentrics (u, v) of triangle
+    /// `slot` (BVH order), as pbrt-v4's `Triangle` computes them.
+    fn triangle_uv(&self, slot: usize, b1: f32, b2: f32) -> (Vec2, Vec3) {
+        const DEFAULT: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
+        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT);
+        let b0 = 1.0 - b1 - b2;
+        let at = uv[0] * b0 + uv[1] * b1 + uv[2] * b2;
+        let [p0, p1, p2] = self.triangles[slot].vertices();
+        let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        let dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
+        // Degenerate texture coordinates: any tangent will do.
+        let dpdu = if det.abs() < 1e-9 || !dpdu.is_finite() {
+            p1 - p0
+        } else {
+            dpdu
+        };
+        (at, dpdu)
     }
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.

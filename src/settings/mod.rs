@@ -654,7 +654,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
             // SPPM converges to the answer only if photon paths are not cut
             // short: Russian roulette, not this limit, should end nearly every
             // path (a 0.75 albedo keeps 1% after 16 hits).
-            max_bounces: int("max_bounces").unwrap_or(if integrator == IntegratorKind::Sppm { 16 } else { 5 }) as u32,
+            max_bounces: int("max_bounces").unwrap_or(if integrator == IntegratorKind::Sppm { 100 } else { 5 }) as u32,
             store_first_hit: flag("store_first_hit"),
             roulette: true,
             gather: Gather {

@@ -84,7 +84,7 @@ pub const SETTINGS: &[Spec] = &[
     Spec {
         name: "max_bounces",
         kind: Kind::Count { min: 1, max: 100 },
-        default: DefaultValue::Derived("5; 16 with integrator sppm"),
+        default: DefaultValue::Derived("5; 100 with integrator sppm, whose photons end by Russian roulette"),
         doc: "Surface hits traced per photon, the first being its direct-light hit",
         in_scene_file: true,
         only_for: &[],

@@ -67,7 +67,7 @@ fn the_command_line_wins_over_the_file_over_the_preset_over_the_default() {
 fn derived_defaults_follow_the_settings_they_depend_on() {
     let none = Layer::default();
     let sppm = layer(&[("integrator", Value::Name("sppm"))], Origin::CommandLine);
-    assert_eq!(resolve3(&sppm, &none, &none).unwrap().photon.max_bounces, 16);
+    assert_eq!(resolve3(&sppm, &none, &none).unwrap().photon.max_bounces, 100);
     // A k typed by the user is not bounded by the scene's radius...
     let k = layer(&[("gather_k", Value::Int(50))], Origin::CommandLine);
     let radius = layer(&[("gather_radius", Value::Real(0.06))], file(4));

@@ -99,7 +99,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     let meshes = shapes(&src, &file.shapes, &materials, opts, files, &mut desc)?;
     // Materials no shape uses still belong to the scene, after the used ones.
     for (name, m) in &materials {
-        desc.material(name, *m);
+        desc.material(name, m.clone());
     }
     Ok(LoadedScene { desc, meshes })
 }
@@ -146,7 +146,7 @@ fn materials(src: &Source, specs: &BTreeMap<String, Spanned<MaterialSpec>>) -> R
                         format!("material '{name}': albedo {:?} must lie in [0, 1]", a.0.to_array()),
                     ));
                 }
-                Material::Diffuse { albedo: a.0 }
+                Material::diffuse(a.0.x, a.0.y, a.0.z)
             }
             MaterialKind::Mirror => {
                 let r = spec.get_ref().reflectance.map_or(Vec3::ONE, |r| r.0);
@@ -156,14 +156,14 @@ fn materials(src: &Source, specs: &BTreeMap<String, Spanned<MaterialSpec>>) -> R
                         format!("material '{name}': reflectance {:?} must lie in [0, 1]", r.to_array()),
                     ));
                 }
-                Material::Mirror { reflectance: r }
+                Material::mirror(r)
             }
             MaterialKind::Glass => {
                 let ior = spec.get_ref().ior.unwrap_or(1.5);
                 if !(ior.is_finite() && (1.0..=5.0).contains(&ior)) {
                     return Err(src.error(spec.span(), format!("material '{name}': ior {ior} must lie in [1, 5]")));
                 }
-                Material::Glass { ior }
+                Material::glass(ior)
             }
         };
         // Keys that belong to another material type are mistakes, not options.
@@ -196,7 +196,7 @@ fn shapes(
     let path = src.path;
     let material = |desc: &mut SceneDesc, name: &Spanned<String>| -> Result<u32> {
         match materials.get(name.get_ref()) {
-            Some(m) => Ok(desc.material(name.get_ref(), *m)),
+            Some(m) => Ok(desc.material(name.get_ref(), m.clone())),
             None => Err(src.error(
                 name.span(),
                 format!(
@@ -240,6 +240,7 @@ fn shapes(
             desc.triangles.push(TriangleDesc {
                 vertices: v,
                 normals,
+                uvs: None,
                 material: m,
             })
         };

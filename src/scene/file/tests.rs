@@ -306,15 +306,10 @@ fn mirror_and_glass_materials_are_read_and_checked() {
         type = "glass"
     "#;
     let d = parse_str(base).unwrap().desc;
-    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| *m);
-    assert_eq!(
-        get("m"),
-        Some(Material::Mirror {
-            reflectance: Vec3::new(0.9, 0.8, 0.7)
-        })
-    );
-    assert_eq!(get("g"), Some(Material::Glass { ior: 1.33 }));
-    assert_eq!(get("plain_glass"), Some(Material::Glass { ior: 1.5 }));
+    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m.clone());
+    assert_eq!(get("m"), Some(Material::mirror(Vec3::new(0.9, 0.8, 0.7))));
+    assert_eq!(get("g"), Some(Material::glass(1.33)));
+    assert_eq!(get("plain_glass"), Some(Material::glass(1.5)));
     for (bad, what) in [
         ("[materials.x]\ntype = \"glass\"\nalbedo = [1, 1, 1]\n", "albedo"),
         ("[materials.x]\ntype = \"glass\"\nior = 0.5\n", "ior"),
@@ -421,6 +416,7 @@ fn spot_distant_and_infinite_lights_are_read() {
             Vec3::new(1.0, 0.0, 1.0),
         ],
         normals: None,
+        uvs: None,
         material: 0,
     });
     let scene = Scene::build(desc).unwrap();

@@ -35,11 +35,12 @@ use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
-use crate::material::Material;
+use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
 use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::settings::{Layer, Origin, SceneSettings, Value};
+use crate::texture::Texture;
 use glam::Mat4;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::f32::consts::PI;
@@ -874,6 +875,7 @@ impl<'a> Conv<'a> {
                             desc.triangles.push(TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
+                                uvs: None,
                                 material,
                             });
                         }
@@ -987,9 +989,8 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             if !albedo.is_finite() {
                 return Err(located(loc, "diffuse: \"reflectance\" must be finite"));
             }
-            Ok(Ok(Material::Diffuse {
-                albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE),
-            }))
+            let a = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+            Ok(Ok(Material::diffuse(a.x, a.y, a.z)))
         }
         "dielectric" => {
             let eta = match p.get("eta") {
@@ -1014,26 +1015,165 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
                     format!("dielectric: \"eta\" {eta} must be a positive number"),
                 ));
             }
-            let remap = p.get_bool("remaproughness", true)?;
-            let mut alpha: f32 = 0.0;
-            let r = p.get_float_or_texture("roughness")?;
-            for n in ["uroughness", "vroughness"] {
-                let v = match p.get_float_or_texture(n)?.or(r.clone()) {
-                    None => 0.0,
-                    Some(FloatOrTexture::Value(v)) => v,
-                    Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured roughness is not supported".into())),
+            let roughness = match roughness(p, loc)? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Material::Dielectric { eta, roughness }))
+        }
+        "thindielectric" => {
+            let eta = p.get_float("eta", 1.5)?;
+            if !(eta.is_finite() && eta > 0.0) {
+                return Err(located(
+                    loc,
+                    format!("thindielectric: \"eta\" {eta} must be a positive number"),
+                ));
+            }
+            Ok(Ok(Material::ThinDielectric { eta }))
+        }
+        "conductor" => {
+            let roughness = match roughness(p, loc)? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            let fresnel = if p.has("reflectance") {
+                match colour(p, "reflectance", loc)? {
+                    Ok(r) => ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE))),
+                    Err(why) => return Ok(Err(why)),
+                }
+            } else {
+                // pbrt-v4's default conductor is copper.
+                let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
+                let eta = if p.has("eta") {
+                    colour(p, "eta", loc)?
+                } else {
+                    Ok(cu_eta)
                 };
-                let a = if remap { v.max(0.0).sqrt() } else { v };
-                alpha = alpha.max(a);
+                let k = if p.has("k") { colour(p, "k", loc)? } else { Ok(cu_k) };
+                match (eta, k) {
+                    (Ok(eta), Ok(k)) => {
+                        if eta.min_element() <= 0.0 || k.min_element() < 0.0 {
+                            return Err(located(
+                                loc,
+                                "conductor: \"eta\" must be positive and \"k\" not negative",
+                            ));
+                        }
+                        ConductorFresnel::Ior { eta, k }
+                    }
+                    (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
+                }
+            };
+            Ok(Ok(Material::Conductor { fresnel, roughness }))
+        }
+        "coateddiffuse" => {
+            if p.get_spectrum("albedo")?
+                .is_some_and(|a| a.to_rgb().is_none_or(|c| c.max_element() > 0.0))
+            {
+                return Ok(Err(
+                    "a coat medium that scatters (\"albedo\" > 0) is not supported".into()
+                ));
             }
-            // pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth.
-            if alpha >= 1e-3 {
-                return Ok(Err("a rough dielectric is not supported".into()));
+            let roughness = match roughness(p, loc)? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            let reflectance = match if p.has("reflectance") {
+                colour(p, "reflectance", loc)?
+            } else {
+                Ok(Vec3::splat(0.5))
+            } {
+                Ok(r) => r.clamp(Vec3::ZERO, Vec3::ONE),
+                Err(why) => return Ok(Err(why)),
+            };
+            let eta = p.get_float("eta", 1.5)?;
+            let thickness = p.get_float("thickness", 0.01)?;
+            if !(eta.is_finite() && eta > 0.0 && thickness.is_finite() && thickness >= 0.0) {
+                return Err(located(
+                    loc,
+                    "coateddiffuse: \"eta\" must be positive and \"thickness\" not negative",
+                ));
             }
-            Ok(Ok(Material::Glass { ior: eta }))
+            Ok(Ok(Material::CoatedDiffuse {
+                reflectance: Texture::from(reflectance),
+                roughness,
+                eta,
+                thickness,
+            }))
+        }
+        "diffusetransmission" => {
+            let scale = p.get_float("scale", 1.0)?;
+            let mut rt = [Vec3::splat(0.25); 2];
+            for (i, n) in ["reflectance", "transmittance"].into_iter().enumerate() {
+                if p.has(n) {
+                    match colour(p, n, loc)? {
+                        Ok(c) => rt[i] = c,
+                        Err(why) => return Ok(Err(why)),
+                    }
+                }
+            }
+            let [r, t] = rt.map(|c| (c * scale).clamp(Vec3::ZERO, Vec3::ONE));
+            Ok(Ok(Material::DiffuseTransmission {
+                reflectance: Texture::from(r),
+                transmittance: Texture::from(t),
+            }))
         }
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
     }
+}
+
+/// The microfacet roughness of a pbrt-v4 material: `uroughness` and
+/// `vroughness`, each defaulting to `roughness` (default 0), and `remaproughness`.
+fn roughness(p: &Params, loc: &Loc) -> Result<std::result::Result<Roughness, String>> {
+    let remap = p.get_bool("remaproughness", true)?;
+    let r = p.get_float_or_texture("roughness")?;
+    let mut uv = [0.0f32; 2];
+    for (i, n) in ["uroughness", "vroughness"].into_iter().enumerate() {
+        uv[i] = match p.get_float_or_texture(n)?.or(r.clone()) {
+            None => 0.0,
+            Some(FloatOrTexture::Value(v)) => v,
+            Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured roughness is not supported".into())),
+        };
+        if !(uv[i].is_finite() && uv[i] >= 0.0) {
+            return Err(located(loc, format!("\"{n}\" {} must be a number >= 0", uv[i])));
+        }
+    }
+    Ok(Ok(Roughness {
+        u: uv[0],
+        v: uv[1],
+        remap,
+    }))
+}
+
+/// An RGB parameter given as a number, an `rgb`, a named spectrum (pbrt-v4's
+/// metal spectra, fitted to RGB once: `bsdf::metals`) or sampled values.
+fn colour(p: &Params, name: &str, loc: &Loc) -> Result<std::result::Result<Vec3, String>> {
+    if p.get(name).is_some_and(|e| e.ty == super::ParamType::Float) {
+        return Ok(Ok(Vec3::splat(p.get_float(name, 0.0)?)));
+    }
+    if let Some(cs) = colour_space(p, name) {
+        return Ok(Err(format!("rgb in colour space \"{cs}\" is not supported")));
+    }
+    let v = match p.get_spectrum_or_texture(name)? {
+        None => return Ok(Err(format!("\"{name}\" is missing"))),
+        Some(SpectrumOrTexture::Texture(t)) => {
+            return Ok(Err(format!("a textured \"{name}\" (texture \"{t}\") is not supported")))
+        }
+        Some(SpectrumOrTexture::Value(v)) => v,
+    };
+    let c = match &v {
+        SpectrumValue::Named(n) => match crate::bsdf::named_spectrum_rgb(n) {
+            Some(c) => c,
+            None => return Ok(Err(format!("the spectrum \"{n}\" is not supported for \"{name}\""))),
+        },
+        other => match reflectance_rgb(other) {
+            Some(c) => c,
+            None => return Ok(Err(format!("\"{name}\" given as this spectrum is not supported"))),
+        },
+    };
+    if !c.is_finite() {
+        return Err(located(loc, format!("\"{name}\" must be finite")));
+    }
+    Ok(Ok(c))
 }
 
 /// A reflectance spectrum's RGB: an `rgb` as given; a sampled spectrum's
@@ -1274,8 +1414,8 @@ mod tests {
              Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.3 0.4 ] \"float bogus\" [ 1 ]\nShape \"sphere\"\n",
             quad(0.0)
         ));
-        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| *m).collect();
-        assert!(mats.contains(&Material::Glass { ior: 1.33 }));
+        let mats: Vec<Material> = c.desc.materials.iter().map(|(_, m)| m.clone()).collect();
+        assert!(mats.contains(&Material::glass(1.33)));
         assert!(mats.contains(&Material::diffuse(0.2, 0.3, 0.4)));
         let s = &c.desc.settings.scene_file;
         assert_eq!(s.get("max_depth").map(|v| v.0), Some(Value::Int(7)));

@@ -1,0 +1,140 @@
+//! Textures: values that vary over a surface, looked up at a shading point's
+//! texture coordinates (pbrt-v4 chapter 10). A texture here is RGB-valued; a
+//! scalar parameter (a roughness, a mix amount) reads the first channel.
+//!
+//! Textures form a small tree (scale and mix hold other textures), cloned
+//! cheaply: the leaves that hold data share it.
+
+use crate::math::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// Where a texture is looked up: the surface's (u, v) and the point itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexCoord {
+    pub uv: Vec2,
+    pub p: Vec3,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    Constant(Vec3),
+    /// Two textures alternating over a `u_scale` x `v_scale` grid of squares
+    /// per unit of (u, v) (pbrt-v4 `checkerboard`, 2D, no filtering).
+    Checkerboard {
+        even: Arc<Texture>,
+        odd: Arc<Texture>,
+        u_scale: f32,
+        v_scale: f32,
+    },
+    /// The product of two textures (pbrt-v4 `scale`).
+    Scale {
+        tex: Arc<Texture>,
+        scale: Arc<Texture>,
+    },
+    /// (1 - amount) a + amount b (pbrt-v4 `mix`).
+    Mix {
+        a: Arc<Texture>,
+        b: Arc<Texture>,
+        amount: Arc<Texture>,
+    },
+}
+
+impl Texture {
+    pub fn constant(v: Vec3) -> Texture {
+        Texture::Constant(v)
+    }
+
+    pub fn evaluate(&self, tc: &TexCoord) -> Vec3 {
+        match self {
+            Texture::Constant(v) => *v,
+            Texture::Checkerboard {
+                even,
+                odd,
+                u_scale,
+                v_scale,
+            } => {
+                let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
+                // Parity of the square; rem_euclid keeps negative coordinates alternating too.
+                if (su + sv).rem_euclid(2.0) == 0.0 {
+                    even.evaluate(tc)
+                } else {
+                    odd.evaluate(tc)
+                }
+            }
+            Texture::Scale { tex, scale } => tex.evaluate(tc) * scale.evaluate(tc),
+            Texture::Mix { a, b, amount } => {
+                let t = amount.evaluate(tc).x;
+                a.evaluate(tc) * (1.0 - t) + b.evaluate(tc) * t
+            }
+        }
+    }
+
+    /// The first channel: the value of a scalar texture.
+    pub fn evaluate_scalar(&self, tc: &TexCoord) -> f32 {
+        self.evaluate(tc).x
+    }
+
+    /// The value when the texture does not vary, else `None`.
+    pub fn as_constant(&self) -> Option<Vec3> {
+        match self {
+            Texture::Constant(v) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// Bounds of the values the texture can take, per channel (for validation
+    /// and for the photon tracer's roulette, which must not assume a constant).
+    pub fn max_value(&self) -> Vec3 {
+        match self {
+            Texture::Constant(v) => *v,
+            Texture::Checkerboard { even, odd, .. } => even.max_value().max(odd.max_value()),
+            Texture::Scale { tex, scale } => tex.max_value() * scale.max_value(),
+            Texture::Mix { a, b, .. } => a.max_value().max(b.max_value()),
+        }
+    }
+}
+
+impl From<Vec3> for Texture {
+    fn from(v: Vec3) -> Texture {
+        Texture::Constant(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(u: f32, v: f32) -> TexCoord {
+        TexCoord {
+            uv: Vec2::new(u, v),
+            p: Vec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn checkerboard_alternates_and_scale_and_mix_combine() {
+        let (black, white) = (Arc::new(Texture::from(Vec3::ZERO)), Arc::new(Texture::from(Vec3::ONE)));
+        let c = Texture::Checkerboard {
+            even: white.clone(),
+            odd: black.clone(),
+            u_scale: 4.0,
+            v_scale: 4.0,
+        };
+        assert_eq!(c.evaluate(&at(0.1, 0.1)), Vec3::ONE);
+        assert_eq!(c.evaluate(&at(0.3, 0.1)), Vec3::ZERO);
+        assert_eq!(c.evaluate(&at(0.3, 0.3)), Vec3::ONE);
+        assert_eq!(c.evaluate(&at(-0.1, 0.1)), Vec3::ZERO);
+        let s = Texture::Scale {
+            tex: Arc::new(Texture::from(Vec3::new(0.5, 1.0, 2.0))),
+            scale: Arc::new(Texture::from(Vec3::splat(0.5))),
+        };
+        assert_eq!(s.evaluate(&at(0.0, 0.0)), Vec3::new(0.25, 0.5, 1.0));
+        let m = Texture::Mix {
+            a: black,
+            b: white,
+            amount: Arc::new(Texture::from(Vec3::splat(0.25))),
+        };
+        assert_eq!(m.evaluate(&at(0.0, 0.0)), Vec3::splat(0.25));
+        assert_eq!(m.max_value(), Vec3::ONE);
+    }
+}
