@@ -141,6 +141,227 @@ pub fn sample_tent(u: f32) -> f32 {
     }
 }
 
+/// A value in [a, b] with density proportional to the smoothstep from a to b
+/// (pbrt-v4's `SampleSmoothStep`): t = (x - a) / (b - a) has CDF 2t^3 - t^4,
+/// inverted by Newton's method safeguarded by bisection.
+pub fn sample_smoothstep(u: f32, a: f32, b: f32) -> f32 {
+    let u = u as f64;
+    let (mut lo, mut hi, mut t) = (0.0f64, 1.0f64, 0.5f64);
+    for _ in 0..40 {
+        let f = t * t * t * (2.0 - t) - u;
+        if f.abs() < 1e-9 {
+            break;
+        }
+        if f > 0.0 {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        let df = t * t * (6.0 - 4.0 * t);
+        let next = t - f / df;
+        t = if df > 0.0 && next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    a + (t as f32) * (b - a)
+}
+
+/// A piecewise-constant density on [0, 1) from `n` non-negative values
+/// (pbrt-v4's `PiecewiseConstant1D`): segment i covers [i/n, (i+1)/n) and is
+/// chosen in proportion to its value. Negative and non-finite values count
+/// as zero; when every value is zero the distribution is empty (`integral`
+/// is 0) and sampling returns a zero pdf.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution1D {
+    func: Vec<f32>,
+    /// n + 1 entries from 0 to 1.
+    cdf: Vec<f32>,
+    /// The integral of the function over [0, 1]: its mean.
+    integral: f32,
+}
+
+impl Distribution1D {
+    /// `f` must not be empty.
+    pub fn new(f: &[f32]) -> Distribution1D {
+        assert!(!f.is_empty(), "a distribution needs at least one value");
+        let func: Vec<f32> = f
+            .iter()
+            .map(|&v| if v.is_finite() && v > 0.0 { v } else { 0.0 })
+            .collect();
+        let n = func.len();
+        // Accumulated in f64: large maps lose nothing to rounding.
+        let mut sums = Vec::with_capacity(n + 1);
+        let mut sum = 0.0f64;
+        sums.push(0.0);
+        for &v in &func {
+            sum += v as f64;
+            sums.push(sum);
+        }
+        let cdf = if sum > 0.0 {
+            let mut c: Vec<f32> = sums.iter().map(|&s| (s / sum) as f32).collect();
+            c[n] = 1.0;
+            c
+        } else {
+            (0..=n).map(|i| i as f32 / n as f32).collect()
+        };
+        Distribution1D {
+            func,
+            cdf,
+            integral: (sum / n as f64) as f32,
+        }
+    }
+
+    /// Number of segments.
+    pub fn len(&self) -> usize {
+        self.func.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.integral == 0.0
+    }
+
+    /// The function's integral over [0, 1] (the mean of its values).
+    pub fn integral(&self) -> f32 {
+        self.integral
+    }
+
+    /// The value of segment `i`.
+    pub fn value(&self, i: usize) -> f32 {
+        self.func[i]
+    }
+
+    /// Segment whose CDF interval holds `u`: one of non-zero value when any.
+    fn find(&self, u: f32) -> usize {
+        // Largest i < n with cdf[i] <= u.
+        let n = self.func.len();
+        self.cdf[..n].partition_point(|&c| c <= u).saturating_sub(1)
+    }
+
+    /// A point x in [0, 1) distributed as the function, with its density and
+    /// segment: (x, pdf(x), segment).
+    pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
+        let i = self.find(u);
+        if self.integral == 0.0 {
+            return ((i as f32 + 0.5) / self.len() as f32, 0.0, i);
+        }
+        let (c0, c1) = (self.cdf[i], self.cdf[i + 1]);
+        let du = if c1 > c0 {
+            ((u - c0) / (c1 - c0)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let x = ((i as f32 + du) / self.len() as f32).min(ONE_MINUS_EPS);
+        (x, self.func[i] / self.integral, i)
+    }
+
+    /// A segment chosen in proportion to its value, with its probability.
+    pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
+        let i = self.find(u);
+        (i, self.cdf[i + 1] - self.cdf[i])
+    }
+
+    /// The density at `x` in [0, 1] (0 for an empty distribution).
+    pub fn pdf(&self, x: f32) -> f32 {
+        if self.integral == 0.0 || !(0.0..=1.0).contains(&x) {
+            return 0.0;
+        }
+        let i = ((x * self.len() as f32) as usize).min(self.len() - 1);
+        self.func[i] / self.integral
+    }
+}
+
+/// A piecewise-constant density on [0, 1)^2 from an `nu` x `nv` grid of
+/// values, row by row (value (iu, iv) at `f[iv * nu + iu]`): a marginal
+/// distribution over rows and one conditional distribution per row
+/// (pbrt-v4's `PiecewiseConstant2D`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution2D {
+    conditional: Vec<Distribution1D>,
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    pub fn new(f: &[f32], nu: usize, nv: usize) -> Distribution2D {
+        assert!(
+            nu > 0 && nv > 0 && f.len() == nu * nv,
+            "a {nu} x {nv} grid needs {} values",
+            nu * nv
+        );
+        let conditional: Vec<Distribution1D> = f.chunks_exact(nu).map(Distribution1D::new).collect();
+        let marginal = Distribution1D::new(&conditional.iter().map(|c| c.integral()).collect::<Vec<_>>());
+        Distribution2D { conditional, marginal }
+    }
+
+    /// The function's integral over the unit square.
+    pub fn integral(&self) -> f32 {
+        self.marginal.integral()
+    }
+
+    /// A point distributed as the function and its density (0 when the
+    /// function is zero everywhere).
+    pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
+        let (v, pdf_v, iv) = self.marginal.sample_continuous(u.y);
+        let (x, pdf_u, _) = self.conditional[iv].sample_continuous(u.x);
+        (Vec2::new(x, v), pdf_u * pdf_v)
+    }
+
+    /// The density at `p` in the unit square.
+    pub fn pdf(&self, p: Vec2) -> f32 {
+        let integral = self.marginal.integral();
+        if integral == 0.0 || !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
+            return 0.0;
+        }
+        let nv = self.conditional.len();
+        let iv = ((p.y * nv as f32) as usize).min(nv - 1);
+        let row = &self.conditional[iv];
+        let iu = ((p.x * row.len() as f32) as usize).min(row.len() - 1);
+        row.value(iu) / integral
+    }
+}
+
+/// pbrt-v4's equal-area map from the unit square to the unit sphere
+/// (Clarberg 2008, "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD"):
+/// the square's centre goes to +z, its corners to -z, its edges' midpoints
+/// to the equator (u = 1, v = 1/2 is +x; u = 1/2, v = 1 is +y). Equal areas
+/// of the square cover equal solid angles (4 pi in all).
+pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
+    let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    // Signed distance from the diagonal |u| + |v| = 1: positive inside (z > 0).
+    let signed_distance = 1.0 - (up + vp);
+    let r = 1.0 - signed_distance.abs();
+    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * (PI / 4.0);
+    let z = (1.0 - r * r).copysign(signed_distance);
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    Vec3::new(cos_phi.copysign(u) * s, sin_phi.copysign(v) * s, z)
+}
+
+/// The inverse of `equal_area_square_to_sphere` for a unit vector.
+pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
+    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let b = if a == 0.0 { 0.0 } else { b / a };
+    // The angle from the nearer of the x and y axes, as a fraction of 90 degrees.
+    let mut phi = b.atan() * (2.0 / PI);
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d.z < 0.0 {
+        // Southern hemisphere: mirrored into the square's corners.
+        std::mem::swap(&mut u, &mut v);
+        u = 1.0 - u;
+        v = 1.0 - v;
+    }
+    let (u, v) = (u.copysign(d.x), v.copysign(d.y));
+    Vec2::new(0.5 * (u + 1.0), 0.5 * (v + 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,5 +422,60 @@ mod tests {
         assert!((sample_tent(0.5)).abs() < 1e-6);
         assert!((sample_tent(0.0) + 1.0).abs() < 1e-6);
         assert!((sample_tent(0.25) + sample_tent(0.75)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn distribution_1d_samples_in_proportion() {
+        let d = Distribution1D::new(&[0.0, 1.0, 3.0, 0.0]);
+        assert!((d.integral() - 1.0).abs() < 1e-6);
+        let mut counts = [0u32; 4];
+        let mut r = Rng::new(4, 0);
+        for _ in 0..40_000 {
+            let (x, pdf, i) = d.sample_continuous(r.next_f32());
+            assert_eq!((x * 4.0) as usize, i);
+            assert_eq!(pdf, d.pdf(x));
+            counts[i] += 1;
+        }
+        assert_eq!((counts[0], counts[3]), (0, 0));
+        assert!((counts[2] as f32 / 30_000.0 - 1.0).abs() < 0.02, "{counts:?}");
+        assert_eq!(d.sample_discrete(0.3), (2, 0.75));
+        let empty = Distribution1D::new(&[0.0, f32::NAN, -1.0]);
+        assert!(empty.is_empty() && empty.sample_continuous(0.5).1 == 0.0);
+    }
+
+    #[test]
+    fn distribution_2d_pdf_integrates_to_one() {
+        let f: Vec<f32> = (0..12).map(|i| (i % 5) as f32).collect();
+        let d = Distribution2D::new(&f, 4, 3);
+        let n = 64;
+        let mut sum = 0.0;
+        for j in 0..n {
+            for i in 0..n {
+                sum += d.pdf(Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32));
+            }
+        }
+        assert!((sum / (n * n) as f32 - 1.0).abs() < 1e-4, "{sum}");
+        let mut r = Rng::new(5, 0);
+        for _ in 0..1000 {
+            let (p, pdf) = d.sample(r.next_2d());
+            assert!(pdf > 0.0 && (d.pdf(p) - pdf).abs() <= 1e-5 * pdf);
+        }
+    }
+
+    #[test]
+    fn equal_area_map_round_trips_and_keeps_pbrt_orientation() {
+        let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        assert!(near(equal_area_square_to_sphere(Vec2::new(0.5, 0.5)), Vec3::Z));
+        assert!(near(equal_area_square_to_sphere(Vec2::new(0.0, 0.0)), -Vec3::Z));
+        assert!(near(equal_area_square_to_sphere(Vec2::new(1.0, 0.5)), Vec3::X));
+        assert!(near(equal_area_square_to_sphere(Vec2::new(0.5, 1.0)), Vec3::Y));
+        let mut r = Rng::new(6, 0);
+        for _ in 0..10_000 {
+            let p = r.next_2d();
+            let d = equal_area_square_to_sphere(p);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let q = equal_area_sphere_to_square(d);
+            assert!((p - q).length() < 1e-4, "{p} -> {d} -> {q}");
+        }
     }
 }

@@ -127,6 +127,46 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 h.vec3(radiance);
                 h.u32(two_sided as u32);
             }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_falloff_start,
+                cos_falloff_end,
+            } => {
+                h.u32(3);
+                h.vec3(position);
+                h.vec3(direction);
+                h.vec3(intensity);
+                h.f32(cos_falloff_start);
+                h.f32(cos_falloff_end);
+            }
+            Light::Distant {
+                direction, radiance, ..
+            } => {
+                h.u32(4);
+                h.vec3(direction);
+                h.vec3(radiance);
+            }
+            Light::Infinite {
+                radiance,
+                ref map,
+                to_world,
+                ..
+            } => {
+                h.u32(5);
+                h.vec3(radiance);
+                to_world.to_cols_array().iter().for_each(|&v| h.f32(v));
+                match map {
+                    Some(m) => {
+                        h.u32(m.width());
+                        h.u32(m.height());
+                        h.u32(m.mapping() as u32);
+                        m.texels().iter().for_each(|&t| h.vec3(t));
+                    }
+                    None => h.u32(0),
+                }
+            }
         }
     }
     if camera {

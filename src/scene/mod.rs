@@ -133,7 +133,11 @@ impl SceneDesc {
 
     /// Sets the radius of every sphere light; 0 turns them into point lights.
     pub fn set_light_radius(&mut self, radius: f32) {
-        for l in &mut self.lights {
+        for l in self
+            .lights
+            .iter_mut()
+            .filter(|l| matches!(l, Light::Sphere { .. } | Light::Point { .. } | Light::Triangle { .. }))
+        {
             let (position, power) = (l.position(), l.power());
             *l = if radius > 0.0 {
                 Light::Sphere {
@@ -228,6 +232,7 @@ pub struct Scene {
     /// Cumulative light powers (largest channel) for choosing one light in
     /// proportion to its power; the last entry is the total.
     light_cdf: Vec<f32>,
+    /// Indices of the infinite lights.
     infinite_lights: Vec<u32>,
     pub bvh: Bvh,
     /// Triangles in BVH order.
@@ -342,9 +347,14 @@ impl Scene {
                     normals.push(None);
                     uvs.push(None);
                 }
-                Light::Point { .. } => {}
+                // Point, spot and distant lights have no surface; infinite
+                // lights are seen by the rays that escape (`infinite_lights`).
+                Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => {}
             }
         }
+        let infinite_lights = (0..lights.len() as u32)
+            .filter(|&i| matches!(lights[i as usize], Light::Infinite { .. }))
+            .collect();
 
         if tris.len() > Bvh::MAX_TRIANGLES {
             return Err(Error::Scene(format!(
@@ -360,23 +370,13 @@ impl Scene {
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
-        let light_cdf = lights
-            .iter()
-            .scan(0.0f32, |acc, l| {
-                *acc += l.power().max_element().max(0.0);
-                Some(*acc)
-            })
-            .collect();
-        let infinite_lights = (0..lights.len() as u32)
-            .filter(|&i| lights[i as usize].is_infinite())
-            .collect();
-        Ok(Scene {
+        let mut scene = Scene {
             name: desc.name.clone(),
             camera,
             materials,
             material_names: names,
             lights,
-            light_cdf,
+            light_cdf: vec![],
             infinite_lights,
             bvh,
             triangles,
@@ -387,7 +387,37 @@ impl Scene {
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
-        })
+        };
+        // Lights at infinity reach the scene through its bounding sphere.
+        let bounds = scene.bounds();
+        let world = if bounds.is_empty() {
+            Sphere {
+                centre: Vec3::ZERO,
+                radius: 0.0,
+            }
+        } else {
+            Sphere {
+                centre: bounds.centre(),
+                radius: 0.5 * bounds.extent().length(),
+            }
+        };
+        scene.lights.iter_mut().for_each(|l| l.set_scene_bounds(world));
+        // Their power depends on it: lights are chosen by power only now.
+        scene.light_cdf = scene
+            .lights
+            .iter()
+            .scan(0.0f32, |acc, l| {
+                *acc += l.power().max_element().max(0.0);
+                Some(*acc)
+            })
+            .collect();
+        Ok(scene)
+    }
+
+    /// Indices of the lights that shine on rays leaving the scene (whose
+    /// `le_escaped` is not zero): the infinite lights.
+    pub fn infinite_lights(&self) -> &[u32] {
+        &self.infinite_lights
     }
 
     /// Chooses a light in proportion to its power: its index and the
@@ -418,11 +448,6 @@ impl Scene {
         } else {
             0.0
         }
-    }
-
-    /// Lights that rays leaving the scene see (environment lights).
-    pub fn infinite_lights(&self) -> &[u32] {
-        &self.infinite_lights
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -570,7 +595,7 @@ impl Scene {
         }
         light.move_to(position);
         if let Some(l) = self.desc.lights.get_mut(index) {
-            *l = *light;
+            *l = light.clone();
         }
         for s in &mut self.spheres {
             if s.light == Some(index as u32) {
@@ -589,7 +614,7 @@ impl Scene {
         for s in &self.spheres {
             b = b.union(&s.sphere.bounds());
         }
-        for l in &self.lights {
+        for l in self.lights.iter().filter(|l| !l.is_infinite()) {
             b.grow(l.position());
         }
         b

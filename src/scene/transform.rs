@@ -58,6 +58,16 @@ fn sin_cos_deg(deg: f64) -> (f64, f64) {
     }
 }
 
+/// The rotation of `rotate` degrees about x, then y, then z (as a mesh's).
+pub fn rotation(rotate_deg: Vec3) -> glam::Mat3 {
+    Transform {
+        rotate_deg,
+        ..Transform::default()
+    }
+    .linear()
+    .as_mat3()
+}
+
 impl Transform {
     /// Checks the numbers a user gave; the message names the offending key.
     pub fn validate(&self) -> std::result::Result<(), String> {

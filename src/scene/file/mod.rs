@@ -445,27 +445,67 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         LightKind::Point => "point",
         LightKind::Triangle => "triangle",
         LightKind::Quad => "quad",
+        LightKind::Spot => "spot",
+        LightKind::Distant => "distant",
+        LightKind::Infinite => "infinite",
     };
     let colour = l.colour.map_or(Vec3::ONE, |c| c.0);
     if colour.min_element() < 0.0 || l.power.is_some_and(|p| p.0 < 0.0) {
         return Err(err("light power and colour must be >= 0".into()));
     }
     let area_light = matches!(l.kind, LightKind::Triangle | LightKind::Quad);
+    let at_infinity = matches!(l.kind, LightKind::Distant | LightKind::Infinite);
+    let spot = l.kind == LightKind::Spot;
     // Keys that belong to another kind of light are mistakes, not options.
     let given = [
         ("centre", l.centre.is_some(), !area_light && l.kind == LightKind::Sphere),
         ("radius", l.radius.is_some(), l.kind == LightKind::Sphere),
-        ("position", l.position.is_some(), l.kind == LightKind::Point),
+        ("position", l.position.is_some(), l.kind == LightKind::Point || spot),
         ("vertices", l.vertices.is_some(), area_light),
-        ("radiance", l.radiance.is_some(), area_light),
+        ("radiance", l.radiance.is_some(), area_light || at_infinity),
         ("two_sided", l.two_sided.is_some(), area_light),
+        ("power", l.power.is_some(), !at_infinity),
+        ("direction", l.direction.is_some(), spot || l.kind == LightKind::Distant),
+        ("intensity", l.intensity.is_some(), spot),
+        ("cone_angle", l.cone_angle.is_some(), spot),
+        ("cone_delta", l.cone_delta.is_some(), spot),
+        ("scale", l.scale.is_some(), spot || at_infinity),
+        ("file", l.file.is_some(), l.kind == LightKind::Infinite),
+        ("mapping", l.mapping.is_some(), l.kind == LightKind::Infinite),
+        ("rotate", l.rotate.is_some(), l.kind == LightKind::Infinite),
     ];
     if let Some((key, ..)) = given.iter().find(|(_, given, applies)| *given && !applies) {
-        return Err(err(format!("`{key}` does not apply to a {kind} light")));
+        let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            "an"
+        } else {
+            "a"
+        };
+        return Err(err(format!("`{key}` does not apply to {article} {kind} light")));
     }
     let power = || -> Result<Vec3> {
         let p = l.power.ok_or_else(|| err(format!("{kind} light: missing `power`")))?;
         Ok(colour * p.0)
+    };
+    let scale = l.scale.map_or(1.0, |s| s.0);
+    if scale < 0.0 {
+        return Err(err(format!("{kind} light: scale {scale} must be >= 0")));
+    }
+    let direction = || -> Result<Vec3> {
+        let d = l
+            .direction
+            .ok_or_else(|| err(format!("{kind} light: missing `direction`")))?
+            .0;
+        let n = d.normalize_or_zero();
+        if n == Vec3::ZERO {
+            return Err(err(format!("{kind} light: direction {:?} has no length", d.to_array())));
+        }
+        Ok(n)
+    };
+    let non_negative = |key: &str, v: Vec3| -> Result<Vec3> {
+        if v.min_element() < 0.0 {
+            return Err(err(format!("{kind} light: {key} {:?} must be >= 0", v.to_array())));
+        }
+        Ok(v)
     };
     match l.kind {
         LightKind::Sphere => {
@@ -522,7 +562,105 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                 })
                 .collect())
         }
+        LightKind::Spot => {
+            let position = l
+                .position
+                .ok_or_else(|| err("spot light: missing `position`".into()))?
+                .0;
+            let direction = direction()?;
+            let cone_angle = l.cone_angle.map_or(30.0, |a| a.0);
+            let cone_delta = l.cone_delta.map_or(5.0, |a| a.0);
+            if !(cone_angle > 0.0 && cone_angle <= 180.0) {
+                return Err(err(format!(
+                    "spot light: cone_angle {cone_angle} must be in (0, 180] degrees"
+                )));
+            }
+            if !(0.0..=cone_angle).contains(&cone_delta) {
+                return Err(err(format!(
+                    "spot light: cone_delta {cone_delta} must be in [0, cone_angle = {cone_angle}] degrees"
+                )));
+            }
+            let light = Light::spot(position, direction, Vec3::ONE, cone_angle, cone_delta);
+            let intensity = match (l.intensity, l.power) {
+                (Some(i), None) => non_negative("intensity", i.0)? * colour,
+                // The intensity that emits this power (pbrt-v4's `power`).
+                (None, Some(_)) => power()? / light.power().x,
+                _ => return Err(err("spot light: give `intensity` or `power`, one of them".into())),
+            };
+            let Light::Spot {
+                cos_falloff_start,
+                cos_falloff_end,
+                ..
+            } = light
+            else {
+                unreachable!()
+            };
+            Ok(vec![Light::Spot {
+                position,
+                direction,
+                intensity: intensity * scale,
+                cos_falloff_start,
+                cos_falloff_end,
+            }])
+        }
+        LightKind::Distant => {
+            let radiance = non_negative("radiance", l.radiance.map_or(Vec3::ONE, |r| r.0))?;
+            Ok(vec![Light::distant(direction()?, radiance * colour * scale)])
+        }
+        LightKind::Infinite => {
+            let rotate = l.rotate.map_or(Vec3::ZERO, |r| r.0);
+            let to_world = super::transform::rotation(rotate);
+            let map = match &l.file {
+                None => {
+                    if l.mapping.is_some() {
+                        return Err(err("infinite light: `mapping` needs `file`".into()));
+                    }
+                    None
+                }
+                Some(file) => {
+                    if l.radiance.is_some() {
+                        return Err(err("infinite light: give `radiance` or `file`, not both".into()));
+                    }
+                    Some(std::sync::Arc::new(
+                        environment_map(src, file, l.mapping.as_deref()).map_err(err)?,
+                    ))
+                }
+            };
+            let radiance = non_negative("radiance", l.radiance.map_or(Vec3::ONE, |r| r.0))?;
+            Ok(vec![Light::infinite(radiance * colour * scale, map, to_world)])
+        }
     }
+}
+
+/// An infinite light's image, `file` relative to the scene file, read with
+/// `image_io` (EXR or PFM); the message of an error names the file.
+fn environment_map(
+    src: &Source,
+    file: &str,
+    mapping: Option<&str>,
+) -> std::result::Result<crate::light::EnvMap, String> {
+    use crate::light::{EnvMap, EnvMapping};
+    let mapping = match mapping.unwrap_or("latlong") {
+        "latlong" => EnvMapping::LatLong,
+        "octahedral" => EnvMapping::Octahedral,
+        other => {
+            return Err(format!(
+                "infinite light: unknown mapping '{other}' (latlong, octahedral)"
+            ))
+        }
+    };
+    let path = src.path.parent().map(Path::to_path_buf).unwrap_or_default().join(file);
+    let fail = |m: String| format!("infinite light: environment map {}: {m}", path.display());
+    if !path.is_file() {
+        return Err(fail("file not found".into()));
+    }
+    let film = crate::image_io::read_image(&path).map_err(|e| match e {
+        Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => fail("file not found".into()),
+        Error::Io { source, .. } => fail(source.to_string()),
+        Error::Parse { message, .. } => fail(message),
+        e => fail(e.to_string()),
+    })?;
+    EnvMap::new(film.width, film.height, film.pixels, mapping, file).map_err(fail)
 }
 
 #[cfg(test)]

@@ -363,3 +363,213 @@ fn quad_lights_become_two_triangle_lights_of_the_given_radiance_or_power() {
     assert!((total - 10.0).abs() < 1e-4, "{total}");
     assert!(matches!(d.lights[2], Light::Triangle { two_sided: false, radiance, .. } if radiance == Vec3::splat(3.0)));
 }
+
+#[test]
+fn spot_distant_and_infinite_lights_are_read() {
+    let text = format!(
+        "{CAMERA}[[lights]]\ntype = \"spot\"\nposition = [0, -1, 0]\ndirection = [0, 2, 0]\nintensity = [2, 2, 2]\n\
+         scale = 1.5\ncone_angle = 25\ncone_delta = 10\n\
+         [[lights]]\ntype = \"spot\"\nposition = [1, -1, 0]\ndirection = [0, 1, 0]\npower = 12\ncolour = [1, 0.5, 0]\n\
+         [[lights]]\ntype = \"distant\"\ndirection = [0, 0, -3]\nradiance = [1, 2, 3]\nscale = 2\n\
+         [[lights]]\ntype = \"infinite\"\nradiance = [0.5, 0.5, 1]\n\
+         [[lights]]\ntype = \"infinite\"\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    assert_eq!(d.lights.len(), 5);
+    let Light::Spot {
+        position,
+        direction,
+        intensity,
+        cos_falloff_start,
+        cos_falloff_end,
+    } = d.lights[0]
+    else {
+        panic!("{:?}", d.lights[0])
+    };
+    assert_eq!(
+        (position, direction, intensity),
+        (Vec3::new(0.0, -1.0, 0.0), Vec3::Y, Vec3::splat(3.0))
+    );
+    assert!((cos_falloff_start - 15f32.to_radians().cos()).abs() < 1e-6);
+    assert!((cos_falloff_end - 25f32.to_radians().cos()).abs() < 1e-6);
+    // Given power, the spot emits it (30 and 5 degrees by default).
+    let p = d.lights[1].power();
+    assert!((p - Vec3::new(12.0, 6.0, 0.0)).abs().max_element() < 1e-4, "{p}");
+    assert!(
+        matches!(&d.lights[1], Light::Spot { cos_falloff_end, .. } if (cos_falloff_end - 30f32.to_radians().cos()).abs() < 1e-6)
+    );
+    assert!(
+        matches!(&d.lights[2], Light::Distant { direction, radiance, .. } if *direction == -Vec3::Z && *radiance == Vec3::new(2.0, 4.0, 6.0))
+    );
+    assert!(
+        matches!(&d.lights[3], Light::Infinite { radiance, map: None, .. } if *radiance == Vec3::new(0.5, 0.5, 1.0))
+    );
+    assert!(matches!(&d.lights[4], Light::Infinite { radiance, map: None, .. } if *radiance == Vec3::ONE));
+
+    // Built, the lights at infinity know the scene's size; only the infinite ones are seen by escaping rays.
+    let mut desc = d;
+    desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+    desc.triangles.push(TriangleDesc {
+        vertices: [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+        ],
+        normals: None,
+        uvs: None,
+        material: 0,
+    });
+    let scene = Scene::build(desc).unwrap();
+    assert_eq!(scene.infinite_lights(), &[3, 4]);
+    // The bounding box spans the triangle and the spots: [-1, 1] x [-1, 0] x [-1, 1].
+    let r = 0.5 * Vec3::new(2.0, 1.0, 2.0).length();
+    let expected = Vec3::new(2.0, 4.0, 6.0) * std::f32::consts::PI * r * r;
+    assert!(
+        (scene.lights[2].power() - expected).abs().max_element() < 1e-3,
+        "{:?}",
+        scene.lights[2]
+    );
+    assert!((scene.lights[4].power().x - 4.0 * std::f32::consts::PI.powi(2) * r * r).abs() < 1e-3);
+}
+
+/// Writes a `w` x `h` image whose texel (x, y) is `f(x, y)`.
+fn write_env(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> Vec3) {
+    let mut film = crate::film::Film::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            film.set(x, y, f(x, y));
+        }
+    }
+    crate::image_io::write_image(&film, path, 0.0).unwrap();
+}
+
+#[test]
+fn environment_maps_are_read_beside_the_scene_file() {
+    use crate::light::EnvMapping;
+    let dir = tempfile::tempdir().unwrap();
+    // Lat-long: the top row (+z) bright, the rest dim.
+    write_env(&dir.path().join("sky.pfm"), 8, 4, |_, y| {
+        Vec3::splat(if y == 0 { 5.0 } else { 0.1 })
+    });
+    write_env(&dir.path().join("oct.exr"), 4, 4, |x, y| {
+        Vec3::new(x as f32, y as f32, 1.0)
+    });
+    let scene = dir.path().join("env.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{CAMERA}[[lights]]\ntype = \"infinite\"\nfile = \"sky.pfm\"\nscale = 2\nrotate = [90, 0, 0]\n\
+             [[lights]]\ntype = \"infinite\"\nfile = \"oct.exr\"\nmapping = \"octahedral\"\n"
+        ),
+    )
+    .unwrap();
+    let d = load(&scene, &LoadOptions::default()).unwrap().desc;
+    let Light::Infinite { map: Some(m), .. } = &d.lights[0] else {
+        panic!("{:?}", d.lights[0])
+    };
+    assert_eq!((m.width(), m.height(), m.mapping()), (8, 4, EnvMapping::LatLong));
+    // Turned by 90 degrees about x, the map's +z (its top row) is the world's up, -y.
+    assert_eq!(d.lights[0].le_escaped(-Vec3::Y), Vec3::splat(10.0));
+    assert_eq!(d.lights[0].le_escaped(Vec3::Y), Vec3::splat(0.2));
+    let Light::Infinite { map: Some(m), .. } = &d.lights[1] else {
+        panic!("{:?}", d.lights[1])
+    };
+    assert_eq!(m.mapping(), EnvMapping::Octahedral);
+    // The octahedral map's centre is +z: texel (2, 2) of 4 x 4.
+    assert_eq!(d.lights[1].le_escaped(Vec3::Z), Vec3::new(2.0, 2.0, 1.0));
+    // The corners are -z.
+    assert_eq!(d.lights[1].le_escaped(-Vec3::Z).z, 1.0);
+}
+
+#[test]
+fn bad_lights_are_one_line_errors_at_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    write_env(&dir.path().join("wide.exr"), 4, 2, |_, _| Vec3::ONE);
+    write_env(&dir.path().join("nan.pfm"), 2, 1, |x, _| {
+        Vec3::splat(if x == 1 { f32::NAN } else { 1.0 })
+    });
+    std::fs::write(dir.path().join("junk.exr"), "not an image").unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "not an image").unwrap();
+    let cases = [
+        (
+            "type = \"infinite\"\nfile = \"missing.exr\"",
+            "missing.exr: file not found",
+        ),
+        ("type = \"infinite\"\nfile = \"junk.exr\"", "junk.exr"),
+        ("type = \"infinite\"\nfile = \"notes.txt\"", "not a .pfm or .exr file"),
+        (
+            "type = \"infinite\"\nfile = \"nan.pfm\"",
+            "texel (1, 0) is not a finite number",
+        ),
+        (
+            "type = \"infinite\"\nfile = \"wide.exr\"\nmapping = \"octahedral\"",
+            "must be square",
+        ),
+        (
+            "type = \"infinite\"\nfile = \"wide.exr\"\nmapping = \"cube\"",
+            "unknown mapping 'cube'",
+        ),
+        ("type = \"infinite\"\nmapping = \"latlong\"", "`mapping` needs `file`"),
+        (
+            "type = \"infinite\"\nfile = \"wide.exr\"\nradiance = [1, 1, 1]",
+            "not both",
+        ),
+        (
+            "type = \"infinite\"\nradiance = [1, -1, 1]",
+            "radiance [1.0, -1.0, 1.0] must be >= 0",
+        ),
+        ("type = \"infinite\"\nscale = -2", "scale -2 must be >= 0"),
+        (
+            "type = \"infinite\"\ndirection = [0, 0, 1]",
+            "`direction` does not apply to an infinite light",
+        ),
+        (
+            "type = \"distant\"\nradiance = [1, 1, 1]",
+            "distant light: missing `direction`",
+        ),
+        ("type = \"distant\"\ndirection = [0, 0, 0]", "has no length"),
+        (
+            "type = \"distant\"\ndirection = [0, 0, 1]\npower = 3",
+            "`power` does not apply",
+        ),
+        (
+            "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]",
+            "give `intensity` or `power`",
+        ),
+        (
+            "type = \"spot\"\ndirection = [0, 0, 1]\npower = 1",
+            "spot light: missing `position`",
+        ),
+        (
+            "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]\npower = 1\ncone_angle = 0",
+            "cone_angle 0 must be in (0, 180]",
+        ),
+        (
+            "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]\npower = 1\ncone_angle = 10\ncone_delta = 12",
+            "cone_delta 12 must be in [0, cone_angle = 10]",
+        ),
+        (
+            "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]\nintensity = [nan, 1, 1]",
+            "not a finite",
+        ),
+        (
+            "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]\nintensity = [1, 1, 1]\nfile = \"a.exr\"",
+            "`file` does not apply",
+        ),
+    ];
+    for (i, (light, what)) in cases.iter().enumerate() {
+        let path = dir.path().join(format!("bad{i}.toml"));
+        // The light's table starts at line 6, after the camera and a blank line.
+        std::fs::write(&path, format!("{CAMERA}\n[[lights]]\n{light}\n")).unwrap();
+        let e = load(&path, &LoadOptions::default()).unwrap_err().to_string();
+        assert!(!e.contains('\n'), "'{e}' is not one line");
+        assert!(e.contains(what), "{light}: '{e}' does not say '{what}'");
+        let at = format!("{}:", path.display());
+        let line: usize = e[at.len()..].split(':').next().unwrap().parse().unwrap_or(0);
+        assert!(
+            e.starts_with(&at) && (6..=7 + light.lines().count()).contains(&line),
+            "{light}: '{e}'"
+        );
+        // Exit status 2 is the binary's for every such error (tests/cli.rs).
+    }
+}

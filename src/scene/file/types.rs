@@ -96,6 +96,9 @@ pub(super) enum LightKind {
     Point,
     Triangle,
     Quad,
+    Spot,
+    Distant,
+    Infinite,
 }
 
 #[derive(Debug, Deserialize)]
@@ -112,6 +115,18 @@ pub(super) struct LightSpec {
     pub(super) vertices: Option<Vec<Vec3Spec>>,
     pub(super) radiance: Option<Vec3Spec>,
     pub(super) two_sided: Option<bool>,
+    /// Spot and distant lights: the direction of the axis, of travel.
+    pub(super) direction: Option<Vec3Spec>,
+    /// Spot lights: intensity (W/sr) and the cone (degrees).
+    pub(super) intensity: Option<Vec3Spec>,
+    pub(super) cone_angle: Option<Num>,
+    pub(super) cone_delta: Option<Num>,
+    /// Spot, distant and infinite lights: a factor on intensity or radiance.
+    pub(super) scale: Option<Num>,
+    /// Infinite lights: an environment image, how it covers the sphere, its rotation.
+    pub(super) file: Option<String>,
+    pub(super) mapping: Option<String>,
+    pub(super) rotate: Option<Vec3Spec>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]

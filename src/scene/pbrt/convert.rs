@@ -1237,6 +1237,20 @@ fn reflect(desc: &mut SceneDesc) {
                 let [a, b, c] = vertices.map(point);
                 *vertices = [a, c, b];
             }
+            Light::Spot {
+                position, direction, ..
+            } => {
+                *position = point(*position);
+                *direction = vector(*direction);
+            }
+            Light::Distant { direction, .. } => *direction = vector(*direction),
+            Light::Infinite { to_world, .. } => {
+                *to_world = glam::Mat3::from_cols(
+                    vector(to_world.x_axis),
+                    vector(to_world.y_axis),
+                    vector(to_world.z_axis),
+                )
+            }
         }
     }
 }

@@ -1,0 +1,669 @@
+//! Lights, with pbrt's two faces: incident-light sampling for shadow rays
+//! (`sample_li`, with its solid-angle density `pdf_li`) and particle emission
+//! for photon tracing (`sample_le`, `sample_le_flux`, `pdf_le`).
+//! A sphere light is a Lambertian emitter given by its total power Phi, so
+//! its radiance is Phi / (pi * area). A point light of the same power has
+//! intensity Phi / (4 pi). A triangle light is a diffuse area light (pbrt-v4's
+//! `DiffuseAreaLight` on one triangle; meshes and quads are several) given by
+//! its radiance, emitting on the side its normal, (v1 - v0) x (v2 - v0),
+//! points to, or on both sides; its power is L * pi * area per side.
+//!
+//! After pbrt-v4 (`lights.cpp`) besides: a spot light (`SpotLight`: a point
+//! whose intensity falls off with a smoothstep between two cones), a distant
+//! light (`DistantLight`: parallel light from one direction) and an infinite
+//! light (`UniformInfiniteLight` and `ImageInfiniteLight`: radiance from
+//! every direction, constant or from an environment image, see `envmap`).
+//! Distant and infinite lights have no surface a ray can hit; their power,
+//! and the rays they emit, depend on the scene's bounding sphere, which
+//! `Scene::build` hands them (`set_scene_bounds`): photons leave a disk of
+//! that sphere's radius facing the light, as in pbrt-v4.
+
+mod envmap;
+
+pub use envmap::{EnvMap, EnvMapping};
+
+use crate::geometry::Sphere;
+use crate::math::{orthonormal_basis, to_world, Ray, Vec2, Vec3};
+use crate::sampling::{concentric_disk, cosine_hemisphere, sample_smoothstep, uniform_cone, uniform_sphere};
+use glam::Mat3;
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    Sphere {
+        sphere: Sphere,
+        power: Vec3,
+    },
+    Point {
+        position: Vec3,
+        power: Vec3,
+    },
+    Triangle {
+        vertices: [Vec3; 3],
+        radiance: Vec3,
+        two_sided: bool,
+    },
+    /// pbrt-v4's `spot`: a point light at `position` whose intensity towards
+    /// a direction at angle theta from the axis `direction` (unit) is
+    /// `intensity * smoothstep(cos theta, cos_falloff_end, cos_falloff_start)`:
+    /// full inside the falloff start, none outside the cone.
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        cos_falloff_start: f32,
+        cos_falloff_end: f32,
+    },
+    /// Parallel light travelling along `direction` (unit) from infinitely far
+    /// away; `radiance` is pbrt-v4's `L` times `scale`, the irradiance on a
+    /// surface facing it. `world` is the scene's bounding sphere.
+    Distant {
+        direction: Vec3,
+        radiance: Vec3,
+        world: Sphere,
+    },
+    /// Radiance arriving from every direction: `radiance` where there is no
+    /// map, otherwise the map's texel times `radiance` (the map's scale per
+    /// channel). `to_world` turns the map's frame into the world's (an
+    /// orthogonal matrix); `world` is the scene's bounding sphere.
+    Infinite {
+        radiance: Vec3,
+        map: Option<Arc<EnvMap>>,
+        to_world: Mat3,
+        world: Sphere,
+    },
+}
+
+/// The bounding sphere of a light before `Scene::build` has given it the scene's.
+const NO_WORLD: Sphere = Sphere {
+    centre: Vec3::ZERO,
+    radius: 0.0,
+};
+
+/// One sample of the light arriving at a point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction towards the light.
+    pub wi: Vec3,
+    /// Distance to the sampled point on the light.
+    pub dist: f32,
+    /// Incident radiance divided by the solid-angle pdf (for a point light,
+    /// the irradiance at normal incidence).
+    pub weight: Vec3,
+}
+
+/// One particle leaving a light (`Light::sample_le_flux`).
+#[derive(Clone, Copy, Debug)]
+pub struct LeSample {
+    pub ray: Ray,
+    /// The surface normal at the ray's origin for area lights; the ray's
+    /// direction for distant and infinite lights (the disk it leaves faces
+    /// it); zero for point and spot lights.
+    pub n: Vec3,
+    /// The particle's flux, Le cos / (pdf_pos pdf_dir): its expectation is
+    /// `power()`. It equals `power()` for every light but an infinite light
+    /// with a map, whose directions follow the map's luminance (so the
+    /// flux's luminance is constant and its colour is the texel's).
+    pub flux: Vec3,
+}
+
+impl Light {
+    /// A spot light after pbrt-v4: full `intensity` within `cone_angle -
+    /// cone_delta` degrees of `direction`, falling off smoothly to zero at
+    /// `cone_angle` degrees.
+    pub fn spot(position: Vec3, direction: Vec3, intensity: Vec3, cone_angle: f32, cone_delta: f32) -> Light {
+        Light::Spot {
+            position,
+            direction: direction.normalize(),
+            intensity,
+            cos_falloff_start: (cone_angle - cone_delta).to_radians().cos(),
+            cos_falloff_end: cone_angle.to_radians().cos(),
+        }
+    }
+
+    /// A distant light: light travelling along `direction` with irradiance
+    /// `radiance` on a surface facing it.
+    pub fn distant(direction: Vec3, radiance: Vec3) -> Light {
+        Light::Distant {
+            direction: direction.normalize(),
+            radiance,
+            world: NO_WORLD,
+        }
+    }
+
+    /// An infinite light: constant `radiance`, or `map` scaled by it, turned
+    /// into the world by `to_world` (a rotation, or any orthogonal matrix).
+    pub fn infinite(radiance: Vec3, map: Option<Arc<EnvMap>>, to_world: Mat3) -> Light {
+        Light::Infinite {
+            radiance,
+            map,
+            to_world,
+            world: NO_WORLD,
+        }
+    }
+
+    /// Total emitted power. For distant and infinite lights it is the power
+    /// that crosses the scene's bounding sphere (pbrt-v4's `Phi`), zero until
+    /// `set_scene_bounds`.
+    pub fn power(&self) -> Vec3 {
+        match self {
+            Light::Sphere { power, .. } | Light::Point { power, .. } => *power,
+            Light::Triangle {
+                vertices,
+                radiance,
+                two_sided,
+            } => {
+                let sides = if *two_sided { 2.0 } else { 1.0 };
+                *radiance * (PI * triangle_area(vertices) * sides)
+            }
+            Light::Spot {
+                intensity,
+                cos_falloff_start: cs,
+                cos_falloff_end: ce,
+                ..
+            } => *intensity * (2.0 * PI * ((1.0 - cs) + (cs - ce) / 2.0)),
+            Light::Distant { radiance, world, .. } => *radiance * (PI * world.radius * world.radius),
+            Light::Infinite {
+                radiance, map, world, ..
+            } => {
+                let integral = map.as_ref().map_or(Vec3::splat(4.0 * PI), |m| m.integral());
+                *radiance * integral * (PI * world.radius * world.radius)
+            }
+        }
+    }
+
+    /// Gives a distant or infinite light the scene's bounding sphere (its
+    /// photons leave a disk of that radius; its power depends on it). Other
+    /// lights ignore it.
+    pub fn set_scene_bounds(&mut self, bounds: Sphere) {
+        match self {
+            Light::Distant { world, .. } | Light::Infinite { world, .. } => *world = bounds,
+            _ => {}
+        }
+    }
+
+    /// Point, spot and distant lights: a delta distribution in position or
+    /// direction, which no BSDF-sampled ray finds (`pdf_li` is 0).
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. })
+    }
+
+    /// Infinite and distant lights: at infinity, no surface a ray can hit;
+    /// their `sample_li` returns `dist = f32::INFINITY`.
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Infinite { .. } | Light::Distant { .. })
+    }
+
+    /// Radiance reaching a ray that leaves the scene in direction `dir`
+    /// (unit): non-zero only for infinite lights.
+    pub fn le_escaped(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Light::Infinite {
+                radiance,
+                map: Some(m),
+                to_world,
+                ..
+            } => *radiance * m.le((to_world.transpose() * dir).normalize()),
+            Light::Infinite { radiance, .. } => *radiance,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// The solid-angle density with which `sample_li` at `p` returns `dir`
+    /// (unit) for a light at infinity: the weight of an escaped ray in
+    /// multiple importance sampling. Zero for every other light (and for a
+    /// distant light, a delta).
+    pub fn pdf_li_escaped(&self, _p: Vec3, dir: Vec3) -> f32 {
+        match self {
+            Light::Infinite {
+                map: Some(m), to_world, ..
+            } => m.pdf((to_world.transpose() * dir).normalize()),
+            Light::Infinite { .. } => 1.0 / (4.0 * PI),
+            _ => 0.0,
+        }
+    }
+
+    /// A spot light's intensity towards `w` (unit); zero for other lights.
+    pub fn intensity(&self, w: Vec3) -> Vec3 {
+        match self {
+            Light::Spot {
+                direction,
+                intensity,
+                cos_falloff_start,
+                cos_falloff_end,
+                ..
+            } => *intensity * smoothstep(w.dot(*direction), *cos_falloff_end, *cos_falloff_start),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Where the light is: its centre (a triangle's centroid); for distant
+    /// and infinite lights, the centre of the scene's bounding sphere.
+    pub fn position(&self) -> Vec3 {
+        match self {
+            Light::Sphere { sphere, .. } => sphere.centre,
+            Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+            Light::Triangle { vertices: v, .. } => (v[0] + v[1] + v[2]) / 3.0,
+            Light::Distant { world, .. } | Light::Infinite { world, .. } => world.centre,
+        }
+    }
+
+    /// Emitted radiance of the surface (zero for point, spot, distant and
+    /// infinite lights, which have none; see `le_escaped`).
+    pub fn radiance(&self) -> Vec3 {
+        match self {
+            Light::Sphere { sphere, power } => *power / (PI * sphere.area()),
+            Light::Triangle { radiance, .. } => *radiance,
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => Vec3::ZERO,
+        }
+    }
+
+    /// Radiance leaving the light's surface towards `w` (a one-sided light
+    /// is dark from behind).
+    pub fn le(&self, w: Vec3) -> Vec3 {
+        match self {
+            Light::Triangle {
+                vertices,
+                two_sided: false,
+                ..
+            } if triangle_normal(vertices).dot(w) <= 0.0 => Vec3::ZERO,
+            _ => self.radiance(),
+        }
+    }
+
+    /// Moves the light's centre to `to`, keeping its size, shape and power
+    /// (distant and infinite lights stay where they are, at infinity).
+    pub fn move_to(&mut self, to: Vec3) {
+        let by = to - self.position();
+        match self {
+            Light::Sphere { sphere, .. } => sphere.centre = to,
+            Light::Point { position, .. } | Light::Spot { position, .. } => *position = to,
+            Light::Triangle { vertices, .. } => vertices.iter_mut().for_each(|v| *v += by),
+            Light::Distant { .. } | Light::Infinite { .. } => {}
+        }
+    }
+
+    /// Samples a direction towards the light from `p`: uniformly over the
+    /// cone a sphere subtends (pbrt-v4 6.2.4: exact for a sphere, every
+    /// sample lands on the visible cap), uniformly in area on a triangle,
+    /// the one direction of point, spot and distant lights, and for an
+    /// infinite light uniformly over the sphere or, with a map, in proportion
+    /// to the map's luminance. Distant and infinite lights return
+    /// `dist = f32::INFINITY`.
+    pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Spot { position, .. } => {
+                let v = *position - p;
+                let d2 = v.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let dist = d2.sqrt();
+                let wi = v / dist;
+                let weight = self.intensity(-wi) / d2;
+                (weight != Vec3::ZERO).then_some(LightSample { wi, dist, weight })
+            }
+            Light::Distant {
+                direction, radiance, ..
+            } => Some(LightSample {
+                wi: -*direction,
+                dist: f32::INFINITY,
+                weight: *radiance,
+            }),
+            Light::Infinite {
+                radiance, map: None, ..
+            } => Some(LightSample {
+                wi: uniform_sphere(u),
+                dist: f32::INFINITY,
+                weight: *radiance * (4.0 * PI),
+            }),
+            Light::Infinite {
+                radiance,
+                map: Some(m),
+                to_world,
+                ..
+            } => {
+                let (wl, le, pdf) = m.sample(u)?;
+                let weight = *radiance * le / pdf;
+                (weight != Vec3::ZERO && weight.is_finite()).then(|| LightSample {
+                    wi: (*to_world * wl).normalize(),
+                    dist: f32::INFINITY,
+                    weight,
+                })
+            }
+            Light::Point { position, power } => {
+                let v = *position - p;
+                let d2 = v.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let dist = d2.sqrt();
+                Some(LightSample {
+                    wi: v / dist,
+                    dist,
+                    weight: *power / (4.0 * PI * d2),
+                })
+            }
+            Light::Sphere { sphere, .. } => {
+                let v = sphere.centre - p;
+                let dc2 = v.length_squared();
+                let r2 = sphere.radius * sphere.radius;
+                if dc2 <= r2 {
+                    return None;
+                }
+                let dc = dc2.sqrt();
+                let axis = v / dc;
+                let sin2_max = r2 / dc2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                // 1 - cos_max without cancellation for small, distant lights.
+                let one_minus_cos_max = sin2_max / (1.0 + cos_max);
+                let wi = to_world(uniform_cone(u, one_minus_cos_max), axis).normalize();
+                // Distance to the near side of the sphere along wi.
+                let b = wi.dot(v);
+                let disc = r2 - (v - wi * b).length_squared();
+                let dist = if disc > 0.0 {
+                    b - disc.sqrt()
+                } else {
+                    (dc2 - r2).max(0.0).sqrt()
+                };
+                let solid_angle = 2.0 * PI * one_minus_cos_max;
+                Some(LightSample {
+                    wi,
+                    dist,
+                    weight: self.radiance() * solid_angle,
+                })
+            }
+            Light::Triangle {
+                vertices: v,
+                radiance,
+                two_sided,
+            } => {
+                // Uniform in area (pbrt-v4 6.5.4), then to solid angle at p.
+                let q = uniform_triangle(v, u);
+                let d = q - p;
+                let d2 = d.length_squared();
+                let area = triangle_area(v);
+                if d2 == 0.0 || area == 0.0 {
+                    return None;
+                }
+                let dist = d2.sqrt();
+                let wi = d / dist;
+                let cos_l = -triangle_normal(v).dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    dist,
+                    weight: *radiance * (cos_l * area / d2),
+                })
+            }
+        }
+    }
+
+    /// `pdf_li` for a direction known to reach the light at `q` (a ray from
+    /// `p` hit it there): no intersection test that could disagree with the
+    /// one that found the hit near an edge or silhouette.
+    pub fn pdf_li_hit(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
+        match self {
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } => 0.0,
+            Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
+            Light::Sphere { sphere, .. } => {
+                let dc2 = (sphere.centre - p).length_squared();
+                let r2 = sphere.radius * sphere.radius;
+                if dc2 <= r2 {
+                    return 0.0;
+                }
+                let sin2_max = r2 / dc2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                1.0 / (2.0 * PI * (sin2_max / (1.0 + cos_max)))
+            }
+            Light::Triangle {
+                vertices: v, two_sided, ..
+            } => {
+                let cos_l = -triangle_normal(v).dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                let area = triangle_area(v);
+                if cos_l <= 0.0 || area == 0.0 {
+                    return 0.0;
+                }
+                (q - p).length_squared() / (cos_l * area)
+            }
+        }
+    }
+
+    /// Solid-angle density with which `sample_li` at `p` picks direction `wi`
+    /// (zero where it never does; a delta light's, point, spot or distant,
+    /// is reported as 0).
+    pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } => 0.0,
+            Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
+            Light::Sphere { sphere, .. } => {
+                let v = sphere.centre - p;
+                let dc2 = v.length_squared();
+                let r2 = sphere.radius * sphere.radius;
+                if dc2 <= r2 {
+                    return 0.0;
+                }
+                let sin2_max = r2 / dc2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                if wi.dot(v) < cos_max * dc2.sqrt() {
+                    return 0.0;
+                }
+                1.0 / (2.0 * PI * (sin2_max / (1.0 + cos_max)))
+            }
+            Light::Triangle {
+                vertices: v, two_sided, ..
+            } => {
+                let tri = crate::geometry::Triangle::new(v[0], v[1], v[2]);
+                let Some(t) = tri.intersect_mt(&Ray::new(p, wi), 0.0, f32::INFINITY).map(|h| h.t) else {
+                    return 0.0;
+                };
+                let cos_l = -triangle_normal(v).dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                let area = triangle_area(v);
+                if cos_l <= 0.0 || area == 0.0 {
+                    return 0.0;
+                }
+                t * t / (cos_l * area)
+            }
+        }
+    }
+
+    /// Emits a particle: a ray leaving the light, distributed as its emission
+    /// (uniform over a sphere's surface, cosine-weighted outward; uniform in
+    /// direction for a point light; a spot light's directions in proportion
+    /// to its intensity; for distant and infinite lights, uniform over a disk
+    /// of the scene's bounding sphere facing the direction of travel), and
+    /// the normal described at `LeSample::n`. Each particle carries Phi / N,
+    /// except from an infinite light with a map, whose directions follow the
+    /// map's luminance: there `sample_le_flux` gives each particle's flux.
+    pub fn sample_le(&self, u1: Vec2, u2: Vec2) -> (Ray, Vec3) {
+        match self {
+            Light::Spot {
+                position,
+                direction,
+                cos_falloff_start: cs,
+                cos_falloff_end: ce,
+                ..
+            } => {
+                // pbrt-v4: the inner cone or the falloff ring, by their shares of power.
+                let (inner, ring) = (1.0 - cs, (cs - ce) / 2.0);
+                let local = if u2.x * (inner + ring) < inner || ring <= 0.0 {
+                    uniform_cone(u1, inner)
+                } else {
+                    let cos_t = sample_smoothstep(u1.x, *ce, *cs);
+                    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+                    let (sin_p, cos_p) = (2.0 * PI * u1.y).sin_cos();
+                    Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
+                };
+                (Ray::new(*position, to_world(local, *direction).normalize()), Vec3::ZERO)
+            }
+            Light::Distant { direction, world, .. } => {
+                let d = *direction;
+                (Ray::new(disk_point(world, d, u1) - d * world.radius, d), d)
+            }
+            Light::Infinite {
+                map, to_world, world, ..
+            } => {
+                // wi points towards the light; the photon travels along -wi.
+                let wi = match map {
+                    None => uniform_sphere(u1),
+                    Some(m) => match m.sample(u1) {
+                        Some((wl, ..)) => (*to_world * wl).normalize(),
+                        None => Vec3::Z,
+                    },
+                };
+                (Ray::new(disk_point(world, -wi, u2) + wi * world.radius, -wi), -wi)
+            }
+            Light::Point { position, .. } => (Ray::new(*position, uniform_sphere(u1)), Vec3::ZERO),
+            Light::Sphere { sphere, .. } => {
+                let n = uniform_sphere(u1);
+                let d = to_world(cosine_hemisphere(u2), n).normalize();
+                let o = sphere.centre + n * (sphere.radius * (1.0 + 1e-4));
+                (Ray::new(o, d), n)
+            }
+            Light::Triangle {
+                vertices: v, two_sided, ..
+            } => {
+                let mut n = triangle_normal(v);
+                let mut u2 = u2;
+                // Both sides emit alike: the first coordinate picks one and is reused.
+                if *two_sided {
+                    if u2.x < 0.5 {
+                        u2.x *= 2.0;
+                    } else {
+                        u2.x = u2.x * 2.0 - 1.0;
+                        n = -n;
+                    }
+                    u2.x = u2.x.min(1.0 - f32::EPSILON);
+                }
+                let q = uniform_triangle(v, u1);
+                let d = to_world(cosine_hemisphere(u2), n).normalize();
+                (Ray::new(crate::math::offset_origin(q, n, d), d), n)
+            }
+        }
+    }
+
+    /// `sample_le` with the particle's flux (see `LeSample::flux`): photon
+    /// tracing that starts N particles from this light gives each flux / N.
+    pub fn sample_le_flux(&self, u1: Vec2, u2: Vec2) -> LeSample {
+        let (ray, n) = self.sample_le(u1, u2);
+        let flux = match self {
+            Light::Infinite {
+                radiance,
+                map: Some(m),
+                to_world,
+                world,
+            } => {
+                let wl = (to_world.transpose() * -ray.d).normalize();
+                let pdf = m.pdf(wl);
+                if pdf > 0.0 {
+                    *radiance * m.le(wl) * (PI * world.radius * world.radius) / pdf
+                } else {
+                    Vec3::ZERO
+                }
+            }
+            _ => self.power(),
+        };
+        LeSample { ray, n, flux }
+    }
+
+    /// The densities with which `sample_le` emits `ray` from a point with
+    /// normal `n` (as it returned them): (area density of the origin,
+    /// solid-angle density of the direction), as pbrt-v4's `PDF_Le`. A delta
+    /// part (the position of point and spot lights, the direction of distant
+    /// lights) is reported as 0.
+    pub fn pdf_le(&self, ray: &Ray, n: Vec3) -> (f32, f32) {
+        let disk = |world: &Sphere| {
+            let a = PI * world.radius * world.radius;
+            if a > 0.0 {
+                1.0 / a
+            } else {
+                0.0
+            }
+        };
+        match self {
+            Light::Point { .. } => (0.0, 1.0 / (4.0 * PI)),
+            Light::Sphere { sphere, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / PI),
+            Light::Triangle {
+                vertices, two_sided, ..
+            } => {
+                let area = triangle_area(vertices);
+                let cos = n.dot(ray.d).max(0.0);
+                let side = if *two_sided { 0.5 } else { 1.0 };
+                (if area > 0.0 { 1.0 / area } else { 0.0 }, side * cos / PI)
+            }
+            Light::Spot {
+                direction,
+                cos_falloff_start: cs,
+                cos_falloff_end: ce,
+                ..
+            } => {
+                let (inner, ring) = (1.0 - cs, (cs - ce) / 2.0);
+                let cos_t = ray.d.dot(*direction);
+                let pdf = if cos_t >= *cs {
+                    if inner > 0.0 {
+                        1.0 / (2.0 * PI * (inner + ring))
+                    } else {
+                        0.0
+                    }
+                } else if cos_t > *ce {
+                    // The ring's share times the smoothstep density in cos theta, over 2 pi.
+                    ring / (inner + ring) * 2.0 * smoothstep(cos_t, *ce, *cs) / (cs - ce) / (2.0 * PI)
+                } else {
+                    0.0
+                };
+                (0.0, pdf)
+            }
+            Light::Distant { world, .. } => (disk(world), 0.0),
+            Light::Infinite { world, .. } => (disk(world), self.pdf_li_escaped(ray.o, -ray.d)),
+        }
+    }
+}
+
+/// A point uniform on the disk through `world`'s centre, of its radius,
+/// perpendicular to `axis` (pbrt-v4's distant and infinite light emission).
+fn disk_point(world: &Sphere, axis: Vec3, u: Vec2) -> Vec3 {
+    let d = concentric_disk(u);
+    let (s, t) = orthonormal_basis(axis);
+    world.centre + (s * d.x + t * d.y) * world.radius
+}
+
+/// 0 below `a`, 1 above `b`, 3x^2 - 2x^3 of x = (v - a) / (b - a) between;
+/// a step at `a` when `a == b`.
+pub fn smoothstep(v: f32, a: f32, b: f32) -> f32 {
+    if a == b {
+        return if v < a { 0.0 } else { 1.0 };
+    }
+    let t = ((v - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Unit normal (v1 - v0) x (v2 - v0) of a triangle (zero if degenerate).
+pub fn triangle_normal(v: &[Vec3; 3]) -> Vec3 {
+    (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero()
+}
+
+pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
+    0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
+}
+
+/// A point uniformly distributed over the triangle (pbrt-v4's
+/// `SampleUniformTriangle`, which keeps strata apart).
+pub fn uniform_triangle(v: &[Vec3; 3], u: Vec2) -> Vec3 {
+    let (b0, b1) = if u.x < u.y {
+        let b0 = u.x / 2.0;
+        (b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        (u.x - b1, b1)
+    };
+    v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
+}
+
+#[cfg(test)]
+mod tests;
