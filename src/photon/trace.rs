@@ -110,8 +110,11 @@ impl Emitter {
             li += 1;
         }
         let light = &scene.lights[li];
-        let (ray, _) = light.sample_le(rng.next_2d(), rng.next_2d());
-        let power = light.power() / (self.n as f32 * self.weights[li] / self.total) / self.unit;
+        // An environment map's photons follow its luminance, not its colour:
+        // each carries the flux of its own direction.
+        let le = light.sample_le_flux(rng.next_2d(), rng.next_2d());
+        let ray = le.ray;
+        let power = le.flux / (self.n as f32 * self.weights[li] / self.total) / self.unit;
         (ray, power)
     }
 }
