@@ -14,7 +14,7 @@ use super::transform::Transform;
 use super::{SceneDesc, TriangleDesc};
 use crate::error::{Error, Result};
 use crate::material::Material;
-use crate::math::{Aabb, Vec3};
+use crate::math::{Aabb, Vec2, Vec3};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -38,6 +38,9 @@ pub struct Mesh {
     /// Per-vertex normals, as many as positions; zero where a vertex has none.
     /// `None` when the file has no normals at all.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, as many as positions (OBJ `vt`, PLY
+    /// `u`/`v` and their other names); `None` when the file has none.
+    pub uvs: Option<Vec<Vec2>>,
     /// Vertex index triples, all within `positions`.
     pub triangles: Vec<[u32; 3]>,
     pub parts: Vec<MeshPart>,
@@ -157,7 +160,8 @@ impl Mesh {
     /// Adds the mesh's triangles to the scene, placed by `transform`. With
     /// `material` every triangle uses it; without, each part uses its MTL
     /// albedo as a diffuse material named `<file stem>/<material>`.
-    /// `smooth` passes the file's vertex normals on for shading.
+    /// `smooth` passes the file's vertex normals on for shading; texture
+    /// coordinates are passed on whenever the file has them.
     pub fn add_to_scene(
         &self,
         desc: &mut SceneDesc,
@@ -200,10 +204,11 @@ impl Mesh {
                     _ => None,
                 };
                 let p = &placed.positions;
+                let uvs = self.uvs.as_ref().map(|uv| [uv[a], uv[b], uv[c]]);
                 desc.triangles.push(TriangleDesc {
                     vertices: [p[a], p[b], p[c]],
                     normals,
-                    uvs: None,
+                    uvs,
                     material: m,
                 });
             }
