@@ -11,7 +11,9 @@ use std::sync::Arc;
 
 mod imagemap;
 
-pub use imagemap::{load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, TexImage, UvMapping, WrapMode};
+pub use imagemap::{
+    decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, TexImage, UvMapping, WrapMode,
+};
 
 /// Where a texture is looked up: the surface's (u, v) and the point itself.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,8 +15,10 @@ use super::{SceneDesc, TriangleDesc};
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::math::{Aabb, Vec2, Vec3};
+use crate::texture::{Encoding, TexImage};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A named part of a mesh (an OBJ group or object; the whole of a PLY file).
 #[derive(Clone, Debug, PartialEq)]
@@ -53,6 +55,15 @@ pub struct Mesh {
 /// letting a scene's paths reach arbitrary files).
 pub trait FileSource {
     fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
+
+    /// An image texture's pixels; by default decoded from `read`'s bytes.
+    fn read_image(&self, path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
+        let bytes = self.read(path).map_err(|e| Error::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        Ok(Arc::new(crate::texture::decode_bytes(path, &bytes, encoding, false)?))
+    }
 }
 
 /// The file system.
@@ -74,6 +85,11 @@ impl FileSource for Disk {
         let mut bytes = Vec::with_capacity(meta.len().min(1 << 30) as usize);
         file.read_to_end(&mut bytes)?;
         Ok(bytes)
+    }
+
+    /// Decoded once per file and encoding, and shared (`load_image`).
+    fn read_image(&self, path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
+        crate::texture::load_image(path, encoding)
     }
 }
 

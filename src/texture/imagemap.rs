@@ -375,30 +375,46 @@ pub fn load_image(path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
 /// Reads and decodes an image file, by its extension for EXR and PFM and by
 /// its contents for the rest.
 fn decode(path: &Path, encoding: Encoding) -> Result<TexImage> {
-    let perr = |m: String| Error::Parse {
-        path: path.to_path_buf(),
-        message: m,
-    };
     let meta = std::fs::metadata(path).map_err(|e| Error::Io {
         path: path.to_path_buf(),
         source: e,
     })?;
     if !meta.is_file() {
-        return Err(perr("not a regular file".into()));
+        return Err(Error::Parse {
+            path: path.to_path_buf(),
+            message: "not a regular file".into(),
+        });
     }
     let bytes = std::fs::read(path).map_err(|e| Error::Io {
         path: path.to_path_buf(),
         source: e,
     })?;
+    decode_bytes(path, &bytes, encoding, true)
+}
+
+/// Decodes an image file's bytes (not cached); `path` names it in errors and
+/// gives the extension. EXR is read from the file itself, so it needs
+/// `on_disk`.
+pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool) -> Result<TexImage> {
+    let perr = |m: String| Error::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
     let mut h = Fnv64::default();
-    h.bytes(&bytes);
+    h.bytes(bytes);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     if ext == "exr" || ext == "pfm" {
-        let film = crate::image_io::read_image(path)?;
+        let film = if ext == "pfm" {
+            crate::image_io::read_pfm(bytes).map_err(perr)?
+        } else if on_disk {
+            crate::image_io::read_image(path)?
+        } else {
+            return Err(perr("EXR textures are read from files on disk only".into()));
+        };
         if film.width == 0 || film.height == 0 {
             return Err(perr("the image is empty".into()));
         }
@@ -415,7 +431,7 @@ fn decode(path: &Path, encoding: Encoding) -> Result<TexImage> {
             Encoding::Linear,
         ));
     }
-    let mut reader = ::image::ImageReader::new(std::io::Cursor::new(&bytes))
+    let mut reader = ::image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| perr(e.to_string()))?;
     if reader.format().is_none() {
