@@ -17,6 +17,9 @@ use toml::Spanned;
 /// A table's keys and their values, with spans.
 pub(super) type Table = BTreeMap<String, Spanned<toml::Value>>;
 
+/// Finds a texture by the name written at a span.
+type Lookup<'a> = dyn FnMut(&str, std::ops::Range<usize>) -> Result<Arc<Texture>> + 'a;
+
 /// Reads the keys of one table, each error at the key's line.
 struct Keys<'a> {
     src: &'a Source<'a>,
@@ -118,11 +121,7 @@ impl Keys<'_> {
 
     /// A colour parameter: a number, `[r, g, b]` or the name of a texture,
     /// found by `lookup` (which reports unknown names and cycles).
-    fn param(
-        &self,
-        key: &str,
-        lookup: &mut dyn FnMut(&str, std::ops::Range<usize>) -> Result<Arc<Texture>>,
-    ) -> Result<Option<Texture>> {
+    fn param(&self, key: &str, lookup: &mut Lookup) -> Result<Option<Texture>> {
         let Some(v) = self.table.get(key) else {
             return Ok(None);
         };
