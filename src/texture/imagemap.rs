@@ -117,12 +117,15 @@ pub struct TexImage {
 }
 
 impl std::fmt::Debug for TexImage {
-    // Not the pixels: scene fingerprints hash a material's Debug form.
+    // Not the pixels: scene fingerprints hash a material's Debug form. Nor
+    // the folder: the same scene read from another folder or machine (a
+    // shared photon map, a checkpoint resumed elsewhere) is the same scene.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = self.path.file_name().unwrap_or(self.path.as_os_str());
         write!(
             f,
-            "TexImage {{ path: {:?}, size: {}x{}, hash: {:016x} }}",
-            self.path, self.width, self.height, self.hash
+            "TexImage {{ file: {:?}, size: {}x{}, hash: {:016x} }}",
+            name, self.width, self.height, self.hash
         )
     }
 }
