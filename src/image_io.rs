@@ -330,7 +330,7 @@ pub fn read_image(path: &Path) -> Result<Film> {
     }
 }
 
-fn read_pfm(bytes: &[u8]) -> std::result::Result<Film, String> {
+pub(crate) fn read_pfm(bytes: &[u8]) -> std::result::Result<Film, String> {
     // Header: three whitespace-separated tokens, then one whitespace byte.
     let mut tokens = Vec::new();
     let mut pos = 0;

@@ -3,10 +3,17 @@
 //! scalar parameter (a roughness, a mix amount) reads the first channel.
 //!
 //! Textures form a small tree (scale and mix hold other textures), cloned
-//! cheaply: the leaves that hold data share it.
+//! cheaply: the leaves that hold data share it (an image texture's pixels are
+//! an `Arc`, decoded once per file; see [`load_image`]).
 
 use crate::math::{Vec2, Vec3};
 use std::sync::Arc;
+
+mod imagemap;
+
+pub use imagemap::{
+    decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, TexImage, UvMapping, WrapMode,
+};
 
 /// Where a texture is looked up: the surface's (u, v) and the point itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,6 +44,8 @@ pub enum Texture {
         b: Arc<Texture>,
         amount: Arc<Texture>,
     },
+    /// An image looked up at (u, v), bilinearly (pbrt-v4 `imagemap`).
+    Image(Arc<ImageTexture>),
 }
 
 impl Texture {
@@ -66,6 +75,7 @@ impl Texture {
                 let t = amount.evaluate(tc).x;
                 a.evaluate(tc) * (1.0 - t) + b.evaluate(tc) * t
             }
+            Texture::Image(img) => img.evaluate(tc.uv),
         }
     }
 
@@ -90,7 +100,16 @@ impl Texture {
             Texture::Checkerboard { even, odd, .. } => even.max_value().max(odd.max_value()),
             Texture::Scale { tex, scale } => tex.max_value() * scale.max_value(),
             Texture::Mix { a, b, .. } => a.max_value().max(b.max_value()),
+            Texture::Image(img) => img.max_value(),
         }
+    }
+}
+
+impl Texture {
+    /// An image texture read from `path` (or shared with an earlier read of
+    /// the same file and encoding); see [`ImageTexture::open`].
+    pub fn image(path: &std::path::Path, opts: &ImageOptions) -> crate::error::Result<Texture> {
+        Ok(Texture::Image(Arc::new(ImageTexture::open(path, opts)?)))
     }
 }
 

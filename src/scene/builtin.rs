@@ -326,6 +326,7 @@ mod tests {
             triangles: vec![[0, 3, 5], [6, 7, 8], [1, 2, 4]],
             positions: pts,
             normals: None,
+            uvs: None,
             parts: vec![],
             warnings: vec![],
         };

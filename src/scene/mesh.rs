@@ -14,9 +14,11 @@ use super::transform::Transform;
 use super::{SceneDesc, TriangleDesc};
 use crate::error::{Error, Result};
 use crate::material::Material;
-use crate::math::{Aabb, Vec3};
+use crate::math::{Aabb, Vec2, Vec3};
+use crate::texture::{Encoding, TexImage};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A named part of a mesh (an OBJ group or object; the whole of a PLY file).
 #[derive(Clone, Debug, PartialEq)]
@@ -38,6 +40,9 @@ pub struct Mesh {
     /// Per-vertex normals, as many as positions; zero where a vertex has none.
     /// `None` when the file has no normals at all.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, as many as positions (OBJ `vt`, PLY
+    /// `u`/`v` and their other names); `None` when the file has none.
+    pub uvs: Option<Vec<Vec2>>,
     /// Vertex index triples, all within `positions`.
     pub triangles: Vec<[u32; 3]>,
     pub parts: Vec<MeshPart>,
@@ -50,6 +55,15 @@ pub struct Mesh {
 /// letting a scene's paths reach arbitrary files).
 pub trait FileSource {
     fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
+
+    /// An image texture's pixels; by default decoded from `read`'s bytes.
+    fn read_image(&self, path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
+        let bytes = self.read(path).map_err(|e| Error::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        Ok(Arc::new(crate::texture::decode_bytes(path, &bytes, encoding, false)?))
+    }
 }
 
 /// The file system.
@@ -71,6 +85,11 @@ impl FileSource for Disk {
         let mut bytes = Vec::with_capacity(meta.len().min(1 << 30) as usize);
         file.read_to_end(&mut bytes)?;
         Ok(bytes)
+    }
+
+    /// Decoded once per file and encoding, and shared (`load_image`).
+    fn read_image(&self, path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
+        crate::texture::load_image(path, encoding)
     }
 }
 
@@ -157,7 +176,8 @@ impl Mesh {
     /// Adds the mesh's triangles to the scene, placed by `transform`. With
     /// `material` every triangle uses it; without, each part uses its MTL
     /// albedo as a diffuse material named `<file stem>/<material>`.
-    /// `smooth` passes the file's vertex normals on for shading.
+    /// `smooth` passes the file's vertex normals on for shading; texture
+    /// coordinates are passed on whenever the file has them.
     pub fn add_to_scene(
         &self,
         desc: &mut SceneDesc,
@@ -200,10 +220,11 @@ impl Mesh {
                     _ => None,
                 };
                 let p = &placed.positions;
+                let uvs = self.uvs.as_ref().map(|uv| [uv[a], uv[b], uv[c]]);
                 desc.triangles.push(TriangleDesc {
                     vertices: [p[a], p[b], p[c]],
                     normals,
-                    uvs: None,
+                    uvs,
                     material: m,
                 });
             }

@@ -149,6 +149,7 @@ mod tests {
             path: "test.obj".into(),
             positions: points.to_vec(),
             normals: None,
+            uvs: None,
             triangles: (0..points.len() as u32 / 3)
                 .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
                 .collect(),

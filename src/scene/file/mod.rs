@@ -15,13 +15,14 @@ use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::settings::{self, Kind, Origin, SceneSettings, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
 use toml::Spanned;
 use types::*;
 
+mod materials;
 mod types;
 
 /// 1-based line of a byte offset.
@@ -90,8 +91,11 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         desc.settings = scene_settings(&src, table)?;
     }
 
-    // Materials, checked here and numbered in order of first use.
-    let materials = materials(&src, &file.materials)?;
+    // Textures, then materials, checked here; materials are numbered in
+    // order of first use.
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let textures = materials::textures(&src, &file.textures, &dir, files)?;
+    let materials = materials::materials(&src, &file.materials, &textures)?;
     for l in &file.lights {
         desc.lights.extend(light(&src, l)?);
     }
@@ -126,62 +130,6 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
     crate::limits::check_resolution(camera.width, camera.height)
         .map_err(|m| src.error(cam_span.clone(), format!("camera {m}")))?;
     Ok(camera)
-}
-
-/// The `[materials.NAME]` tables.
-fn materials(src: &Source, specs: &BTreeMap<String, Spanned<MaterialSpec>>) -> Result<BTreeMap<String, Material>> {
-    let mut materials = BTreeMap::new();
-    for (name, spec) in specs {
-        let m = match spec.get_ref().kind {
-            MaterialKind::Diffuse => {
-                let Some(a) = spec.get_ref().albedo else {
-                    return Err(src.error(
-                        spec.span(),
-                        format!("material '{name}': a diffuse material needs `albedo`"),
-                    ));
-                };
-                if a.0.min_element() < 0.0 || a.0.max_element() > 1.0 {
-                    return Err(src.error(
-                        spec.span(),
-                        format!("material '{name}': albedo {:?} must lie in [0, 1]", a.0.to_array()),
-                    ));
-                }
-                Material::diffuse(a.0.x, a.0.y, a.0.z)
-            }
-            MaterialKind::Mirror => {
-                let r = spec.get_ref().reflectance.map_or(Vec3::ONE, |r| r.0);
-                if r.min_element() < 0.0 || r.max_element() > 1.0 {
-                    return Err(src.error(
-                        spec.span(),
-                        format!("material '{name}': reflectance {:?} must lie in [0, 1]", r.to_array()),
-                    ));
-                }
-                Material::mirror(r)
-            }
-            MaterialKind::Glass => {
-                let ior = spec.get_ref().ior.unwrap_or(1.5);
-                if !(ior.is_finite() && (1.0..=5.0).contains(&ior)) {
-                    return Err(src.error(spec.span(), format!("material '{name}': ior {ior} must lie in [1, 5]")));
-                }
-                Material::glass(ior)
-            }
-        };
-        // Keys that belong to another material type are mistakes, not options.
-        let sp = spec.get_ref();
-        let stray = match sp.kind {
-            MaterialKind::Diffuse => sp.reflectance.map(|_| "reflectance").or(sp.ior.map(|_| "ior")),
-            MaterialKind::Mirror => sp.albedo.map(|_| "albedo").or(sp.ior.map(|_| "ior")),
-            MaterialKind::Glass => sp.albedo.map(|_| "albedo").or(sp.reflectance.map(|_| "reflectance")),
-        };
-        if let Some(key) = stray {
-            return Err(src.error(
-                spec.span(),
-                format!("material '{name}': `{key}` does not apply to this type"),
-            ));
-        }
-        materials.insert(name.clone(), m);
-    }
-    Ok(materials)
 }
 
 /// The `[[shapes]]` tables, added to `desc`; returns what loading each mesh took.
@@ -236,11 +184,21 @@ fn shapes(
             None if s.kind == ShapeKind::Mesh => None,
             None => return Err(need("material")),
         };
-        let mut tri = |v: [Vec3; 3], normals: Option<[Vec3; 3]>, m: u32| {
+        let uvs = match &s.uvs {
+            None => None,
+            Some(uv) => {
+                let n = if s.kind == ShapeKind::Quad { 4 } else { 3 };
+                if uv.len() != n {
+                    return Err(err(format!("`uvs` needs {n} pairs [u, v], found {}", uv.len())));
+                }
+                Some(uv.iter().map(|[u, v]| Vec2::new(u.0, v.0)).collect::<Vec<_>>())
+            }
+        };
+        let mut tri = |v: [Vec3; 3], normals: Option<[Vec3; 3]>, uvs: Option<[Vec2; 3]>, m: u32| {
             desc.triangles.push(TriangleDesc {
                 vertices: v,
                 normals,
-                uvs: None,
+                uvs,
                 material: m,
             })
         };
@@ -251,13 +209,18 @@ fn shapes(
                     Some(n) => Some(points::<3>(Some(n), "normals").map_err(err)?),
                     None => None,
                 };
-                tri(v, n, mat.unwrap_or(0));
+                let uv = uvs.as_ref().map(|t| [t[0], t[1], t[2]]);
+                tri(v, n, uv, mat.unwrap_or(0));
             }
             ShapeKind::Quad => {
                 let [a, b, c, d] = points::<4>(s.vertices.as_deref(), "vertices").map_err(err)?;
                 let m = mat.unwrap_or(0);
-                tri([a, b, c], None, m);
-                tri([a, c, d], None, m);
+                let (uv1, uv2) = match &uvs {
+                    Some(t) => (Some([t[0], t[1], t[2]]), Some([t[0], t[2], t[3]])),
+                    None => (None, None),
+                };
+                tri([a, b, c], None, uv1, m);
+                tri([a, c, d], None, uv2, m);
             }
             ShapeKind::Box => {
                 let (lo, hi) = match (s.min, s.max) {
@@ -269,7 +232,7 @@ fn shapes(
                     return Err(err(format!("min {:?} exceeds max {:?}", lo.to_array(), hi.to_array())));
                 }
                 for t in box_triangles(lo, hi) {
-                    tri(t, None, mat.unwrap_or(0));
+                    tri(t, None, None, mat.unwrap_or(0));
                 }
             }
             ShapeKind::Sphere => {

@@ -202,7 +202,7 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"a.obj\"\nscale = 0\n"), 7, "non-zero"),
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"a.obj\"\nfit = {{ height = 1 }}\n"), 10, "bottom_centre"),
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"mesh\"\npath = \"no-such.obj\"\n"), 7, "no-such.obj not found (pass --mesh PATH"),
-        (format!("{CAMERA}[materials.a]\nalbedo = [2, 0, 0]\n"), 5, "[0, 1]"),
+        (format!("{CAMERA}[materials.a]\nalbedo = [2, 0, 0]\n"), 6, "[0, 1]"),
         (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\npower = 1\n"), 5, "missing `radius`"),
         (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\nradius = 1\npower = 1\n"), 5, "`radius` does not apply to a point light"),
         (format!("{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]\nradiance = [1, 1, 1]\n"), 5, "area is zero"),

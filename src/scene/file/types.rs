@@ -50,7 +50,9 @@ pub(super) struct SceneFile {
     pub(super) camera: Spanned<CameraSpec>,
     pub(super) settings: Option<Spanned<BTreeMap<String, Spanned<toml::Value>>>>,
     #[serde(default)]
-    pub(super) materials: BTreeMap<String, Spanned<MaterialSpec>>,
+    pub(super) textures: BTreeMap<String, Spanned<super::materials::Table>>,
+    #[serde(default)]
+    pub(super) materials: BTreeMap<String, Spanned<super::materials::Table>>,
     #[serde(default)]
     pub(super) lights: Vec<Spanned<LightSpec>>,
     #[serde(default)]
@@ -66,27 +68,6 @@ pub(super) struct CameraSpec {
     pub(super) fov_y: Num,
     pub(super) width: Option<u32>,
     pub(super) height: Option<u32>,
-}
-
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub(super) enum MaterialKind {
-    #[default]
-    Diffuse,
-    Mirror,
-    Glass,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct MaterialSpec {
-    #[serde(rename = "type", default)]
-    pub(super) kind: MaterialKind,
-    pub(super) albedo: Option<Vec3Spec>,
-    /// Mirror reflectance (default white).
-    pub(super) reflectance: Option<Vec3Spec>,
-    /// Glass index of refraction (default 1.5).
-    pub(super) ior: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -161,6 +142,8 @@ pub(super) struct ShapeSpec {
     pub(super) material: Option<Spanned<String>>,
     pub(super) vertices: Option<Vec<Vec3Spec>>,
     pub(super) normals: Option<Vec<Vec3Spec>>,
+    /// Texture coordinates per vertex (triangles and quads).
+    pub(super) uvs: Option<Vec<[Num; 2]>>,
     pub(super) min: Option<Vec3Spec>,
     pub(super) max: Option<Vec3Spec>,
     pub(super) centre: Option<Vec3Spec>,
@@ -175,8 +158,9 @@ pub(super) struct ShapeSpec {
 
 impl ShapeSpec {
     /// The optional keys that are present, by name.
-    pub(super) fn given(&self) -> [(&'static str, bool); 13] {
+    pub(super) fn given(&self) -> [(&'static str, bool); 14] {
         [
+            ("uvs", self.uvs.is_some()),
             ("material", self.material.is_some()),
             ("vertices", self.vertices.is_some()),
             ("normals", self.normals.is_some()),
@@ -208,8 +192,8 @@ impl ShapeKind {
     /// Keys each shape type reads besides `type`.
     pub(super) fn keys(self) -> &'static [&'static str] {
         match self {
-            ShapeKind::Triangle => &["material", "vertices", "normals"],
-            ShapeKind::Quad => &["material", "vertices"],
+            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs"],
+            ShapeKind::Quad => &["material", "vertices", "uvs"],
             ShapeKind::Box => &["material", "min", "max"],
             ShapeKind::Sphere => &["material", "centre", "radius"],
             ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],

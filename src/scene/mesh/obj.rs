@@ -6,7 +6,7 @@
 
 use super::{FileSource, Mesh, MeshPart};
 use crate::error::{Error, Result};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::cell::RefCell;
 use std::io::Cursor;
 use std::path::Path;
@@ -58,12 +58,15 @@ pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result
         path: path.to_path_buf(),
         positions: vec![],
         normals: None,
+        uvs: None,
         triangles: vec![],
         parts: vec![],
         warnings: warnings.into_inner(),
     };
     let mut normals: Vec<Vec3> = vec![];
     let mut any_normals = false;
+    let mut uvs: Vec<Vec2> = vec![];
+    let mut any_uvs = false;
     for model in &models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
@@ -76,6 +79,13 @@ pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result
             normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
         } else {
             normals.resize(mesh.positions.len(), Vec3::ZERO);
+        }
+        // Texture coordinates likewise, part by part.
+        if !m.texcoords.is_empty() && m.texcoords.len() / 2 == m.positions.len() / 3 {
+            any_uvs = true;
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+        } else {
+            uvs.resize(mesh.positions.len(), Vec2::ZERO);
         }
         mesh.triangles.extend(
             m.indices
@@ -92,6 +102,12 @@ pub(super) fn parse(path: &Path, bytes: &[u8], files: &dyn FileSource) -> Result
     }
     if any_normals {
         mesh.normals = Some(normals);
+    }
+    if any_uvs {
+        if uvs.iter().any(|t| !t.is_finite()) {
+            return Err(locate(path, bytes, "a texture coordinate is not a finite number"));
+        }
+        mesh.uvs = Some(uvs);
     }
     let finite = |v: &Vec<Vec3>| v.iter().all(|p| p.is_finite());
     if !finite(&mesh.positions) || !mesh.normals.as_ref().is_none_or(finite) {

@@ -1,6 +1,7 @@
 //! Stanford PLY (Turk, "The PLY Polygon File Format", 1994): ASCII,
 //! binary_little_endian and binary_big_endian. We read the `vertex` element's
-//! x, y, z (and nx, ny, nz when all three are there) and the `face` element's
+//! x, y, z (and nx, ny, nz when all three are there, and texture coordinates
+//! u, v or s, t or texture_u, texture_v or texture_s, texture_t) and the `face` element's
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulating polygons;
 //! every other property and element is skipped whatever its type.
 //!
@@ -11,8 +12,16 @@
 
 use super::{Mesh, MeshPart};
 use crate::error::{Error, Result};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::path::Path;
+
+/// The names PLY writers give a vertex's texture coordinates, in the order tried.
+const UV_NAMES: [[&str; 2]; 4] = [
+    ["u", "v"],
+    ["s", "t"],
+    ["texture_u", "texture_v"],
+    ["texture_s", "texture_t"],
+];
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Format {
@@ -363,6 +372,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         path: path.to_path_buf(),
         positions: vec![],
         normals: None,
+        uvs: None,
         triangles: vec![],
         parts: vec![],
         warnings: vec![],
@@ -370,6 +380,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     for el in &header.elements {
         // Where the properties we want sit in each item.
         let (mut xyz, mut nxyz, mut indices) = ([None; 3], [None; 3], None);
+        let mut uv_ix: [Option<usize>; 2] = [None; 2];
         match el.name.as_str() {
             "vertex" => {
                 for (k, n) in ["x", "y", "z"].iter().enumerate() {
@@ -378,10 +389,17 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 for (k, n) in ["nx", "ny", "nz"].iter().enumerate() {
                     nxyz[k] = el.index_of(n);
                 }
+                // Texture coordinates under any of their usual names, the first pair present.
+                for [u, v] in UV_NAMES {
+                    if let (Some(a), Some(b)) = (el.index_of(u), el.index_of(v)) {
+                        uv_ix = [Some(a), Some(b)];
+                        break;
+                    }
+                }
                 if xyz.iter().any(Option::is_none) {
                     return Err(herr(el.line, "the vertex element has no x, y and z properties".into()));
                 }
-                for i in xyz.iter().chain(&nxyz).flatten() {
+                for i in xyz.iter().chain(&nxyz).chain(&uv_ix).flatten() {
                     if matches!(el.properties[*i].ty, PropertyType::List { .. }) {
                         return Err(herr(
                             el.line,
@@ -412,7 +430,9 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             continue;
         }
         let has_normals = nxyz.iter().all(Option::is_some);
+        let has_uvs = uv_ix.iter().all(Option::is_some);
         let mut normals = vec![];
+        let mut uvs = vec![];
         let mut values = vec![0.0f64; el.properties.len()];
         let mut face: Vec<u32> = vec![];
         for item in 0..el.count {
@@ -473,10 +493,24 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                     }
                     normals.push(n);
                 }
+                if let [Some(iu), Some(iv)] = uv_ix {
+                    let t = Vec2::new(values[iu] as f32, values[iv] as f32);
+                    if !t.is_finite() {
+                        return Err(r.error(
+                            path,
+                            start,
+                            format!("vertex {item} has a non-finite texture coordinate: {t}"),
+                        ));
+                    }
+                    uvs.push(t);
+                }
             }
         }
         if el.name == "vertex" && has_normals {
             mesh.normals = Some(normals);
+        }
+        if el.name == "vertex" && has_uvs {
+            mesh.uvs = Some(uvs);
         }
     }
     let name = path

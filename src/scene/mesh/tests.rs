@@ -399,3 +399,82 @@ fn bunny_has_the_bounds_scenes_md_gives() {
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
     }
 }
+
+/// A unit square in z = 0 from a mesh file, its texture coordinates
+/// (0, 0) .. (2, 1) at its corners, placed in a scene and hit by rays.
+fn hit_uv(mesh: &Mesh, x: f32, y: f32) -> crate::math::Vec2 {
+    use crate::scene::{CameraDesc, Scene, SceneDesc};
+    let camera = CameraDesc {
+        position: Vec3::new(0.5, 0.5, -2.0),
+        look_at: Vec3::new(0.5, 0.5, 0.0),
+        up: Vec3::new(0.0, -1.0, 0.0),
+        fov_y_deg: 40.0,
+        width: 8,
+        height: 8,
+    };
+    let mut desc = SceneDesc::empty("uv", camera);
+    let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+    mesh.add_to_scene(&mut desc, &Transform::default(), Some(m), false)
+        .unwrap();
+    let scene = Scene::build(desc).unwrap();
+    let ray = crate::math::Ray::new(Vec3::new(x, y, -1.0), Vec3::Z);
+    scene
+        .intersect(&ray, 1e-4, f32::INFINITY)
+        .expect("the ray hits the square")
+        .uv
+}
+
+fn assert_uvs_interpolate(mesh: &Mesh) {
+    let uvs = mesh.uvs.as_ref().expect("texture coordinates");
+    assert_eq!(uvs.len(), mesh.positions.len());
+    for (x, y) in [(0.25f32, 0.5f32), (0.9, 0.1), (0.1, 0.8), (0.5, 0.5)] {
+        let uv = hit_uv(mesh, x, y);
+        assert!(
+            (uv - crate::math::Vec2::new(2.0 * x, y)).abs().max_element() < 1e-5,
+            "({x}, {y}): {uv}"
+        );
+    }
+}
+
+#[test]
+fn obj_texture_coordinates_reach_the_hit() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "quad.obj",
+        b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 2 0\nvt 2 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+    );
+    let m = load_mesh(&p).unwrap();
+    assert_uvs_interpolate(&m);
+    // Faces without vt give no coordinates.
+    let p = write(dir.path(), "plain.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    assert_eq!(load_mesh(&p).unwrap().uvs, None);
+}
+
+#[test]
+fn ply_texture_coordinates_under_each_name_reach_the_hit() {
+    let dir = tempfile::tempdir().unwrap();
+    for [u, v] in [
+        ["u", "v"],
+        ["s", "t"],
+        ["texture_u", "texture_v"],
+        ["texture_s", "texture_t"],
+    ] {
+        let text = format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             property float {u}\nproperty float {v}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             0 0 0 0 0\n1 0 0 2 0\n1 1 0 2 1\n0 1 0 0 1\n4 0 1 2 3\n"
+        );
+        let p = write(dir.path(), &format!("quad-{u}.ply"), text.as_bytes());
+        let m = load_mesh(&p).unwrap();
+        assert_uvs_interpolate(&m);
+    }
+    let p = write(
+        dir.path(),
+        "nan.ply",
+        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+          property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+          0 0 0 0 0\n1 0 0 nan 0\n1 1 0 1 1\n3 0 1 2\n",
+    );
+    assert_error(&p, ":13:", "texture coordinate");
+}

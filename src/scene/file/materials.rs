@@ -1,0 +1,509 @@
+//! The `[textures.NAME]` and `[materials.NAME]` tables. Each is read as a
+//! table of spanned values, so that every error points at the key it is
+//! about: a key of another type, a bad value, an unknown texture name.
+
+use super::Source;
+use crate::bsdf::named_metal;
+use crate::error::Result;
+use crate::material::{ConductorFresnel, Material, Roughness};
+use crate::math::Vec3;
+use crate::scene::mesh::FileSource;
+use crate::texture::{Encoding, ImageOptions, ImageTexture, Texture, UvMapping, WrapMode};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+use toml::Spanned;
+
+/// A table's keys and their values, with spans.
+pub(super) type Table = BTreeMap<String, Spanned<toml::Value>>;
+
+/// Finds a texture by the name written at a span.
+type Lookup<'a> = dyn FnMut(&str, std::ops::Range<usize>) -> Result<Arc<Texture>> + 'a;
+
+/// Reads the keys of one table, each error at the key's line.
+struct Keys<'a> {
+    src: &'a Source<'a>,
+    table: &'a Table,
+    span: std::ops::Range<usize>,
+    /// "material 'x'" or "texture 'x'".
+    what: String,
+}
+
+impl Keys<'_> {
+    fn err(&self, key: Option<&str>, m: String) -> crate::error::Error {
+        let span = key
+            .and_then(|k| self.table.get(k))
+            .map_or(self.span.clone(), |v| v.span());
+        self.src.error(span, format!("{}: {m}", self.what))
+    }
+
+    fn has(&self, key: &str) -> bool {
+        self.table.contains_key(key)
+    }
+
+    /// Refuses every key not in `allowed` (besides `type`).
+    fn only(&self, kind: &str, allowed: &[&str]) -> Result<()> {
+        for key in self.table.keys() {
+            if key != "type" && !allowed.contains(&key.as_str()) {
+                let known = if allowed.is_empty() {
+                    "none".to_string()
+                } else {
+                    allowed.join(", ")
+                };
+                return Err(self.err(
+                    Some(key),
+                    format!("`{key}` does not apply to this type ({kind} takes: {known})"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn num(&self, key: &str) -> Result<Option<f32>> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        let f = match v.get_ref() {
+            toml::Value::Integer(i) => *i as f32,
+            toml::Value::Float(f) => *f as f32,
+            other => return Err(self.err(Some(key), format!("`{key}` must be a number, not {}", other.type_str()))),
+        };
+        if !f.is_finite() {
+            return Err(self.err(Some(key), format!("`{key}` must be a finite number")));
+        }
+        Ok(Some(f))
+    }
+
+    fn string(&self, key: &str) -> Result<Option<&str>> {
+        match self.table.get(key).map(|v| v.get_ref()) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s)),
+            Some(other) => Err(self.err(Some(key), format!("`{key}` must be a string, not {}", other.type_str()))),
+        }
+    }
+
+    fn boolean(&self, key: &str) -> Result<Option<bool>> {
+        match self.table.get(key).map(|v| v.get_ref()) {
+            None => Ok(None),
+            Some(toml::Value::Boolean(b)) => Ok(Some(*b)),
+            Some(other) => Err(self.err(
+                Some(key),
+                format!("`{key}` must be true or false, not {}", other.type_str()),
+            )),
+        }
+    }
+
+    /// A number or `[r, g, b]`.
+    fn rgb(&self, key: &str) -> Result<Option<Vec3>> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        match v.get_ref() {
+            toml::Value::Array(a) if a.len() == 3 => {
+                let mut c = [0.0f32; 3];
+                for (i, x) in a.iter().enumerate() {
+                    c[i] = match x {
+                        toml::Value::Integer(n) => *n as f32,
+                        toml::Value::Float(f) => *f as f32,
+                        _ => return Err(self.err(Some(key), format!("`{key}` must hold three numbers"))),
+                    };
+                }
+                let c = Vec3::from_array(c);
+                if !c.is_finite() {
+                    return Err(self.err(Some(key), format!("`{key}` must hold finite numbers")));
+                }
+                Ok(Some(c))
+            }
+            toml::Value::Integer(_) | toml::Value::Float(_) => Ok(self.num(key)?.map(Vec3::splat)),
+            _ => Err(self.err(Some(key), format!("`{key}` must be a number or [r, g, b]"))),
+        }
+    }
+
+    /// A colour parameter: a number, `[r, g, b]` or the name of a texture,
+    /// found by `lookup` (which reports unknown names and cycles).
+    fn param(&self, key: &str, lookup: &mut Lookup) -> Result<Option<Texture>> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        if let toml::Value::String(name) = v.get_ref() {
+            return Ok(Some((*lookup(name, v.span())?).clone()));
+        }
+        match self.rgb(key) {
+            Ok(c) => Ok(c.map(Texture::Constant)),
+            Err(_) => Err(self.err(
+                Some(key),
+                format!("`{key}` must be a number, [r, g, b] or the name of a texture"),
+            )),
+        }
+    }
+}
+
+/// Resolves texture names while the `[textures]` tables are read.
+struct Resolver<'a> {
+    src: &'a Source<'a>,
+    specs: &'a BTreeMap<String, Spanned<Table>>,
+    dir: &'a Path,
+    files: &'a dyn FileSource,
+    done: BTreeMap<String, Arc<Texture>>,
+    /// Textures being read, innermost last: a name met again is a cycle.
+    stack: Vec<String>,
+}
+
+impl Resolver<'_> {
+    fn get(&mut self, name: &str, span: std::ops::Range<usize>) -> Result<Arc<Texture>> {
+        if let Some(t) = self.done.get(name) {
+            return Ok(t.clone());
+        }
+        let Some(spec) = self.specs.get(name) else {
+            let known: Vec<&str> = self.specs.keys().map(String::as_str).collect();
+            let known = if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            };
+            return Err(self
+                .src
+                .error(span, format!("unknown texture '{name}' (defined: {known})")));
+        };
+        if let Some(i) = self.stack.iter().position(|n| n == name) {
+            let mut cycle = self.stack[i..].to_vec();
+            cycle.push(name.to_string());
+            return Err(self.src.error(
+                span,
+                format!("textures refer to each other in a cycle: {}", cycle.join(" -> ")),
+            ));
+        }
+        self.stack.push(name.to_string());
+        let t = Arc::new(self.read(name, spec)?);
+        self.stack.pop();
+        self.done.insert(name.to_string(), t.clone());
+        Ok(t)
+    }
+
+    fn read(&mut self, name: &str, spec: &Spanned<Table>) -> Result<Texture> {
+        let k = Keys {
+            src: self.src,
+            table: spec.get_ref(),
+            span: spec.span(),
+            what: format!("texture '{name}'"),
+        };
+        let kind = match k.string("type")? {
+            Some(t) => t,
+            None => {
+                return Err(k.err(
+                    None,
+                    "missing `type` (image, checkerboard, scale, mix or constant)".into(),
+                ))
+            }
+        };
+        let (dir, files) = (self.dir, self.files);
+        let mut lookup = |n: &str, s: std::ops::Range<usize>| self.get(n, s);
+        let one = Texture::Constant(Vec3::ONE);
+        let zero = Texture::Constant(Vec3::ZERO);
+        Ok(match kind {
+            "constant" => {
+                k.only(kind, &["value"])?;
+                k.param("value", &mut lookup)?.unwrap_or(one)
+            }
+            "checkerboard" => {
+                k.only(kind, &["tex1", "tex2", "uscale", "vscale"])?;
+                Texture::Checkerboard {
+                    even: Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(one)),
+                    odd: Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(zero)),
+                    u_scale: k.num("uscale")?.unwrap_or(1.0),
+                    v_scale: k.num("vscale")?.unwrap_or(1.0),
+                }
+            }
+            "scale" => {
+                k.only(kind, &["tex", "scale"])?;
+                Texture::Scale {
+                    tex: Arc::new(k.param("tex", &mut lookup)?.unwrap_or(one.clone())),
+                    scale: Arc::new(k.param("scale", &mut lookup)?.unwrap_or(one)),
+                }
+            }
+            "mix" => {
+                k.only(kind, &["tex1", "tex2", "amount"])?;
+                Texture::Mix {
+                    a: Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(zero)),
+                    b: Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(one)),
+                    amount: Arc::new(
+                        k.param("amount", &mut lookup)?
+                            .unwrap_or(Texture::Constant(Vec3::splat(0.5))),
+                    ),
+                }
+            }
+            "image" => {
+                k.only(
+                    kind,
+                    &[
+                        "file", "wrap", "encoding", "scale", "invert", "uscale", "vscale", "udelta", "vdelta",
+                    ],
+                )?;
+                let file = k.string("file")?.ok_or_else(|| k.err(None, "missing `file`".into()))?;
+                let wrap = match k.string("wrap")? {
+                    None => WrapMode::Repeat,
+                    Some(w) => WrapMode::parse(w)
+                        .ok_or_else(|| k.err(Some("wrap"), format!("wrap '{w}': use repeat, clamp or black")))?,
+                };
+                let encoding = match k.string("encoding")? {
+                    None => Encoding::Srgb,
+                    Some(e) => Encoding::parse(e).ok_or_else(|| {
+                        k.err(
+                            Some("encoding"),
+                            format!("encoding '{e}': use sRGB, linear or \"gamma G\" with G > 0"),
+                        )
+                    })?,
+                };
+                let opts = ImageOptions {
+                    wrap,
+                    encoding,
+                    scale: k.num("scale")?.unwrap_or(1.0),
+                    invert: k.boolean("invert")?.unwrap_or(false),
+                    mapping: UvMapping {
+                        su: k.num("uscale")?.unwrap_or(1.0),
+                        sv: k.num("vscale")?.unwrap_or(1.0),
+                        du: k.num("udelta")?.unwrap_or(0.0),
+                        dv: k.num("vdelta")?.unwrap_or(0.0),
+                    },
+                };
+                let path = dir.join(file);
+                let image = files.read_image(&path, encoding).map_err(|e| match e {
+                    crate::error::Error::Io { path, source } if source.kind() == std::io::ErrorKind::NotFound => {
+                        k.err(Some("file"), format!("image file {} not found", path.display()))
+                    }
+                    e => k.err(Some("file"), format!("cannot read the image: {e}")),
+                })?;
+                Texture::Image(Arc::new(ImageTexture::new(image, &opts)))
+            }
+            other => {
+                return Err(k.err(
+                    Some("type"),
+                    format!("unknown texture type '{other}' (image, checkerboard, scale, mix or constant)"),
+                ))
+            }
+        })
+    }
+}
+
+/// The `[textures.NAME]` tables, with image paths relative to `dir`.
+pub(super) fn textures(
+    src: &Source,
+    specs: &BTreeMap<String, Spanned<Table>>,
+    dir: &Path,
+    files: &dyn FileSource,
+) -> Result<BTreeMap<String, Arc<Texture>>> {
+    let mut r = Resolver {
+        src,
+        specs,
+        dir,
+        files,
+        done: BTreeMap::new(),
+        stack: vec![],
+    };
+    for (name, spec) in specs {
+        r.get(name, spec.span())?;
+    }
+    Ok(r.done)
+}
+
+const ROUGHNESS_KEYS: [&str; 4] = ["roughness", "uroughness", "vroughness", "remap_roughness"];
+
+/// The `[materials.NAME]` tables; colour parameters may name `textures`.
+pub(super) fn materials(
+    src: &Source,
+    specs: &BTreeMap<String, Spanned<Table>>,
+    textures: &BTreeMap<String, Arc<Texture>>,
+) -> Result<BTreeMap<String, Material>> {
+    let mut out = BTreeMap::new();
+    for (name, spec) in specs {
+        let k = Keys {
+            src,
+            table: spec.get_ref(),
+            span: spec.span(),
+            what: format!("material '{name}'"),
+        };
+        out.insert(name.clone(), material(&k, textures)?);
+    }
+    Ok(out)
+}
+
+fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Material> {
+    let mut lookup = |n: &str, span: std::ops::Range<usize>| -> Result<Arc<Texture>> {
+        textures.get(n).cloned().ok_or_else(|| {
+            let known: Vec<&str> = textures.keys().map(String::as_str).collect();
+            let known = if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            };
+            k.src
+                .error(span, format!("{}: unknown texture '{n}' (defined: {known})", k.what))
+        })
+    };
+    // A reflectance-like parameter: [0, 1] everywhere the texture can reach.
+    let mut albedo = |key: &str, default: f32| -> Result<Texture> {
+        let t = k
+            .param(key, &mut lookup)?
+            .unwrap_or(Texture::Constant(Vec3::splat(default)));
+        let (lo, hi) = match t.as_constant() {
+            Some(c) => (c.min_element(), c.max_element()),
+            None => (0.0, t.max_value().max_element()),
+        };
+        if !(lo >= 0.0 && hi <= 1.0) {
+            let shown = match t.as_constant() {
+                Some(c) => format!("{:?}", c.to_array()),
+                None => format!("(a texture reaching {hi})"),
+            };
+            return Err(k.err(Some(key), format!("{key} {shown} must lie in [0, 1]")));
+        }
+        Ok(t)
+    };
+    let kind = k.string("type")?.unwrap_or("diffuse");
+    let eta = |default: f32| -> Result<f32> {
+        let e = k.num("eta")?.unwrap_or(default);
+        if e <= 0.0 {
+            return Err(k.err(Some("eta"), format!("eta {e} must be > 0")));
+        }
+        Ok(e)
+    };
+    let roughness = || -> Result<Roughness> {
+        let r = k.num("roughness")?;
+        let (u, v) = (k.num("uroughness")?, k.num("vroughness")?);
+        if r.is_some() && (u.is_some() || v.is_some()) {
+            return Err(k.err(
+                Some("roughness"),
+                "give `roughness` or `uroughness`/`vroughness`, not both".into(),
+            ));
+        }
+        let (u, v) = (u.or(r).unwrap_or(0.0), v.or(r).unwrap_or(0.0));
+        for (key, x) in [("roughness", r.unwrap_or(0.0)), ("uroughness", u), ("vroughness", v)] {
+            if x < 0.0 {
+                let key = if k.has(key) { key } else { "roughness" };
+                return Err(k.err(Some(key), format!("{key} {x} must be >= 0")));
+            }
+        }
+        Ok(Roughness {
+            u,
+            v,
+            remap: k.boolean("remap_roughness")?.unwrap_or(true),
+        })
+    };
+    Ok(match kind {
+        "diffuse" => {
+            k.only(kind, &["reflectance", "albedo"])?;
+            if k.has("albedo") && k.has("reflectance") {
+                return Err(k.err(
+                    Some("albedo"),
+                    "give `reflectance` or `albedo` (the same), not both".into(),
+                ));
+            }
+            let key = if k.has("albedo") { "albedo" } else { "reflectance" };
+            Material::Diffuse {
+                reflectance: albedo(key, 0.5)?,
+            }
+        }
+        "mirror" => {
+            k.only(kind, &["reflectance"])?;
+            Material::Conductor {
+                fresnel: ConductorFresnel::Reflectance(albedo("reflectance", 1.0)?),
+                roughness: Roughness::SMOOTH,
+            }
+        }
+        "glass" => {
+            k.only(kind, &["ior"])?;
+            let ior = k.num("ior")?.unwrap_or(1.5);
+            if !(1.0..=5.0).contains(&ior) {
+                return Err(k.err(Some("ior"), format!("ior {ior} must lie in [1, 5]")));
+            }
+            Material::glass(ior)
+        }
+        "conductor" => {
+            let mut keys = vec!["eta", "k", "metal", "reflectance"];
+            keys.extend(ROUGHNESS_KEYS);
+            k.only(kind, &keys)?;
+            let fresnel = if k.has("reflectance") {
+                if let Some(key) = ["eta", "k", "metal"].into_iter().find(|x| k.has(x)) {
+                    return Err(k.err(Some(key), format!("give `reflectance` or `{key}`, not both")));
+                }
+                ConductorFresnel::Reflectance(albedo("reflectance", 1.0)?)
+            } else if let Some(m) = k.string("metal")? {
+                if let Some(key) = ["eta", "k"].into_iter().find(|x| k.has(x)) {
+                    return Err(k.err(Some(key), format!("give `metal` or `{key}`, not both")));
+                }
+                let (eta, kk) = named_metal(m).ok_or_else(|| {
+                    k.err(
+                        Some("metal"),
+                        format!("unknown metal '{m}' (known: Ag, Al, Au, Cu, CuZn)"),
+                    )
+                })?;
+                ConductorFresnel::Ior { eta, k: kk }
+            } else if k.has("eta") || k.has("k") {
+                let eta = k
+                    .rgb("eta")?
+                    .ok_or_else(|| k.err(Some("k"), "`k` needs `eta` too".into()))?;
+                let kk = k
+                    .rgb("k")?
+                    .ok_or_else(|| k.err(Some("eta"), "`eta` needs `k` too".into()))?;
+                if eta.min_element() <= 0.0 {
+                    return Err(k.err(Some("eta"), format!("eta {:?} must be > 0", eta.to_array())));
+                }
+                if kk.min_element() < 0.0 {
+                    return Err(k.err(Some("k"), format!("k {:?} must be >= 0", kk.to_array())));
+                }
+                ConductorFresnel::Ior { eta, k: kk }
+            } else {
+                // pbrt-v4's default: copper.
+                let (eta, kk) = named_metal("Cu").expect("copper is a named metal");
+                ConductorFresnel::Ior { eta, k: kk }
+            };
+            Material::Conductor {
+                fresnel,
+                roughness: roughness()?,
+            }
+        }
+        "dielectric" => {
+            let mut keys = vec!["eta"];
+            keys.extend(ROUGHNESS_KEYS);
+            k.only(kind, &keys)?;
+            Material::Dielectric {
+                eta: eta(1.5)?,
+                roughness: roughness()?,
+            }
+        }
+        "thindielectric" => {
+            k.only(kind, &["eta"])?;
+            Material::ThinDielectric { eta: eta(1.5)? }
+        }
+        "coateddiffuse" => {
+            let mut keys = vec!["reflectance", "eta", "thickness"];
+            keys.extend(ROUGHNESS_KEYS);
+            k.only(kind, &keys)?;
+            let thickness = k.num("thickness")?.unwrap_or(0.01);
+            if thickness <= 0.0 {
+                return Err(k.err(Some("thickness"), format!("thickness {thickness} must be > 0")));
+            }
+            Material::CoatedDiffuse {
+                reflectance: albedo("reflectance", 0.5)?,
+                roughness: roughness()?,
+                eta: eta(1.5)?,
+                thickness,
+            }
+        }
+        "diffusetransmission" => {
+            k.only(kind, &["reflectance", "transmittance"])?;
+            Material::DiffuseTransmission {
+                reflectance: albedo("reflectance", 0.25)?,
+                transmittance: albedo("transmittance", 0.25)?,
+            }
+        }
+        other => {
+            return Err(k.err(
+                Some("type"),
+                format!(
+                    "unknown material type '{other}' (diffuse, mirror, glass, conductor, dielectric, \
+                     thindielectric, coateddiffuse, diffusetransmission)"
+                ),
+            ))
+        }
+    })
+}

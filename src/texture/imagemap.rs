@@ -1,0 +1,632 @@
+//! Image textures (pbrt-v4 `imagemap`): an RGB image looked up at (u, v)
+//! with bilinear filtering, pbrt-v4's texture coordinate convention and wrap
+//! modes.
+//!
+//! Convention (pbrt-v4 `SpectrumImageTexture::Evaluate` and
+//! `Image::Bilerp`): (s, t) = (uscale u + udelta, vscale v + vdelta), then
+//! t = 1 - t, and the image, whose first row is its top, is read at pixel
+//! coordinates (s w - 0.5, t h - 0.5): texel centres sit at half-integers.
+//! So (u, v) = (0, 0) is the bottom-left corner of the picture as seen, and
+//! v grows upwards. pbrt-v4 also builds a MIP map and resizes images whose
+//! sides are not powers of two for it; without ray differentials its
+//! bilinear filter reads the finest level, which here is the image as stored.
+//!
+//! Decoded images are shared: [`load_image`] keeps a cache of the images
+//! alive in the process, keyed by canonical path and encoding, so a scene
+//! that uses one file in several textures (or several scenes in one process)
+//! decodes it once.
+
+use crate::error::{Error, Result};
+use crate::math::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, Weak};
+
+/// What happens to lookups outside [0, 1]^2 (pbrt-v4's `WrapMode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum WrapMode {
+    /// The image tiles the plane.
+    #[default]
+    Repeat,
+    /// The edge texels extend outwards.
+    Clamp,
+    /// Black outside the image.
+    Black,
+}
+
+impl WrapMode {
+    /// pbrt-v4's names: "repeat", "clamp", "black".
+    pub fn parse(name: &str) -> Option<WrapMode> {
+        match name {
+            "repeat" => Some(WrapMode::Repeat),
+            "clamp" => Some(WrapMode::Clamp),
+            "black" => Some(WrapMode::Black),
+            _ => None,
+        }
+    }
+}
+
+/// How the integer values of an 8- or 16-bit image map to linear values
+/// (pbrt-v4's `ColorEncoding`). Float images (EXR, PFM) are always linear.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Encoding {
+    /// The sRGB transfer curve (the default, as pbrt-v4's for PNG, JPEG, TGA).
+    #[default]
+    Srgb,
+    Linear,
+    /// value^gamma.
+    Gamma(f32),
+}
+
+impl Encoding {
+    /// pbrt-v4's names: "sRGB", "linear", "gamma G" (G > 0).
+    pub fn parse(name: &str) -> Option<Encoding> {
+        match name {
+            "sRGB" | "srgb" => Some(Encoding::Srgb),
+            "linear" => Some(Encoding::Linear),
+            _ => {
+                let g: f32 = name.strip_prefix("gamma ")?.trim().parse().ok()?;
+                (g.is_finite() && g > 0.0).then_some(Encoding::Gamma(g))
+            }
+        }
+    }
+
+    /// A stored value in [0, 1] as a linear one.
+    pub fn to_linear(self, v: f32) -> f32 {
+        match self {
+            Encoding::Linear => v,
+            Encoding::Gamma(g) => v.max(0.0).powf(g),
+            Encoding::Srgb => srgb_to_linear(v),
+        }
+    }
+
+    /// A key for the cache (f32 is not `Hash`).
+    fn key(self) -> (u8, u32) {
+        match self {
+            Encoding::Srgb => (0, 0),
+            Encoding::Linear => (1, 0),
+            Encoding::Gamma(g) => (2, g.to_bits()),
+        }
+    }
+}
+
+/// The sRGB electro-optical transfer function (IEC 61966-2-1).
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A decoded image: linear RGB, first row at the top.
+pub struct TexImage {
+    pub path: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Vec3>,
+    /// FNV-1a 64 of the file's bytes and the encoding: two images with the
+    /// same hash hold the same pixels.
+    pub hash: u64,
+    /// Whether the file held integers (and `encoding` applied).
+    pub integer: bool,
+    pub encoding: Encoding,
+    /// Per-channel largest and smallest pixel values.
+    pub max: Vec3,
+    pub min: Vec3,
+}
+
+impl std::fmt::Debug for TexImage {
+    // Not the pixels: scene fingerprints hash a material's Debug form. Nor
+    // the folder: the same scene read from another folder or machine (a
+    // shared photon map, a checkpoint resumed elsewhere) is the same scene.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = self.path.file_name().unwrap_or(self.path.as_os_str());
+        write!(
+            f,
+            "TexImage {{ file: {:?}, size: {}x{}, hash: {:016x} }}",
+            name, self.width, self.height, self.hash
+        )
+    }
+}
+
+impl TexImage {
+    /// An image from linear pixels (first row at the top), for textures made
+    /// in code.
+    pub fn from_pixels(name: &str, width: u32, height: u32, pixels: Vec<Vec3>) -> TexImage {
+        assert_eq!(pixels.len(), width as usize * height as usize, "pixel count");
+        assert!(width > 0 && height > 0, "empty image");
+        let mut h = Fnv64::default();
+        for p in &pixels {
+            for c in p.to_array() {
+                h.bytes(&c.to_bits().to_le_bytes());
+            }
+        }
+        Self::finish(PathBuf::from(name), width, height, pixels, h.0, false, Encoding::Linear)
+    }
+
+    fn finish(
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        pixels: Vec<Vec3>,
+        hash: u64,
+        integer: bool,
+        encoding: Encoding,
+    ) -> TexImage {
+        let max = pixels.iter().fold(Vec3::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
+        let min = pixels.iter().fold(Vec3::splat(f32::INFINITY), |a, &p| a.min(p));
+        TexImage {
+            path,
+            width,
+            height,
+            pixels,
+            hash,
+            integer,
+            encoding,
+            max,
+            min,
+        }
+    }
+
+    /// The texel at integer coordinates after wrapping; `None` outside with `Black`.
+    fn texel(&self, x: i64, y: i64, wrap: WrapMode) -> Option<Vec3> {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let (x, y) = match wrap {
+            WrapMode::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
+            WrapMode::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
+            WrapMode::Black => {
+                if x < 0 || y < 0 || x >= w || y >= h {
+                    return None;
+                }
+                (x, y)
+            }
+        };
+        Some(self.pixels[(y * w + x) as usize])
+    }
+
+    /// Bilinear lookup at image coordinates `st` in [0, 1]^2 (t down from the
+    /// top row), as pbrt-v4's `Image::Bilerp`.
+    pub fn bilerp(&self, st: Vec2, wrap: WrapMode) -> Vec3 {
+        // Far outside, f32 -> i64 saturates; repeat's rem_euclid still works.
+        let x = st.x as f64 * self.width as f64 - 0.5;
+        let y = st.y as f64 * self.height as f64 - 0.5;
+        if !(x.is_finite() && y.is_finite()) {
+            return Vec3::ZERO;
+        }
+        let (xf, yf) = (x.floor(), y.floor());
+        let (dx, dy) = ((x - xf) as f32, (y - yf) as f32);
+        let (xi, yi) = (xf as i64, yf as i64);
+        let t = |x, y| self.texel(x, y, wrap).unwrap_or(Vec3::ZERO);
+        t(xi, yi) * ((1.0 - dx) * (1.0 - dy))
+            + t(xi + 1, yi) * (dx * (1.0 - dy))
+            + t(xi, yi + 1) * ((1.0 - dx) * dy)
+            + t(xi + 1, yi + 1) * (dx * dy)
+    }
+}
+
+/// (s, t) = (su u + du, sv v + dv): pbrt-v4's `UVMapping`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvMapping {
+    pub su: f32,
+    pub sv: f32,
+    pub du: f32,
+    pub dv: f32,
+}
+
+impl Default for UvMapping {
+    fn default() -> Self {
+        UvMapping {
+            su: 1.0,
+            sv: 1.0,
+            du: 0.0,
+            dv: 0.0,
+        }
+    }
+}
+
+impl UvMapping {
+    pub fn map(&self, uv: Vec2) -> Vec2 {
+        Vec2::new(self.su * uv.x + self.du, self.sv * uv.y + self.dv)
+    }
+}
+
+/// How an image file is read and looked up: the options of pbrt-v4's `imagemap`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageOptions {
+    pub wrap: WrapMode,
+    /// For 8- and 16-bit images; float images are linear whatever it says.
+    pub encoding: Encoding,
+    /// Multiplies the looked-up value.
+    pub scale: f32,
+    /// Returns 1 - value (after `scale`), clamped at 0.
+    pub invert: bool,
+    pub mapping: UvMapping,
+}
+
+impl Default for ImageOptions {
+    fn default() -> Self {
+        ImageOptions {
+            wrap: WrapMode::Repeat,
+            encoding: Encoding::Srgb,
+            scale: 1.0,
+            invert: false,
+            mapping: UvMapping::default(),
+        }
+    }
+}
+
+/// An image texture: a shared image and how it is looked up.
+#[derive(Clone, Debug)]
+pub struct ImageTexture {
+    pub image: Arc<TexImage>,
+    pub wrap: WrapMode,
+    pub scale: f32,
+    pub invert: bool,
+    pub mapping: UvMapping,
+}
+
+impl PartialEq for ImageTexture {
+    fn eq(&self, o: &Self) -> bool {
+        (Arc::ptr_eq(&self.image, &o.image) || self.image.hash == o.image.hash)
+            && self.wrap == o.wrap
+            && self.scale == o.scale
+            && self.invert == o.invert
+            && self.mapping == o.mapping
+    }
+}
+
+impl ImageTexture {
+    /// Reads (or takes from the cache) the image at `path` and wraps it with
+    /// `opts`. This is what a scene reader calls: PNG, JPEG, TGA (8 or 16
+    /// bits, decoded by `opts.encoding`), EXR and PFM (linear).
+    pub fn open(path: &Path, opts: &ImageOptions) -> Result<ImageTexture> {
+        Ok(Self::new(load_image(path, opts.encoding)?, opts))
+    }
+
+    pub fn new(image: Arc<TexImage>, opts: &ImageOptions) -> ImageTexture {
+        ImageTexture {
+            image,
+            wrap: opts.wrap,
+            scale: opts.scale,
+            invert: opts.invert,
+            mapping: opts.mapping,
+        }
+    }
+
+    /// The value at surface coordinates `uv`.
+    pub fn evaluate(&self, uv: Vec2) -> Vec3 {
+        let st = self.mapping.map(uv);
+        // Images are stored top row first; v grows upwards (pbrt-v4 flips t).
+        let v = self.image.bilerp(Vec2::new(st.x, 1.0 - st.y), self.wrap) * self.scale;
+        if self.invert {
+            (Vec3::ONE - v).max(Vec3::ZERO)
+        } else {
+            v.max(Vec3::ZERO)
+        }
+    }
+
+    /// The largest value `evaluate` can return, per channel.
+    pub fn max_value(&self) -> Vec3 {
+        // Bilinear weights are convex, so lookups stay within the texels'
+        // range; black wrapping adds 0.
+        let (mut lo, mut hi) = (self.image.min, self.image.max);
+        if self.wrap == WrapMode::Black {
+            lo = lo.min(Vec3::ZERO);
+            hi = hi.max(Vec3::ZERO);
+        }
+        let (a, b) = (lo * self.scale, hi * self.scale);
+        let top = a.max(b);
+        let bottom = a.min(b);
+        if self.invert {
+            (Vec3::ONE - bottom).max(Vec3::ZERO)
+        } else {
+            top.max(Vec3::ZERO)
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Fnv64(u64);
+
+impl Default for Fnv64 {
+    fn default() -> Self {
+        Fnv64(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv64 {
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 ^= x as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+type CacheKey = (PathBuf, (u8, u32));
+
+/// Decoded images still in use somewhere, by canonical path and encoding.
+static CACHE: Mutex<Option<HashMap<CacheKey, Weak<TexImage>>>> = Mutex::new(None);
+
+/// Reads an image file as linear RGB, or returns the copy already in
+/// memory. A missing file is `Error::Io`; a file that is not an image of a
+/// known format is `Error::Parse`, naming the file.
+pub fn load_image(path: &Path, encoding: Encoding) -> Result<Arc<TexImage>> {
+    let io = |e: std::io::Error| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let canonical = std::fs::canonicalize(path).map_err(io)?;
+    let key = (canonical, encoding.key());
+    {
+        let cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(img) = cache.as_ref().and_then(|c| c.get(&key)).and_then(Weak::upgrade) {
+            return Ok(img);
+        }
+    }
+    // Decoded outside the lock: two threads may both decode one file, and
+    // the second's copy replaces the first's in the cache; both are right.
+    let img = Arc::new(decode(path, encoding)?);
+    let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+    let map = cache.get_or_insert_with(HashMap::new);
+    map.retain(|_, w| w.strong_count() > 0);
+    map.insert(key, Arc::downgrade(&img));
+    Ok(img)
+}
+
+/// Reads and decodes an image file, by its extension for EXR and PFM and by
+/// its contents for the rest.
+fn decode(path: &Path, encoding: Encoding) -> Result<TexImage> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    if !meta.is_file() {
+        return Err(Error::Parse {
+            path: path.to_path_buf(),
+            message: "not a regular file".into(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    decode_bytes(path, &bytes, encoding, true)
+}
+
+/// Decodes an image file's bytes (not cached); `path` names it in errors and
+/// gives the extension. EXR is read from the file itself, so it needs
+/// `on_disk`.
+pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool) -> Result<TexImage> {
+    let perr = |m: String| Error::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let mut h = Fnv64::default();
+    h.bytes(bytes);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext == "exr" || ext == "pfm" {
+        let film = if ext == "pfm" {
+            crate::image_io::read_pfm(bytes).map_err(perr)?
+        } else if on_disk {
+            crate::image_io::read_image(path)?
+        } else {
+            return Err(perr("EXR textures are read from files on disk only".into()));
+        };
+        if film.width == 0 || film.height == 0 {
+            return Err(perr("the image is empty".into()));
+        }
+        if film.pixels.iter().any(|p| !p.is_finite()) {
+            return Err(perr("the image holds a value that is not a finite number".into()));
+        }
+        return Ok(TexImage::finish(
+            path.to_path_buf(),
+            film.width,
+            film.height,
+            film.pixels,
+            h.0,
+            false,
+            Encoding::Linear,
+        ));
+    }
+    let mut reader = ::image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| perr(e.to_string()))?;
+    if reader.format().is_none() {
+        // TGA has no signature: trust the extension.
+        match ::image::ImageFormat::from_path(path) {
+            Ok(f) if f.reading_enabled() => reader.set_format(f),
+            _ => {
+                return Err(perr(
+                    "not an image file of a known format (PNG, JPEG, TGA, EXR, PFM)".into(),
+                ))
+            }
+        }
+    }
+    let img = reader
+        .decode()
+        .map_err(|e| perr(format!("cannot decode the image: {e}")))?;
+    let (width, height) = (img.width(), img.height());
+    if width == 0 || height == 0 {
+        return Err(perr("the image is empty".into()));
+    }
+    use ::image::DynamicImage as D;
+    let integer = !matches!(img, D::ImageRgb32F(_) | D::ImageRgba32F(_));
+    let rgb = img.to_rgb32f();
+    let enc = if integer { encoding } else { Encoding::Linear };
+    // 8-bit images go through a table; 16-bit ones are decoded per value.
+    let table: Option<Vec<f32>> = matches!(img.color().bytes_per_pixel() / img.color().channel_count(), 1)
+        .then(|| (0..256).map(|i| enc.to_linear(i as f32 / 255.0)).collect());
+    let lin = |v: f32| match &table {
+        Some(t) => t[(v * 255.0).round().clamp(0.0, 255.0) as usize],
+        None => enc.to_linear(v),
+    };
+    let pixels = rgb
+        .pixels()
+        .map(|p| Vec3::new(lin(p.0[0]), lin(p.0[1]), lin(p.0[2])))
+        .collect();
+    h.bytes(&[enc.key().0]);
+    h.bytes(&enc.key().1.to_le_bytes());
+    Ok(TexImage::finish(
+        path.to_path_buf(),
+        width,
+        height,
+        pixels,
+        h.0,
+        integer,
+        enc,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::Film;
+
+    fn two_texels() -> ImageTexture {
+        // One row: black on the left, white on the right.
+        let img = TexImage::from_pixels("two", 2, 1, vec![Vec3::ZERO, Vec3::ONE]);
+        ImageTexture::new(Arc::new(img), &ImageOptions::default())
+    }
+
+    #[test]
+    fn bilinear_lookup_between_two_texels() {
+        let mut t = two_texels();
+        t.wrap = WrapMode::Clamp;
+        // Texel centres at u = 0.25 and 0.75; halfway between them, half.
+        assert_eq!(t.evaluate(Vec2::new(0.25, 0.5)), Vec3::ZERO);
+        assert_eq!(t.evaluate(Vec2::new(0.75, 0.5)), Vec3::ONE);
+        assert!((t.evaluate(Vec2::new(0.5, 0.5)) - Vec3::splat(0.5)).abs().max_element() < 1e-6);
+        assert!(
+            (t.evaluate(Vec2::new(0.375, 0.1)) - Vec3::splat(0.25))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        // Clamp holds the edge texels beyond the centres.
+        assert_eq!(t.evaluate(Vec2::new(0.0, 0.5)), Vec3::ZERO);
+        assert_eq!(t.evaluate(Vec2::new(1.0, 0.5)), Vec3::ONE);
+        assert_eq!(t.evaluate(Vec2::new(-3.0, 0.5)), Vec3::ZERO);
+        assert_eq!(t.max_value(), Vec3::ONE);
+    }
+
+    #[test]
+    fn wrap_modes_repeat_clamp_and_black() {
+        let mut t = two_texels();
+        // Repeat: u = 0 lies between the last texel and the first, wrapped.
+        t.wrap = WrapMode::Repeat;
+        assert!((t.evaluate(Vec2::new(0.0, 0.5)) - Vec3::splat(0.5)).abs().max_element() < 1e-6);
+        assert_eq!(t.evaluate(Vec2::new(1.75, 0.5)), Vec3::ONE);
+        assert_eq!(t.evaluate(Vec2::new(-0.75, 0.5)), Vec3::ZERO);
+        t.wrap = WrapMode::Clamp;
+        assert_eq!(t.evaluate(Vec2::new(1.75, 0.5)), Vec3::ONE);
+        t.wrap = WrapMode::Black;
+        assert_eq!(t.evaluate(Vec2::new(1.0, 0.5)), Vec3::splat(0.5));
+        assert_eq!(t.evaluate(Vec2::new(2.0, 0.5)), Vec3::ZERO);
+        // scale and invert, as pbrt-v4's imagemap.
+        t.wrap = WrapMode::Clamp;
+        t.scale = 0.5;
+        t.invert = true;
+        assert_eq!(t.evaluate(Vec2::new(0.75, 0.5)), Vec3::splat(0.5));
+        assert_eq!(t.evaluate(Vec2::new(0.25, 0.5)), Vec3::ONE);
+        assert_eq!(t.max_value(), Vec3::ONE);
+    }
+
+    #[test]
+    fn v_grows_upwards_from_the_bottom_row() {
+        // Two rows: top red, bottom blue.
+        let img = TexImage::from_pixels("rows", 1, 2, vec![Vec3::X, Vec3::Z]);
+        let t = ImageTexture::new(Arc::new(img), &ImageOptions::default());
+        assert_eq!(t.evaluate(Vec2::new(0.5, 0.25)), Vec3::Z);
+        assert_eq!(t.evaluate(Vec2::new(0.5, 0.75)), Vec3::X);
+    }
+
+    #[test]
+    fn encodings_decode_8_bit_values() {
+        assert!((Encoding::Srgb.to_linear(128.0 / 255.0) - 0.2158605).abs() < 1e-5);
+        assert_eq!(Encoding::Linear.to_linear(0.5), 0.5);
+        assert!((Encoding::parse("gamma 2.2").unwrap().to_linear(0.5) - 0.5f32.powf(2.2)).abs() < 1e-6);
+        assert_eq!(Encoding::parse("sRGB"), Some(Encoding::Srgb));
+        assert_eq!(Encoding::parse("gamma -1"), None);
+        assert_eq!(Encoding::parse("log"), None);
+    }
+
+    #[test]
+    fn png_jpeg_tga_pfm_and_exr_files_load_and_are_shared() {
+        let dir = tempfile::tempdir().unwrap();
+        // 2 x 2, top row (128, 0, 255) and (0, 0, 0), bottom row white and grey 64.
+        let px: [u8; 12] = [128, 0, 255, 0, 0, 0, 255, 255, 255, 64, 64, 64];
+        let png = dir.path().join("a.png");
+        ::image::save_buffer(&png, &px, 2, 2, ::image::ColorType::Rgb8).unwrap();
+        let img = load_image(&png, Encoding::Srgb).unwrap();
+        assert_eq!((img.width, img.height), (2, 2));
+        assert!((img.pixels[0] - Vec3::new(0.2158605, 0.0, 1.0)).abs().max_element() < 1e-5);
+        assert_eq!(img.pixels[2], Vec3::ONE);
+        // Loaded once: the same file and encoding give the same pixels.
+        assert!(Arc::ptr_eq(&img, &load_image(&png, Encoding::Srgb).unwrap()));
+        let linear = load_image(&png, Encoding::Linear).unwrap();
+        assert!((linear.pixels[0].x - 128.0 / 255.0).abs() < 1e-6);
+        assert_ne!(linear.hash, img.hash);
+        // The Debug form names the file and size, not the pixels.
+        let dbg = format!("{img:?}");
+        assert!(dbg.contains("a.png") && dbg.contains("2x2") && dbg.len() < 200, "{dbg}");
+
+        // The image's top-left texel is where v = 1, u = 0.
+        let t = ImageTexture::new(
+            img.clone(),
+            &ImageOptions {
+                wrap: WrapMode::Clamp,
+                ..Default::default()
+            },
+        );
+        assert!((t.evaluate(Vec2::new(0.0, 1.0)) - img.pixels[0]).abs().max_element() < 1e-6);
+        assert_eq!(t.evaluate(Vec2::new(0.0, 0.0)), Vec3::ONE);
+
+        for name in ["a.tga", "a.jpg"] {
+            let p = dir.path().join(name);
+            ::image::save_buffer(&p, &px, 2, 2, ::image::ColorType::Rgb8).unwrap();
+            let i = load_image(&p, Encoding::Srgb).unwrap();
+            assert_eq!((i.width, i.height), (2, 2), "{name}");
+            // JPEG is lossy (and 2 x 2 shares its colour): the white corner stays bright.
+            assert!(i.pixels[2].x > 0.8 && i.pixels[1].x < 0.1, "{name}: {:?}", i.pixels);
+            if name == "a.tga" {
+                assert_eq!(i.pixels, img.pixels);
+            }
+        }
+
+        let mut film = Film::new(3, 2);
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            *p = Vec3::new(i as f32, 2.5 * i as f32, 0.125);
+        }
+        for name in ["a.pfm", "a.exr"] {
+            let p = dir.path().join(name);
+            crate::image_io::write_image(&film, &p, 0.0).unwrap();
+            // Float images are linear whatever the encoding says.
+            let i = load_image(&p, Encoding::Srgb).unwrap();
+            assert_eq!((i.width, i.height), (3, 2), "{name}");
+            assert_eq!(i.pixels, film.pixels, "{name}");
+            assert_eq!(i.max, Vec3::new(5.0, 12.5, 0.125));
+            let t = ImageTexture::open(&p, &ImageOptions::default()).unwrap();
+            assert_eq!(t.max_value(), Vec3::new(5.0, 12.5, 0.125));
+        }
+    }
+
+    #[test]
+    fn missing_and_non_image_files_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = load_image(&dir.path().join("none.png"), Encoding::Srgb).unwrap_err();
+        assert!(matches!(e, Error::Io { .. }), "{e}");
+        let p = dir.path().join("text.png");
+        std::fs::write(&p, "not an image").unwrap();
+        let e = load_image(&p, Encoding::Srgb).unwrap_err().to_string();
+        assert!(e.contains("text.png") && !e.contains('\n'), "{e}");
+        let p = dir.path().join("bad.pfm");
+        std::fs::write(&p, "PF\n2 2\n-1\nxx").unwrap();
+        assert!(load_image(&p, Encoding::Srgb).is_err());
+    }
+}
