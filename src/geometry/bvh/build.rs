@@ -35,7 +35,7 @@ impl Bvh {
     /// With more than [`Bvh::MAX_TRIANGLES`] triangles.
     pub fn build(tris: &[Triangle]) -> Bvh {
         assert!(tris.len() <= Self::MAX_TRIANGLES, "too many triangles for the BVH");
-        let mut refs: Vec<PrimRef> = tris
+        let refs: Vec<PrimRef> = tris
             .par_iter()
             .map(|t| {
                 let [a, b, c] = t.vertices().map(Vec3A::from);
@@ -45,42 +45,66 @@ impl Bvh {
                 }
             })
             .collect();
-        let mut ids: Vec<u32> = (0..tris.len() as u32).collect();
-        let (bounds, cbounds) = bounds_of(&refs);
-        let prims = Prims {
-            refs: &mut refs,
-            ids: &mut ids,
-        };
-        let root = match plan_split(prims.refs, &bounds, &cbounds, 0) {
-            Some(split) => build_node(prims, 0, bounds, cbounds, split, 0),
-            None => BuildNode::Leaf {
-                start: 0,
-                count: tris.len(),
-            },
-        };
-        // The root is always a node, even over a single leaf.
-        let root = match root {
-            BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
-            inner => inner,
-        };
-        let mut nodes = Vec::with_capacity(tris.len() / 4 + 1);
-        let mut packet_slots = Vec::with_capacity(tris.len() / 2 + 1);
-        flatten(&root, &mut nodes, &mut packet_slots);
-        let packets = packet_slots
+        let tree = build_tree(refs);
+        let ids = tree.ids;
+        let packets = tree
+            .packet_slots
             .par_iter()
             .map(|&(first, count)| make_packet(first, count, &ids, tris))
             .collect();
         let order = ids;
-        Bvh { nodes, packets, order }
+        Bvh {
+            nodes: tree.nodes,
+            packets,
+            order,
+        }
     }
 }
 
-/// A triangle's bounds during the build (its input index lives beside it,
+/// A tree over boxes, before its leaves are filled: the nodes, each leaf
+/// packet's first slot and size (a leaf reference numbers its packets), and
+/// the input index of the primitive at each slot.
+pub(super) struct Tree {
+    pub(super) nodes: Vec<Node4>,
+    pub(super) packet_slots: Vec<(u32, u32)>,
+    pub(super) ids: Vec<u32>,
+}
+
+/// Builds the tree over the primitives' boxes; the triangle BVH and the
+/// BVH of analytic shapes (`BoxBvh`) share it.
+pub(super) fn build_tree(mut refs: Vec<PrimRef>) -> Tree {
+    let n = refs.len();
+    let mut ids: Vec<u32> = (0..n as u32).collect();
+    let (bounds, cbounds) = bounds_of(&refs);
+    let prims = Prims {
+        refs: &mut refs,
+        ids: &mut ids,
+    };
+    let root = match plan_split(prims.refs, &bounds, &cbounds, 0) {
+        Some(split) => build_node(prims, 0, bounds, cbounds, split, 0),
+        None => BuildNode::Leaf { start: 0, count: n },
+    };
+    // The root is always a node, even over a single leaf.
+    let root = match root {
+        BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
+        inner => inner,
+    };
+    let mut nodes = Vec::with_capacity(n / 4 + 1);
+    let mut packet_slots = Vec::with_capacity(n / 2 + 1);
+    flatten(&root, &mut nodes, &mut packet_slots);
+    Tree {
+        nodes,
+        packet_slots,
+        ids,
+    }
+}
+
+/// A primitive's bounds during the build (its input index lives beside it,
 /// in a separate array, to keep this at 32 bytes).
 #[derive(Clone, Copy)]
-struct PrimRef {
-    min: Vec3A,
-    max: Vec3A,
+pub(super) struct PrimRef {
+    pub(super) min: Vec3A,
+    pub(super) max: Vec3A,
 }
 
 impl PrimRef {
