@@ -59,7 +59,8 @@ impl BoxBvh {
                 }
             })
             .collect();
-        let tree = build_tree(refs);
+        // Shapes are tested one at a time: the SAH counts each.
+        let tree = build_tree::<1>(refs);
         BoxBvh {
             nodes: tree.nodes,
             packets: tree.packet_slots,
