@@ -68,7 +68,7 @@ impl Fnv64 {
 }
 
 /// Fingerprint of what a scene is made of: materials, triangles (with their
-/// vertex normals, so `--smooth` counts), spheres and lights, in description
+/// vertex normals, so `--smooth` counts), spheres, disks and lights, in description
 /// order, as raw f32 bits. With `camera`, the camera and image size too (a
 /// checkpoint's pixels depend on them; a photon map's photons do not). The
 /// scene's name and its recommended settings are left out: settings that
@@ -102,6 +102,25 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.vec3(s.sphere.centre);
         h.f32(s.sphere.radius);
         h.u32(s.material);
+    }
+    // Disks came later: a scene without them keeps the fingerprint it had.
+    if !desc.disks.is_empty() {
+        h.bytes(b"disks");
+        h.u32(desc.disks.len() as u32);
+        for d in &desc.disks {
+            h.vec3(d.centre);
+            h.vec3(d.normal);
+            h.f32(d.radius);
+            h.f32(d.inner_radius);
+            h.u32(d.material);
+            match d.axes {
+                Some(axes) => {
+                    h.u32(1);
+                    axes.iter().for_each(|&v| h.vec3(v));
+                }
+                None => h.u32(0),
+            }
+        }
     }
     h.u32(desc.lights.len() as u32);
     for l in &desc.lights {
@@ -486,5 +505,29 @@ mod tests {
         let mut d = a.clone();
         d.set_light_radius(0.0);
         assert_ne!(scene_fingerprint(&a, false), scene_fingerprint(&d, false));
+    }
+
+    #[test]
+    fn scene_fingerprint_sees_disks() {
+        use crate::math::Vec3;
+        use crate::scene::DiskDesc;
+        let a = crate::scene::builtin::cornell();
+        let mut b = a.clone();
+        b.disks.push(DiskDesc::new(Vec3::ZERO, Vec3::Y, 0.5, 0.0, 0));
+        let fb = scene_fingerprint(&b, false);
+        assert_ne!(scene_fingerprint(&a, false), fb);
+        let changes: [fn(&mut DiskDesc); 6] = [
+            |d| d.centre.x += 1e-6,
+            |d| d.normal = Vec3::new(0.0, 1.0, 1e-6),
+            |d| d.radius = 0.5001,
+            |d| d.inner_radius = 0.1,
+            |d| d.material = 1,
+            |d| d.axes = Some([Vec3::X, Vec3::Z]),
+        ];
+        for change in changes {
+            let mut c = b.clone();
+            change(&mut c.disks[0]);
+            assert_ne!(scene_fingerprint(&c, false), fb);
+        }
     }
 }

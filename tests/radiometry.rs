@@ -30,6 +30,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         materials: vec![],
         triangles: vec![],
         spheres: vec![],
+        disks: vec![],
         lights: vec![light],
         settings: SceneSettings::default(),
     };

@@ -50,6 +50,7 @@ pub fn place_and_build(mesh: &Mesh) {
         materials: vec![],
         triangles: vec![],
         spheres: vec![],
+        disks: vec![],
         lights: vec![],
         settings: SceneSettings::default(),
     };

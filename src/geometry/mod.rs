@@ -1,9 +1,12 @@
-//! Shapes and the acceleration structure: triangles, spheres and the BVH.
+//! Shapes and the acceleration structures: triangles, spheres, disks, the
+//! triangle BVH and the BVH over the analytic shapes' boxes.
 
 pub mod bvh;
+pub mod disk;
 pub mod sphere;
 pub mod triangle;
 
-pub use bvh::{Bvh, BvhStats};
+pub use bvh::{BoxBvh, Bvh, BvhStats};
+pub use disk::Disk;
 pub use sphere::Sphere;
 pub use triangle::{Triangle, TriangleTest};

@@ -11,7 +11,7 @@ pub mod transform;
 use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::{Bvh, Sphere, Triangle};
+use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::material::SurfacePoint;
@@ -94,6 +94,63 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
+/// A disk or annulus (pbrt-v4's `disk` shape) in world space. A ray meets
+/// it from either side and it is shaded on both; `normal` is its geometric
+/// normal (the front, for one-sided emission). Texture coordinates and dp/du
+/// are pbrt-v4's: u = phi / 2 pi with phi the angle from `axes[0]` towards
+/// `axes[1]`, v = (radius - r) / (radius - inner_radius) at distance r from
+/// the centre, dp/du = 2 pi (x axes[1] - y axes[0]) at coordinates (x, y)
+/// along the axes.
+///
+/// From pbrt-v4's `Shape "disk"` (`height` h, `radius` r, `innerradius` ri)
+/// under a rotation, uniform scale s and translation M (world from object):
+///
+/// - `centre` = M (0, 0, h); `radius` = s r; `inner_radius` = s ri;
+/// - `axes` = `Some([M (1, 0, 0) / s, M (0, 1, 0) / s])`, the images of the
+///   object's x and y axes;
+/// - `normal` = M (0, 0, 1) / s carried as a normal, negated when
+///   `ReverseOrientation` xor M swaps handedness
+///   (`pbrt::ir::Shape::flips_normals`); equivalently
+///   `axes[0] x axes[1]`, negated under `ReverseOrientation` alone.
+///
+/// Mirroring the scene (as the pbrt converter does) maps `centre` as a point
+/// and `normal` and both `axes` as vectors; the texture then stays on the
+/// mirrored surface as it was. `Scene::build` normalises `normal`,
+/// orthonormalises `axes` within the disk's plane, and refuses a radius not
+/// > 0, an inner radius outside [0, radius) and a zero normal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiskDesc {
+    pub centre: Vec3,
+    pub normal: Vec3,
+    pub radius: f32,
+    /// Radius of the hole; 0 for a full disk.
+    pub inner_radius: f32,
+    pub material: u32,
+    /// World directions of phi = 0 and phi = pi / 2; `None`:
+    /// `math::orthonormal_basis(normal)`, which for normal +z is the x and y
+    /// axes (pbrt's disk without a transformation).
+    pub axes: Option<[Vec3; 2]>,
+}
+
+impl DiskDesc {
+    /// A disk with the default axes.
+    pub fn new(centre: Vec3, normal: Vec3, radius: f32, inner_radius: f32, material: u32) -> DiskDesc {
+        DiskDesc {
+            centre,
+            normal,
+            radius,
+            inner_radius,
+            material,
+            axes: None,
+        }
+    }
+
+    /// The disk it describes, or what is wrong with it.
+    pub fn disk(&self) -> std::result::Result<Disk, String> {
+        Disk::new(self.centre, self.normal, self.radius, self.inner_radius, self.axes)
+    }
+}
+
 /// Everything needed to build a scene, before any acceleration structure.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDesc {
@@ -102,6 +159,7 @@ pub struct SceneDesc {
     pub materials: Vec<(String, Material)>,
     pub triangles: Vec<TriangleDesc>,
     pub spheres: Vec<SphereDesc>,
+    pub disks: Vec<DiskDesc>,
     pub lights: Vec<Light>,
     /// The render settings the scene recommends: its file's and its preset's.
     pub settings: SceneSettings,
@@ -116,6 +174,7 @@ impl SceneDesc {
             materials: vec![],
             triangles: vec![],
             spheres: vec![],
+            disks: vec![],
             lights: vec![],
             settings: SceneSettings::default(),
         }
@@ -159,6 +218,7 @@ impl SceneDesc {
 pub enum PrimKind {
     Triangle,
     Sphere,
+    Disk,
     Light,
 }
 
@@ -197,8 +257,9 @@ pub struct Hit {
     /// The surface's dp/du (not normalised), for anisotropic BSDFs.
     pub dpdu: Vec3,
     pub material: u32,
-    /// Object id: the triangle's index in the description, or
-    /// triangle count + sphere index for spheres.
+    /// Object id: the triangle's index in the description; triangle count +
+    /// sphere index for spheres; triangle count + sphere count + disk index
+    /// for disks; for lights, triangle + sphere + disk count + light index.
     pub object: u32,
     pub kind: PrimKind,
     /// Index into `Scene::lights` when the hit is on an emitter.
@@ -221,6 +282,22 @@ struct SphereObject {
     light: Option<u32>,
 }
 
+#[derive(Clone, Debug)]
+struct DiskObject {
+    disk: Disk,
+    material: u32,
+    light: Option<u32>,
+}
+
+/// The primitive a closest-hit query found.
+#[derive(Clone, Copy)]
+enum Found {
+    /// A triangle's slot in BVH order and the hit's barycentrics.
+    Triangle(usize, f32, f32),
+    /// An index into `Scene::spheres`, then `Scene::disks` (`Scene::shapes`' ids).
+    Shape(u32),
+}
+
 /// A scene ready to render.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -240,7 +317,12 @@ pub struct Scene {
     info: Vec<TriInfo>,
     vertex_normals: Vec<Option<[Vec3; 3]>>,
     vertex_uvs: Vec<Option<[Vec2; 3]>>,
+    /// Spheres: the description's, then the lights'.
     spheres: Vec<SphereObject>,
+    disks: Vec<DiskObject>,
+    /// The BVH over spheres and disks: id i < spheres.len() is sphere i,
+    /// the rest are disks.
+    shapes: BoxBvh,
     /// Triangles dropped for zero area or non-finite coordinates.
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
@@ -309,6 +391,25 @@ impl Scene {
                 return Err(Error::Scene(format!("invalid sphere {:?}", s.sphere)));
             }
         }
+        let disks = desc
+            .disks
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                if d.material >= nmat {
+                    return Err(Error::Scene(format!(
+                        "disk {i} names material {} of {nmat}",
+                        d.material
+                    )));
+                }
+                let disk = d.disk().map_err(|m| Error::Scene(format!("disk {i}: {m}")))?;
+                Ok(DiskObject {
+                    disk,
+                    material: d.material,
+                    light: None,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         let black = nmat;
         let mut materials: Vec<Material> = desc.materials.iter().map(|(_, m)| m.clone()).collect();
         let mut names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
@@ -340,7 +441,7 @@ impl Scene {
                     tris.push(tri);
                     info.push(TriInfo {
                         material: black,
-                        object: (desc.triangles.len() + desc.spheres.len() + i) as u32,
+                        object: (desc.triangles.len() + desc.spheres.len() + desc.disks.len() + i) as u32,
                         normal: n.normalize(),
                         light: Some(i as u32),
                     });
@@ -370,6 +471,7 @@ impl Scene {
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
+        let shapes = shape_bvh(&spheres, &disks)?;
         let mut scene = Scene {
             name: desc.name.clone(),
             camera,
@@ -384,6 +486,8 @@ impl Scene {
             vertex_normals,
             vertex_uvs,
             spheres,
+            disks,
+            shapes,
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
@@ -465,51 +569,22 @@ impl Scene {
         let mut best = None;
         if let Some((slot, h)) = self.bvh.intersect(ray, t_min, t_max) {
             best_t = h.t;
-            best = Some((true, slot as usize, h.u, h.v));
+            best = Some(Found::Triangle(slot as usize, h.u, h.v));
         }
-        for (i, s) in self.spheres.iter().enumerate() {
-            if let Some(t) = s.sphere.intersect(ray, t_min, best_t) {
-                best_t = t;
-                best = Some((false, i, 0.0, 0.0));
-            }
+        if let Some((id, t)) = self
+            .shapes
+            .intersect(ray, t_min, best_t, |id, t_max| self.shape_hit(id, ray, t_min, t_max))
+        {
+            best_t = t;
+            best = Some(Found::Shape(id));
         }
-        let (is_tri, idx, u, v) = best?;
         let p = ray.at(best_t);
-        if is_tri {
-            let inf = &self.info[idx];
-            let ns = match &self.vertex_normals[idx] {
-                Some(n) => {
-                    let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
-                    // Keep the interpolated normal on the geometric side.
-                    if s == Vec3::ZERO {
-                        inf.normal
-                    } else if s.dot(inf.normal) < 0.0 {
-                        -s
-                    } else {
-                        s
-                    }
-                }
-                None => inf.normal,
-            };
-            let (uv, dpdu) = self.triangle_uv(idx, u, v);
-            Some(Hit {
-                t: best_t,
-                p,
-                ng: inf.normal,
-                ns,
-                uv,
-                dpdu,
-                material: inf.material,
-                object: inf.object,
-                kind: if inf.light.is_some() {
-                    PrimKind::Light
-                } else {
-                    PrimKind::Triangle
-                },
-                light: inf.light,
-            })
-        } else {
-            let s = &self.spheres[idx];
+        let idx = match best? {
+            Found::Triangle(slot, u, v) => return Some(self.triangle_hit(slot, u, v, best_t, p)),
+            Found::Shape(id) => id as usize,
+        };
+        let before = self.desc.triangles.len() + self.desc.spheres.len() + self.desc.disks.len();
+        if let Some(s) = self.spheres.get(idx) {
             let n = (p - s.sphere.centre) / s.sphere.radius;
             // pbrt-v4's sphere parametrisation about the z axis.
             let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
@@ -518,7 +593,7 @@ impl Scene {
                 1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
             );
             let dpdu = Vec3::new(-n.y, n.x, 0.0) * (std::f32::consts::TAU * s.sphere.radius);
-            Some(Hit {
+            return Some(Hit {
                 t: best_t,
                 p,
                 ng: n,
@@ -526,14 +601,95 @@ impl Scene {
                 uv,
                 dpdu,
                 material: s.material,
-                object: (self.desc.triangles.len() + idx) as u32,
+                object: match s.light {
+                    Some(l) => (before + l as usize) as u32,
+                    None => (self.desc.triangles.len() + idx) as u32,
+                },
                 kind: if s.light.is_some() {
                     PrimKind::Light
                 } else {
                     PrimKind::Sphere
                 },
                 light: s.light,
-            })
+            });
+        }
+        let j = idx - self.spheres.len();
+        let d = &self.disks[j];
+        let (uv, dpdu) = d.disk.uv_dpdu(p);
+        Some(Hit {
+            t: best_t,
+            p,
+            ng: d.disk.normal,
+            ns: d.disk.normal,
+            uv,
+            dpdu,
+            material: d.material,
+            object: match d.light {
+                Some(l) => (before + l as usize) as u32,
+                None => (self.desc.triangles.len() + self.desc.spheres.len() + j) as u32,
+            },
+            kind: if d.light.is_some() {
+                PrimKind::Light
+            } else {
+                PrimKind::Disk
+            },
+            light: d.light,
+        })
+    }
+
+    /// Shape `id` of `shapes` (a sphere, then a disk): its hit in (t_min, t_max).
+    #[inline(always)]
+    fn shape_hit(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        match self.spheres.get(id as usize) {
+            Some(s) => s.sphere.intersect(ray, t_min, t_max),
+            None => self.disks[id as usize - self.spheres.len()]
+                .disk
+                .intersect(ray, t_min, t_max),
+        }
+    }
+
+    /// The light shape `id` of `shapes` emits for, if any.
+    #[inline(always)]
+    fn shape_light(&self, id: u32) -> Option<u32> {
+        match self.spheres.get(id as usize) {
+            Some(s) => s.light,
+            None => self.disks[id as usize - self.spheres.len()].light,
+        }
+    }
+
+    /// The hit record of triangle `slot` (BVH order) at barycentrics (u, v).
+    fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
+        let inf = &self.info[idx];
+        let ns = match &self.vertex_normals[idx] {
+            Some(n) => {
+                let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
+                // Keep the interpolated normal on the geometric side.
+                if s == Vec3::ZERO {
+                    inf.normal
+                } else if s.dot(inf.normal) < 0.0 {
+                    -s
+                } else {
+                    s
+                }
+            }
+            None => inf.normal,
+        };
+        let (uv, dpdu) = self.triangle_uv(idx, u, v);
+        Hit {
+            t,
+            p,
+            ng: inf.normal,
+            ns,
+            uv,
+            dpdu,
+            material: inf.material,
+            object: inf.object,
+            kind: if inf.light.is_some() {
+                PrimKind::Light
+            } else {
+                PrimKind::Triangle
+            },
+            light: inf.light,
         }
     }
 
@@ -560,22 +716,20 @@ impl Scene {
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.spheres
-            .iter()
-            .any(|s| s.sphere.intersect(ray, t_min, t_max).is_some())
+        self.shapes
+            .occluded(ray, t_min, t_max, |id| self.shape_hit(id, ray, t_min, t_max).is_some())
             || self.bvh.occluded(ray, t_min, t_max)
     }
 
-    /// Whether anything but light `light`'s own sphere blocks the segment: the
-    /// shadow test towards a point sampled on that light. The light itself is
-    /// left out because near its silhouette the sampled point's distance is
-    /// ill-conditioned (a tangent ray), and a relative epsilon on `t_max` then
-    /// lets the light shadow itself.
+    /// Whether anything but light `light`'s own sphere (or disk) blocks the
+    /// segment: the shadow test towards a point sampled on that light. The
+    /// light itself is left out because near its silhouette the sampled
+    /// point's distance is ill-conditioned (a tangent ray), and a relative
+    /// epsilon on `t_max` then lets the light shadow itself.
     pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
-        self.spheres
-            .iter()
-            .any(|s| s.light != Some(light) && s.sphere.intersect(ray, t_min, t_max).is_some())
-            || self.bvh.occluded(ray, t_min, t_max)
+        self.shapes.occluded(ray, t_min, t_max, |id| {
+            self.shape_light(id) != Some(light) && self.shape_hit(id, ray, t_min, t_max).is_some()
+        }) || self.bvh.occluded(ray, t_min, t_max)
     }
 
     pub fn material(&self, id: u32) -> &Material {
@@ -583,8 +737,9 @@ impl Scene {
     }
 
     /// Moves light `index` (and the sphere it emits from) to `position`,
-    /// keeping its size and power. The BVH holds no lights, so nothing is
-    /// rebuilt; an index out of range changes nothing.
+    /// keeping its size and power. The triangle BVH holds no sphere lights,
+    /// so only the small BVH over spheres and disks is rebuilt; an index out
+    /// of range changes nothing.
     pub fn move_light(&mut self, index: usize, position: Vec3) {
         let Some(light) = self.lights.get_mut(index) else {
             return;
@@ -602,6 +757,10 @@ impl Scene {
                 s.sphere.centre = position;
             }
         }
+        // The count is unchanged, so this cannot fail.
+        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks) {
+            self.shapes = shapes;
+        }
     }
 
     /// Bounding box of all geometry (triangles, spheres and lights).
@@ -614,9 +773,29 @@ impl Scene {
         for s in &self.spheres {
             b = b.union(&s.sphere.bounds());
         }
+        for d in &self.disks {
+            b = b.union(&d.disk.bounds());
+        }
         for l in self.lights.iter().filter(|l| !l.is_infinite()) {
             b.grow(l.position());
         }
         b
     }
+}
+
+/// The BVH over the spheres' and the disks' boxes (ids: spheres, then disks).
+fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject]) -> Result<BoxBvh> {
+    let boxes: Vec<crate::math::Aabb> = spheres
+        .iter()
+        .map(|s| s.sphere.bounds())
+        .chain(disks.iter().map(|d| d.disk.bounds()))
+        .collect();
+    if boxes.len() > BoxBvh::MAX_BOXES {
+        return Err(Error::Scene(format!(
+            "{} spheres and disks; the BVH holds at most {}",
+            boxes.len(),
+            BoxBvh::MAX_BOXES
+        )));
+    }
+    Ok(BoxBvh::build(&boxes))
 }

@@ -35,7 +35,7 @@ impl Bvh {
     /// With more than [`Bvh::MAX_TRIANGLES`] triangles.
     pub fn build(tris: &[Triangle]) -> Bvh {
         assert!(tris.len() <= Self::MAX_TRIANGLES, "too many triangles for the BVH");
-        let mut refs: Vec<PrimRef> = tris
+        let refs: Vec<PrimRef> = tris
             .par_iter()
             .map(|t| {
                 let [a, b, c] = t.vertices().map(Vec3A::from);
@@ -45,42 +45,68 @@ impl Bvh {
                 }
             })
             .collect();
-        let mut ids: Vec<u32> = (0..tris.len() as u32).collect();
-        let (bounds, cbounds) = bounds_of(&refs);
-        let prims = Prims {
-            refs: &mut refs,
-            ids: &mut ids,
-        };
-        let root = match plan_split(prims.refs, &bounds, &cbounds, 0) {
-            Some(split) => build_node(prims, 0, bounds, cbounds, split, 0),
-            None => BuildNode::Leaf {
-                start: 0,
-                count: tris.len(),
-            },
-        };
-        // The root is always a node, even over a single leaf.
-        let root = match root {
-            BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
-            inner => inner,
-        };
-        let mut nodes = Vec::with_capacity(tris.len() / 4 + 1);
-        let mut packet_slots = Vec::with_capacity(tris.len() / 2 + 1);
-        flatten(&root, &mut nodes, &mut packet_slots);
-        let packets = packet_slots
+        let tree = build_tree::<{ WIDTH as u32 }>(refs);
+        let ids = tree.ids;
+        let packets = tree
+            .packet_slots
             .par_iter()
             .map(|&(first, count)| make_packet(first, count, &ids, tris))
             .collect();
         let order = ids;
-        Bvh { nodes, packets, order }
+        Bvh {
+            nodes: tree.nodes,
+            packets,
+            order,
+        }
     }
 }
 
-/// A triangle's bounds during the build (its input index lives beside it,
+/// A tree over boxes, before its leaves are filled: the nodes, each leaf
+/// packet's first slot and size (a leaf reference numbers its packets), and
+/// the input index of the primitive at each slot.
+pub(super) struct Tree {
+    pub(super) nodes: Vec<Node4>,
+    pub(super) packet_slots: Vec<(u32, u32)>,
+    pub(super) ids: Vec<u32>,
+}
+
+/// Builds the tree over the primitives' boxes; the triangle BVH and the
+/// BVH of analytic shapes (`BoxBvh`) share it. `P` is how many primitives a
+/// leaf tests at once, for the SAH's leaf cost: 4 for triangle packets, 1
+/// for shapes tested one by one.
+pub(super) fn build_tree<const P: u32>(mut refs: Vec<PrimRef>) -> Tree {
+    let n = refs.len();
+    let mut ids: Vec<u32> = (0..n as u32).collect();
+    let (bounds, cbounds) = bounds_of(&refs);
+    let prims = Prims {
+        refs: &mut refs,
+        ids: &mut ids,
+    };
+    let root = match plan_split::<P>(prims.refs, &bounds, &cbounds, 0) {
+        Some(split) => build_node::<P>(prims, 0, bounds, cbounds, split, 0),
+        None => BuildNode::Leaf { start: 0, count: n },
+    };
+    // The root is always a node, even over a single leaf.
+    let root = match root {
+        BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
+        inner => inner,
+    };
+    let mut nodes = Vec::with_capacity(n / 4 + 1);
+    let mut packet_slots = Vec::with_capacity(n / 2 + 1);
+    flatten(&root, &mut nodes, &mut packet_slots);
+    Tree {
+        nodes,
+        packet_slots,
+        ids,
+    }
+}
+
+/// A primitive's bounds during the build (its input index lives beside it,
 /// in a separate array, to keep this at 32 bytes).
 #[derive(Clone, Copy)]
-struct PrimRef {
-    min: Vec3A,
-    max: Vec3A,
+pub(super) struct PrimRef {
+    pub(super) min: Vec3A,
+    pub(super) max: Vec3A,
 }
 
 impl PrimRef {
@@ -163,10 +189,10 @@ fn bounds_of(refs: &[PrimRef]) -> (Bounds3, Bounds3) {
     (b, c)
 }
 
-/// Packets a leaf of `n` triangles needs.
+/// Tests (packets of `P`) a leaf of `n` primitives needs.
 #[inline(always)]
-fn blocks(n: u32) -> f32 {
-    n.div_ceil(WIDTH as u32) as f32
+fn blocks<const P: u32>(n: u32) -> f32 {
+    n.div_ceil(P) as f32
 }
 
 /// How a set of triangles is cut in two.
@@ -262,7 +288,7 @@ impl<const N: usize> Bins<N> {
     }
 
     /// The cheapest plane: (SAH cost without the constant factors, split).
-    fn best_split(&self, cbounds: &Bounds3, scale: Vec3A) -> Option<(f32, Split)> {
+    fn best_split<const P: u32>(&self, cbounds: &Bounds3, scale: Vec3A) -> Option<(f32, Split)> {
         let ext = cbounds.max - cbounds.min;
         let mut best: Option<(f32, Split)> = None;
         for axis in 0..3 {
@@ -278,7 +304,7 @@ impl<const N: usize> Bins<N> {
                 acc = acc.union(bounds[i]);
                 cnt += counts[i];
                 if cnt > 0 {
-                    right_cost[i] = acc.half_area() * blocks(cnt);
+                    right_cost[i] = acc.half_area() * blocks::<P>(cnt);
                 }
             }
             let mut acc = Bounds3::EMPTY;
@@ -289,7 +315,7 @@ impl<const N: usize> Bins<N> {
                 if cnt == 0 || right_cost[i + 1].is_infinite() {
                     continue;
                 }
-                let cost = acc.half_area() * blocks(cnt) + right_cost[i + 1];
+                let cost = acc.half_area() * blocks::<P>(cnt) + right_cost[i + 1];
                 if best.is_none_or(|b| cost < b.0) {
                     let split = Split::Plane {
                         axis,
@@ -307,7 +333,7 @@ impl<const N: usize> Bins<N> {
 }
 
 /// Bins the triangles into `N` bins per axis and finds the cheapest plane.
-fn binned_split<const N: usize>(refs: &[PrimRef], cbounds: &Bounds3) -> Option<(f32, Split)> {
+fn binned_split<const N: usize, const P: u32>(refs: &[PrimRef], cbounds: &Bounds3) -> Option<(f32, Split)> {
     let ext = cbounds.max - cbounds.min;
     // Slightly under N / extent, so the largest centroid lands in bin N - 1.
     let scale = Vec3A::select(
@@ -324,11 +350,11 @@ fn binned_split<const N: usize>(refs: &[PrimRef], cbounds: &Bounds3) -> Option<(
     } else {
         Bins::<N>::new().fill(refs, cbounds.min, scale)
     };
-    bins.best_split(cbounds, scale)
+    bins.best_split::<P>(cbounds, scale)
 }
 
 /// The split to make, or `None` when the triangles should stay one leaf.
-fn plan_split(refs: &[PrimRef], bounds: &Bounds3, cbounds: &Bounds3, depth: usize) -> Option<Split> {
+fn plan_split<const P: u32>(refs: &[PrimRef], bounds: &Bounds3, cbounds: &Bounds3, depth: usize) -> Option<Split> {
     let n = refs.len();
     // Up to one packet, a leaf always wins: a split costs a traversal step
     // more and still tests at least one packet on each side.
@@ -340,15 +366,15 @@ fn plan_split(refs: &[PrimRef], bounds: &Bounds3, cbounds: &Bounds3, depth: usiz
     }
     // Small nodes need fewer bins; clearing and sweeping 32 would dominate.
     let best = match n {
-        0..=16 => binned_split::<8>(refs, cbounds),
-        17..=64 => binned_split::<16>(refs, cbounds),
-        _ => binned_split::<BINS>(refs, cbounds),
+        0..=16 => binned_split::<8, P>(refs, cbounds),
+        17..=64 => binned_split::<16, P>(refs, cbounds),
+        _ => binned_split::<BINS, P>(refs, cbounds),
     };
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
     match best {
         Some((cost, split)) => {
             let split_cost = TRAVERSAL_COST + INTERSECT_COST * cost / area;
-            let leaf_cost = INTERSECT_COST * blocks(n as u32);
+            let leaf_cost = INTERSECT_COST * blocks::<P>(n as u32);
             (split_cost < leaf_cost || n > MAX_LEAF).then_some(split)
         }
         // All centroids coincide: only a split by count bounds the leaf size.
@@ -377,7 +403,7 @@ struct Pending {
 
 /// Builds the node over `prims` (which start at `start` in the build order),
 /// whose first cut is `split`.
-fn build_node(
+fn build_node<const P: u32>(
     mut prims: Prims,
     start: usize,
     bounds: Bounds3,
@@ -415,7 +441,7 @@ fn build_node(
                 end: b,
                 bounds,
                 cbounds,
-                split: plan_split(&prims.refs[a..b], &bounds, &cbounds, depth),
+                split: plan_split::<P>(&prims.refs[a..b], &bounds, &cbounds, depth),
             }
         };
         let (left, right) = (side(s, mid), side(mid, e));
@@ -436,7 +462,7 @@ fn build_node(
     }
     let build = |(part, c): (Prims, &Pending)| {
         let node = match c.split {
-            Some(split) => build_node(part, start + c.start, c.bounds, c.cbounds, split, depth + 1),
+            Some(split) => build_node::<P>(part, start + c.start, c.bounds, c.cbounds, split, depth + 1),
             None => BuildNode::Leaf {
                 start: start + c.start,
                 count: c.end - c.start,

@@ -7,7 +7,11 @@
 //! reasons: the build trades build time against tree quality, the traversal is
 //! the render's innermost loop and must agree bit for bit with
 //! `Triangle::intersect_mt`; either can be read, tuned and tested alone.
+//!
+//! `BoxBvh` (in `boxes`) is the same tree over bounding boxes, for the
+//! analytic shapes: it shares the build and the box test, not the leaves.
 
+mod boxes;
 mod build;
 mod traverse;
 
@@ -16,6 +20,8 @@ mod tests;
 
 use crate::math::{Aabb, Vec3};
 use glam::Vec4;
+
+pub use boxes::BoxBvh;
 
 /// Children of one node and triangles of one leaf packet.
 const WIDTH: usize = 4;

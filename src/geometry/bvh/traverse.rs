@@ -23,7 +23,7 @@ use glam::{BVec4A, Vec4};
 
 /// Traversal stack entries: at most three pushes per level of a tree at most
 /// SAH_DEPTH + 16 levels deep (halving by count four ways).
-const STACK: usize = 3 * (SAH_DEPTH + 16) + 1;
+pub(super) const STACK: usize = 3 * (SAH_DEPTH + 16) + 1;
 
 impl Bvh {
     /// Closest hit in (t_min, t_max): the slot of the triangle and the hit.
@@ -120,7 +120,7 @@ impl Bvh {
 /// A ray prepared for box and packet tests: its origin and direction in all
 /// lanes, the reciprocal direction, which box plane is near on each axis,
 /// and the origin the near and far planes are measured from.
-struct TraversalRay {
+pub(super) struct TraversalRay {
     o: [Vec4; 3],
     d: [Vec4; 3],
     inv_d: [Vec4; 3],
@@ -139,7 +139,7 @@ const FAR_WIDEN: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32
 
 impl TraversalRay {
     #[inline(always)]
-    fn new(ray: &Ray, t_min: f32) -> Self {
+    pub(super) fn new(ray: &Ray, t_min: f32) -> Self {
         let o = ray.o.to_array();
         let d = ray.d.to_array();
         let mut inv = [0.0; 3];
@@ -176,7 +176,7 @@ impl TraversalRay {
     /// Which of the four child boxes the ray enters within (t_min, t_max)
     /// (bit i for lane i), and the entry distances.
     #[inline(always)]
-    fn hit_boxes(&self, node: &Node4, t_max: f32) -> (u32, Vec4) {
+    pub(super) fn hit_boxes(&self, node: &Node4, t_max: f32) -> (u32, Vec4) {
         let b = &node.bounds;
         let slab = |axis: usize| {
             let near = self.near[axis] as usize;

@@ -1,5 +1,5 @@
 //! Scene files in TOML: camera, settings, named materials, lights and shapes
-//! (quads, boxes, triangles, spheres, meshes). The format, with every key and
+//! (quads, boxes, triangles, spheres, disks, meshes). The format, with every key and
 //! its default, is described in `docs/scene-format.md`.
 //!
 //! Unknown keys are errors, and every error names the file and the line: the
@@ -10,7 +10,7 @@
 
 use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::transform::{Fit, Transform};
-use super::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use super::{CameraDesc, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
@@ -245,6 +245,16 @@ fn shapes(
                     sphere: Sphere { centre, radius },
                     material: mat.unwrap_or(0),
                 });
+            }
+            ShapeKind::Disk => {
+                let centre = s.centre.ok_or_else(|| need("centre"))?.0;
+                let normal = s.normal.ok_or_else(|| need("normal"))?.0;
+                let radius = s.radius.ok_or_else(|| need("radius"))?.0;
+                let inner_radius = s.inner_radius.map_or(0.0, |r| r.0);
+                let d = DiskDesc::new(centre, normal, radius, inner_radius, mat.unwrap_or(0));
+                // The checks `Scene::build` makes, reported at the shape's line.
+                d.disk().map_err(err)?;
+                desc.disks.push(d);
             }
             ShapeKind::Mesh => {
                 let file_path = s.path.as_ref().ok_or_else(|| need("path"))?;

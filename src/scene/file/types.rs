@@ -117,6 +117,7 @@ pub(super) enum ShapeKind {
     Quad,
     Box,
     Sphere,
+    Disk,
     Mesh,
 }
 
@@ -148,6 +149,8 @@ pub(super) struct ShapeSpec {
     pub(super) max: Option<Vec3Spec>,
     pub(super) centre: Option<Vec3Spec>,
     pub(super) radius: Option<Num>,
+    pub(super) normal: Option<Vec3Spec>,
+    pub(super) inner_radius: Option<Num>,
     pub(super) path: Option<String>,
     pub(super) scale: Option<ScaleSpec>,
     pub(super) rotate: Option<Vec3Spec>,
@@ -158,7 +161,7 @@ pub(super) struct ShapeSpec {
 
 impl ShapeSpec {
     /// The optional keys that are present, by name.
-    pub(super) fn given(&self) -> [(&'static str, bool); 14] {
+    pub(super) fn given(&self) -> [(&'static str, bool); 16] {
         [
             ("uvs", self.uvs.is_some()),
             ("material", self.material.is_some()),
@@ -168,6 +171,8 @@ impl ShapeSpec {
             ("max", self.max.is_some()),
             ("centre", self.centre.is_some()),
             ("radius", self.radius.is_some()),
+            ("normal", self.normal.is_some()),
+            ("inner_radius", self.inner_radius.is_some()),
             ("path", self.path.is_some()),
             ("scale", self.scale.is_some()),
             ("rotate", self.rotate.is_some()),
@@ -185,6 +190,7 @@ impl ShapeKind {
             ShapeKind::Quad => "quad",
             ShapeKind::Box => "box",
             ShapeKind::Sphere => "sphere",
+            ShapeKind::Disk => "disk",
             ShapeKind::Mesh => "mesh",
         }
     }
@@ -196,6 +202,7 @@ impl ShapeKind {
             ShapeKind::Quad => &["material", "vertices", "uvs"],
             ShapeKind::Box => &["material", "min", "max"],
             ShapeKind::Sphere => &["material", "centre", "radius"],
+            ShapeKind::Disk => &["material", "centre", "normal", "radius", "inner_radius"],
             ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],
         }
     }
