@@ -18,6 +18,7 @@ For each case (scene, size):
 import csv
 import math
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -49,6 +50,7 @@ REF_SPP_CORNELL = int(os.environ.get("REF_SPP_CORNELL", "512"))
 REF_SPP_BOX = int(os.environ.get("REF_SPP_BOX", "1024"))
 MITSUBA_K_SPP = int(os.environ.get("MITSUBA_K_SPP", "256"))
 SKIP_PHOTON = os.environ.get("SKIP_PHOTON", "0") == "1"
+CHECK_ONLY = os.environ.get("CHECK_ONLY", "0") == "1"
 CSV_OUT = os.environ.get("CSV_OUT", os.path.join("docs", "vs-mitsuba.csv"))
 PNG_OUT = os.environ.get("PNG_OUT", os.path.join("docs", "vs-mitsuba.png"))
 
@@ -140,10 +142,13 @@ class Mitsuba:
         dr.set_flag(dr.JitFlag.KernelHistory, True)
 
     def render(self, spp, seed, path):
+        global LAST_CPU
+        c0 = cpu(resource.RUSAGE_SELF)
         t0 = time.perf_counter()
         img = mi.render(self.scene, spp=spp, seed=seed)
         arr = np.array(img)  # waits for the render
         secs = time.perf_counter() - t0
+        LAST_CPU = cpu(resource.RUSAGE_SELF) - c0
         hist = dr.kernel_history()
         jit = sum((k.get("codegen_time") or 0) + (k.get("backend_time") or 0)
                   for k in hist if k.get("cache_hit") == 0) / 1000.0
@@ -165,10 +170,22 @@ class Mitsuba:
         return secs, jit
 
 
+LAST_CPU = 0.0  # CPU seconds (user + system, all threads) of the last timed render
+
+
+def cpu(who):
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def ours(args, path):
+    global LAST_CPU
+    c0 = cpu(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run([RT, *args, "-q", "-o", path], check=True)
-    return time.perf_counter() - t0
+    secs = time.perf_counter() - t0
+    LAST_CPU = cpu(resource.RUSAGE_CHILDREN) - c0
+    return secs
 
 
 def main():
@@ -214,18 +231,32 @@ def main():
             rb, lb = compare(ref_b, tungsten, max_lum)
             extra = f"; against the shipped reference: ours {la:.4f} (relMSE {ra:.5f}), Mitsuba {lb:.4f} (relMSE {rb:.5f})"
             print(f"  {extra[2:]}", flush=True)
+        # The framing: Mitsuba's reference mirrored left-right and flipped
+        # upside down must be far from ours, the reference itself close.
+        arr = np.array(mi.Bitmap(ref_b), dtype=np.float32)[:, :, :3]
+        framing = []
+        for what, a in (("mirrored", arr[:, ::-1]), ("upside down", arr[::-1])):
+            tmp = os.path.join(REFS, f"{name}-mitsuba-{what.replace(' ', '-')}.exr")
+            mi.Bitmap(np.ascontiguousarray(a)).write(tmp)
+            framing.append(f"Mitsuba's reference {what} against ours: relMSE {compare(tmp, ref_a, max_lum)[0]:.4f}")
+        print(f"  framing: relMSE between the references {ref_noise:.6f}; " + "; ".join(framing), flush=True)
+        extra += "; " + "; ".join(framing)
         summary.append((name, lum, lum_all, ref_noise, ok, extra))
+        if CHECK_ONLY:
+            continue
 
         def record(renderer, integrator, settings, spp, secs, img, cold="", jit=""):
+            cpu_secs = LAST_CPU
             ra, _ = compare(img, ref_a, max_lum)
             rb, lb = compare(img, ref_b, max_lum)
             e = (ra + rb) / 2 - ref_noise / 2
             row = dict(case=name, renderer=renderer, integrator=integrator, settings=settings, spp=spp,
-                       seconds=f"{secs:.3f}", warmup_seconds=cold, jit_seconds=jit, rel_mse=f"{e:.6g}",
+                       seconds=f"{secs:.3f}", cpu_seconds=f"{cpu_secs:.3f}", warmup_seconds=cold, jit_seconds=jit, rel_mse=f"{e:.6g}",
                        rel_mse_vs_ours_ref=f"{ra:.6g}", rel_mse_vs_mitsuba_ref=f"{rb:.6g}",
-                       luminance_ratio=f"{lb:.4f}", K=f"{e * secs:.6g}")
+                       luminance_ratio=f"{lb:.4f}", K=f"{e * secs:.6g}", K_cpu=f"{e * cpu_secs:.6g}")
             rows.append(row)
-            print(f"  {renderer:8s} {integrator:7s} {settings:34s} {secs:8.2f} s  relMSE {e:.6f}  K {e * secs:.6f}"
+            print(f"  {renderer:8s} {integrator:7s} {settings:34s} {secs:8.2f} s (cpu {cpu_secs:7.2f} s)"
+                  f"  relMSE {e:.6f}  K {e * secs:.6f}"
                   + (f"  (jit in the timed render {jit} s)" if jit else ""), flush=True)
 
         # 2. Interleaved runs, after Mitsuba's warm-up render.
@@ -252,14 +283,20 @@ def main():
                 record("ours", integ, label, "", secs, img)
         del mts
 
+    if CHECK_ONLY:
+        for name, lum, lum_all, noise, ok, extra in summary:
+            print(f"reference check {name}: Mitsuba / ours mean luminance {lum:.4f} (light out), {lum_all:.4f} (all);"
+                  f" relMSE between references {noise:.6f}; {'OK' if ok else 'NOT within 0.5%'}{extra}")
+        return
     # 3. K ratios.
-    fields = list(rows[0].keys()) + ["K_over_mitsuba"]
+    fields = list(rows[0].keys()) + ["K_over_mitsuba", "K_cpu_over_mitsuba"]
     for name in dict.fromkeys(r["case"] for r in rows):
-        mk = [float(r["K"]) for r in rows if r["case"] == name and r["renderer"] == "mitsuba"
-              and r["spp"] == MITSUBA_K_SPP]
+        m = [r for r in rows if r["case"] == name and r["renderer"] == "mitsuba" and r["spp"] == MITSUBA_K_SPP]
         for r in rows:
             if r["case"] == name:
-                r["K_over_mitsuba"] = f"{float(r['K']) / mk[0]:.3f}" if mk and mk[0] > 0 else ""
+                for k in ("K", "K_cpu"):
+                    ok = m and float(m[0][k]) > 0
+                    r[f"{k}_over_mitsuba"] = f"{float(r[k]) / float(m[0][k]):.3f}" if ok else ""
     os.makedirs(os.path.dirname(CSV_OUT) or ".", exist_ok=True)
     with open(CSV_OUT, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
@@ -268,11 +305,14 @@ def main():
 
     print()
     print(f"K = relMSE x seconds; ratio against Mitsuba's K at {MITSUBA_K_SPP} spp in the same case")
-    print("| case | renderer | integrator | settings | seconds | rel. MSE | K | K / K_mitsuba |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("(K_cpu: the same with CPU seconds, user + system of all threads)")
+    print("| case | renderer | integrator | settings | seconds | CPU s | rel. MSE | K | K / K_mitsuba "
+          "| K_cpu / K_cpu,mitsuba |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['case']} | {r['renderer']} | {r['integrator']} | {r['settings']} | {float(r['seconds']):.2f} "
-              f"| {float(r['rel_mse']):.5f} | {float(r['K']):.5f} | {r['K_over_mitsuba']} |")
+              f"| {float(r['cpu_seconds']):.2f} | {float(r['rel_mse']):.5f} | {float(r['K']):.5f} "
+              f"| {r['K_over_mitsuba']} | {r['K_cpu_over_mitsuba']} |")
     print()
     print("Same sample count, path tracers: K_ours / K_mitsuba")
     for name in dict.fromkeys(r["case"] for r in rows):
@@ -284,6 +324,7 @@ def main():
                 if o and float(r["K"]) > 0:
                     parts.append(f"{r['spp']} spp: {float(o[0]['K']) / float(r['K']):.2f}"
                                  f" (time {float(o[0]['seconds']) / float(r['seconds']):.2f}x,"
+                                 f" CPU {float(o[0]['cpu_seconds']) / float(r['cpu_seconds']):.2f}x,"
                                  f" error {float(o[0]['rel_mse']) / float(r['rel_mse']):.2f}x)")
         print(f"  {name}: " + "; ".join(parts))
     print()
