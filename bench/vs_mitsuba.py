@@ -337,6 +337,7 @@ def main():
 
 def plot(rows):
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -355,14 +356,19 @@ def plot(rows):
             if pts:
                 ax.plot([float(r["seconds"]) for r in pts], [float(r["rel_mse"]) for r in pts],
                         color=colour, marker=marker, label=label)
-        mk = [float(r["K"]) for r in rows if r["case"] == case and r["renderer"] == "mitsuba"
-              and r["spp"] == MITSUBA_K_SPP]
-        if mk:
-            xs = np.array(ax.get_xlim())
-            ax.plot(xs, mk[0] / xs, color="tab:red", linestyle=":", alpha=0.6, label=f"Mitsuba's K at {MITSUBA_K_SPP} spp")
-            ax.plot(xs, 0.25 * mk[0] / xs, color="grey", linestyle=":", alpha=0.6, label="K / 4")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        mk = [float(r["K"]) for r in rows if r["case"] == case and r["renderer"] == "mitsuba"
+              and int(r["spp"] or 0) == MITSUBA_K_SPP]
+        if mk:
+            xlim, ylim = ax.get_xlim(), ax.get_ylim()
+            xs = np.geomspace(*xlim, 20)
+            ax.plot(xs, mk[0] / xs, color="tab:red", linestyle=":", alpha=0.6,
+                    label=f"Mitsuba's K at {MITSUBA_K_SPP} spp")
+            ax.plot(xs, 0.25 * mk[0] / xs, color="grey", linestyle=":", alpha=0.6, label="a quarter of it")
+            ax.set_xlim(xlim)
+            ax.set_ylim(ylim)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_title(case)
         ax.set_xlabel("wall time (s)")
         ax.grid(True, which="both", alpha=0.3)
@@ -374,4 +380,7 @@ def plot(rows):
 
 
 if __name__ == "__main__":
-    main()
+    if os.environ.get("PLOT_ONLY") == "1":  # redraw PNG_OUT from CSV_OUT
+        plot(list(csv.DictReader(open(CSV_OUT))))
+    else:
+        main()
