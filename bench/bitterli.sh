@@ -25,6 +25,7 @@
 # The method is described at the top of bench/bitterli.py.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export PYTHONDONTWRITEBYTECODE=1
 
 VENV=target/bench-venv
 if ! "$VENV/bin/python" -c "import numpy, matplotlib, OpenEXR" 2>/dev/null; then

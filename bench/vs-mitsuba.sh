@@ -30,6 +30,7 @@
 # The method of the error figure is in bench/vs_mitsuba.py.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export PYTHONDONTWRITEBYTECODE=1
 
 VENV=target/mitsuba-venv
 MITSUBA_VERSION=${MITSUBA_VERSION:-3.9.1}
