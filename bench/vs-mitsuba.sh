@@ -8,12 +8,16 @@
 # CASES            scene:size pairs [cornell:256 cornell:512 cornell-box:256]
 #                  (cornell: the built-in room, exported from scenes/cornell.toml
 #                  by bench/mitsuba_export.py; cornell-box: ../shared/bitterli/
-#                  cornell-box, its scene-v4.pbrt for us, scene-mitsuba3.xml for Mitsuba)
+#                  cornell-box, its scene-v4.pbrt for us, scene-mitsuba3.xml for Mitsuba;
+#                  cornell-box-box: the same with a box pixel filter in both)
 # SPP_256, SPP_512 path tracers' samples per pixel [16 64 256], [16 64 256]
 # REF_SPP_CORNELL  references of cornell, rendered at 512 x 512 [512]
 # REF_SPP_BOX      references of cornell-box at the case's size [1024]
 # MITSUBA_K_SPP    the Mitsuba row whose K the ratios divide by [256]
 # SKIP_PHOTON=1    leaves out our photon integrators
+# CHECK_ONLY=1     only the reference checks (agreement, framing)
+# MITSUBA_RR_DEPTH a diagnostic: Mitsuba's Russian roulette from this depth (its default 5)
+# PLOT_ONLY=1      redraws PNG_OUT from CSV_OUT
 # CSV_OUT, PNG_OUT [docs/vs-mitsuba.csv], [docs/vs-mitsuba.png]
 #
 # Installs what it needs when missing: Debian's libllvm19 (Mitsuba's LLVM

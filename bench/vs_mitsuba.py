@@ -51,6 +51,9 @@ REF_SPP_BOX = int(os.environ.get("REF_SPP_BOX", "1024"))
 MITSUBA_K_SPP = int(os.environ.get("MITSUBA_K_SPP", "256"))
 SKIP_PHOTON = os.environ.get("SKIP_PHOTON", "0") == "1"
 CHECK_ONLY = os.environ.get("CHECK_ONLY", "0") == "1"
+# A diagnostic: Mitsuba's path tracer with Russian roulette from this depth
+# (its default is 5; ours starts at 2). Empty: the scene file's integrator.
+MITSUBA_RR_DEPTH = os.environ.get("MITSUBA_RR_DEPTH", "")
 CSV_OUT = os.environ.get("CSV_OUT", os.path.join("docs", "vs-mitsuba.csv"))
 PNG_OUT = os.environ.get("PNG_OUT", os.path.join("docs", "vs-mitsuba.png"))
 
@@ -137,15 +140,18 @@ def compare_all(img, ref, max_lum):
 
 
 class Mitsuba:
-    def __init__(self, xml, size):
+    def __init__(self, xml, size, max_depth=-1):
         self.scene = mi.load_file(xml, resx=size, resy=size, spp=16)
+        self.integrator = self.scene.integrator()
+        if MITSUBA_RR_DEPTH:
+            self.integrator = mi.load_dict({"type": "path", "max_depth": max_depth, "rr_depth": int(MITSUBA_RR_DEPTH)})
         dr.set_flag(dr.JitFlag.KernelHistory, True)
 
     def render(self, spp, seed, path):
         global LAST_CPU
         c0 = cpu(resource.RUSAGE_SELF)
         t0 = time.perf_counter()
-        img = mi.render(self.scene, spp=spp, seed=seed)
+        img = mi.render(self.scene, integrator=self.integrator, spp=spp, seed=seed)
         arr = np.array(img)  # waits for the render
         secs = time.perf_counter() - t0
         LAST_CPU = cpu(resource.RUSAGE_SELF) - c0
@@ -217,7 +223,7 @@ def main():
             print(f"  {s:.1f} s", flush=True)
         if ref_size != n:
             ref_a, ref_b = downsampled(ref_a, n), downsampled(ref_b, n)
-        mts = Mitsuba(xml, n)
+        mts = Mitsuba(xml, n, -1 if scene == "cornell" else 65)
         ref_noise, lum = compare(ref_b, ref_a, max_lum)
         lum_all = compare_all(ref_b, ref_a, max_lum)
         ok = abs(lum - 1) <= 0.005 and abs(lum_all - 1) <= 0.005
