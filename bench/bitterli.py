@@ -37,6 +37,8 @@ PATH_SPP = int(os.environ.get("PATH_SPP", "256"))
 PHOTONS = os.environ.get("PHOTONS", "1000000")
 SPPM_PHOTONS = os.environ.get("SPPM_PHOTONS", "200000")
 MAX_LUM = os.environ.get("MAX_LUMINANCE", "4")
+# A pixel filter for every render instead of the scene file's (box, tent, gaussian).
+FILTER = os.environ.get("FILTER", "")
 WRITE_DOCS = os.environ.get("WRITE_DOCS", "1") == "1"
 START = "<!-- bitterli-bench:start (bench/bitterli.sh replaces this part) -->"
 END = "<!-- bitterli-bench:end -->"
@@ -140,7 +142,7 @@ def main():
     for scene in SCENES:
         w, h = SIZES[scene]
         pbrt = os.path.join(BASE, scene, "scene-v4.pbrt")
-        common = ["--scene", pbrt, "--width", str(w), "--height", str(h)]
+        common = ["--scene", pbrt, "--width", str(w), "--height", str(h)] + (["--filter", FILTER] if FILTER else [])
         info = subprocess.run([RT, "info", "--scene", pbrt], capture_output=True, text=True)
         if info.returncode != 0:
             msg = (info.stderr.strip() or info.stdout.strip()).splitlines()[0]
@@ -198,7 +200,8 @@ def main():
         if scene in TARGETS:
             t = TARGETS[scene]
             verdict = "met" if path_row["rel_mse"] <= t else "not met"
-            notes.append(f"{scene}: path tracer at {PATH_SPP} spp, {w} x {h}: relative MSE {path_row['rel_mse']:.5f}"
+            notes.append(f"{scene}: path tracer at {PATH_SPP} spp, {w} x {h}"
+                         + (f", filter {FILTER}" if FILTER else "") + f": relative MSE {path_row['rel_mse']:.5f}"
                          f" (target <= {t}: {verdict}; {path_row['rel_mse_border']:.5f} with the light's border"
                          f" left out), mean luminance ratio {path_row['luminance_ratio']:.4f}")
 
@@ -227,7 +230,8 @@ def write_benchmarks(table, notes):
     body = [START, "",
             f"Measured by `bench/bitterli.sh` on {time.strftime('%Y-%m-%d', time.gmtime())} "
             f"(load average {load[0]:.1f} at the end; wall times of the whole process, all cores; "
-            f"path tracer at {PATH_SPP} spp, the photon integrators sized to its time):", ""]
+            f"path tracer at {PATH_SPP} spp, the photon integrators sized to its time"
+            + (f"; filter {FILTER}" if FILTER else "; each file's pixel filter") + "):", ""]
     body += table + [""]
     body += [f"- {n}" for n in notes]
     body += ["", END]

@@ -14,6 +14,7 @@
 # PHOTONS        photons of the photon integrator (precomputed irradiance) [1000000]
 # SPPM_PHOTONS   photons per SPPM pass [200000]
 # MAX_LUMINANCE  `compare --max-luminance` [4]
+# FILTER         box, tent or gaussian for every render [each file's own]
 # WRITE_DOCS=0   prints only: no table in BENCHMARKS.md, no docs/bitterli-*.png
 #
 # A scene the renderer refuses (today veach-mis: rough conductors) is reported
