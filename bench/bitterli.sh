@@ -28,7 +28,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export PYTHONDONTWRITEBYTECODE=1
 
-VENV=target/bench-venv
+VENV=${BENCH_VENV:-target/bench-venv}
 if ! "$VENV/bin/python" -c "import numpy, matplotlib, OpenEXR" 2>/dev/null; then
     echo "installing numpy, matplotlib and OpenEXR into $VENV"
     python3 -m venv "$VENV"

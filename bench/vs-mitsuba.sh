@@ -2,7 +2,7 @@
 # Error against wall time: Mitsuba 3's path tracer (llvm_ad_rgb) side by side
 # with our path tracer and our photon integrators (issue 15).
 #
-#   bench/vs-mitsuba.sh                          # the default run (~25 min on 2 cores)
+#   bench/vs-mitsuba.sh                          # the default run: ~12 min, ~28 the first time (references)
 #   CASES="cornell:256" SPP_256="16 64" SKIP_PHOTON=1 bench/vs-mitsuba.sh   # a quick look
 #
 # CASES            scene:size pairs [cornell:256 cornell:512 cornell-box:256]
@@ -19,6 +19,7 @@
 # MITSUBA_RR_DEPTH a diagnostic: Mitsuba's Russian roulette from this depth (its default 5)
 # PLOT_ONLY=1      redraws PNG_OUT from CSV_OUT
 # CSV_OUT, PNG_OUT [docs/vs-mitsuba.csv], [docs/vs-mitsuba.png]
+# MITSUBA_VENV     the virtual environment [target/mitsuba-venv]
 #
 # Installs what it needs when missing: Debian's libllvm19 (Mitsuba's LLVM
 # backend loads it through DRJIT_LIBLLVM_PATH) and, in a virtual environment
@@ -36,7 +37,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export PYTHONDONTWRITEBYTECODE=1
 
-VENV=target/mitsuba-venv
+VENV=${MITSUBA_VENV:-target/mitsuba-venv}
 MITSUBA_VERSION=${MITSUBA_VERSION:-3.9.1}
 
 if ! dpkg -s libllvm19 >/dev/null 2>&1; then
