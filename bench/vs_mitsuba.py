@@ -7,8 +7,9 @@ For each case (scene, size):
 1. a converged reference from each renderer, cached under target/vs-mitsuba/refs;
    their mean luminances must agree within 0.5% (reported, and the run goes on
    with a warning if they do not);
-2. interleaved: Mitsuba's path tracer and ours at each sample count (Mitsuba,
-   then ours, at one count before the next count), then our photon integrators;
+2. interleaved: after one warm-up render of Mitsuba's, its path tracer and
+   ours at each sample count (the two in turn at one count, the order
+   alternating from count to count), then our photon integrators;
 3. relative MSE against the references, the reference noise taken out:
    with A our reference and B Mitsuba's, e(X) = (r(X, A) + r(X, B)) / 2 - r(A, B) / 2
    (E[r(X, A)] = e(X) + v(A), E[r(A, B)] = v(A) + v(B), provided A and B
@@ -16,7 +17,6 @@ For each case (scene, size):
 4. K = e x seconds, and each row's K over Mitsuba's K at MITSUBA_K_SPP samples.
 """
 import csv
-import math
 import os
 import resource
 import subprocess
@@ -76,14 +76,12 @@ PHOTON["cornell-box-box-256"] = PHOTON["cornell-box-256"]
 def case_setup(scene, size):
     """Returns (our scene arguments, Mitsuba scene file, --max-luminance, reference size, reference spp)."""
     if scene == "cornell":
-        xml = os.path.join(WORK, "cornell", "scene.xml")
-        if not os.path.exists(xml):
-            sys.path.insert(0, os.path.join(ROOT, "bench"))
-            import mitsuba_export
+        sys.path.insert(0, os.path.join(ROOT, "bench"))
+        import mitsuba_export
 
-            mitsuba_export.export(os.path.join("scenes", "cornell.toml"), os.path.join(WORK, "cornell"))
+        xml = mitsuba_export.export(os.path.join("scenes", "cornell.toml"), os.path.join(WORK, "cornell"))
         # The light (radiance 111) is left out of the figures; the walls stay below 10.
-        return ["--scene", "cornell"], xml, "10", 512, REF_SPP_CORNELL
+        return ["--scene", "cornell"], xml, "10", 512 if 512 % int(size) == 0 else int(size), REF_SPP_CORNELL
     if scene == "cornell-box":
         # The pbrt file asks for a gaussian filter, its Mitsuba version for a
         # tent of radius 1: ours renders with --filter tent so that both
