@@ -146,6 +146,16 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 h.vec3(radiance);
                 h.u32(two_sided as u32);
             }
+            Light::Disk {
+                disk,
+                radiance,
+                two_sided,
+            } => {
+                h.u32(7);
+                h.bytes(format!("{disk:?}").as_bytes());
+                h.vec3(radiance);
+                h.u32(two_sided as u32);
+            }
             Light::Spot {
                 position,
                 direction,

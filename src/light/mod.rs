@@ -22,7 +22,7 @@ mod envmap;
 
 pub use envmap::{EnvMap, EnvMapping};
 
-use crate::geometry::Sphere;
+use crate::geometry::{Disk, Sphere};
 use crate::math::{orthonormal_basis, to_world, Ray, Vec2, Vec3};
 use crate::sampling::{concentric_disk, cosine_hemisphere, sample_smoothstep, uniform_cone, uniform_sphere};
 use glam::Mat3;
@@ -41,6 +41,13 @@ pub enum Light {
     },
     Triangle {
         vertices: [Vec3; 3],
+        radiance: Vec3,
+        two_sided: bool,
+    },
+    /// A diffuse area light on a disk or annulus (pbrt-v4's `diffuse` area
+    /// light on `disk`), emitting on the side of its normal, or both.
+    Disk {
+        disk: Disk,
         radiance: Vec3,
         two_sided: bool,
     },
@@ -157,6 +164,14 @@ impl Light {
                 let sides = if *two_sided { 2.0 } else { 1.0 };
                 *radiance * (PI * triangle_area(vertices) * sides)
             }
+            Light::Disk {
+                disk,
+                radiance,
+                two_sided,
+            } => {
+                let sides = if *two_sided { 2.0 } else { 1.0 };
+                *radiance * (PI * disk.area() * sides)
+            }
             Light::Spot {
                 intensity,
                 cos_falloff_start: cs,
@@ -245,6 +260,7 @@ impl Light {
             Light::Sphere { sphere, .. } => sphere.centre,
             Light::Point { position, .. } | Light::Spot { position, .. } => *position,
             Light::Triangle { vertices: v, .. } => (v[0] + v[1] + v[2]) / 3.0,
+            Light::Disk { disk, .. } => disk.centre,
             Light::Distant { world, .. } | Light::Infinite { world, .. } => world.centre,
         }
     }
@@ -254,7 +270,7 @@ impl Light {
     pub fn radiance(&self) -> Vec3 {
         match self {
             Light::Sphere { sphere, power } => *power / (PI * sphere.area()),
-            Light::Triangle { radiance, .. } => *radiance,
+            Light::Triangle { radiance, .. } | Light::Disk { radiance, .. } => *radiance,
             Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => Vec3::ZERO,
         }
     }
@@ -268,6 +284,9 @@ impl Light {
                 two_sided: false,
                 ..
             } if triangle_normal(vertices).dot(w) <= 0.0 => Vec3::ZERO,
+            Light::Disk {
+                disk, two_sided: false, ..
+            } if disk.normal.dot(w) <= 0.0 => Vec3::ZERO,
             _ => self.radiance(),
         }
     }
@@ -280,6 +299,7 @@ impl Light {
             Light::Sphere { sphere, .. } => sphere.centre = to,
             Light::Point { position, .. } | Light::Spot { position, .. } => *position = to,
             Light::Triangle { vertices, .. } => vertices.iter_mut().for_each(|v| *v += by),
+            Light::Disk { disk, .. } => disk.centre = to,
             Light::Distant { .. } | Light::Infinite { .. } => {}
         }
     }
@@ -374,6 +394,30 @@ impl Light {
                     weight: self.radiance() * solid_angle,
                 })
             }
+            Light::Disk {
+                disk,
+                radiance,
+                two_sided,
+            } => {
+                let q = disk_area_point(disk, u);
+                let d = q - p;
+                let d2 = d.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let dist = d2.sqrt();
+                let wi = d / dist;
+                let cos_l = -disk.normal.dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    dist,
+                    weight: *radiance * (cos_l * disk.area() / d2),
+                })
+            }
             Light::Triangle {
                 vertices: v,
                 radiance,
@@ -420,6 +464,14 @@ impl Light {
                 let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
                 1.0 / (2.0 * PI * (sin2_max / (1.0 + cos_max)))
             }
+            Light::Disk { disk, two_sided, .. } => {
+                let cos_l = -disk.normal.dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                if cos_l <= 0.0 {
+                    return 0.0;
+                }
+                (q - p).length_squared() / (cos_l * disk.area())
+            }
             Light::Triangle {
                 vertices: v, two_sided, ..
             } => {
@@ -454,6 +506,17 @@ impl Light {
                     return 0.0;
                 }
                 1.0 / (2.0 * PI * (sin2_max / (1.0 + cos_max)))
+            }
+            Light::Disk { disk, two_sided, .. } => {
+                let Some(t) = disk.intersect(&Ray::new(p, wi), 0.0, f32::INFINITY) else {
+                    return 0.0;
+                };
+                let cos_l = -disk.normal.dot(wi);
+                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
+                if cos_l <= 0.0 {
+                    return 0.0;
+                }
+                t * t / (cos_l * disk.area())
             }
             Light::Triangle {
                 vertices: v, two_sided, ..
@@ -526,6 +589,22 @@ impl Light {
                 let o = sphere.centre + n * (sphere.radius * (1.0 + 1e-4));
                 (Ray::new(o, d), n)
             }
+            Light::Disk { disk, two_sided, .. } => {
+                let mut n = disk.normal;
+                let mut u2 = u2;
+                if *two_sided {
+                    if u2.x < 0.5 {
+                        u2.x *= 2.0;
+                    } else {
+                        u2.x = u2.x * 2.0 - 1.0;
+                        n = -n;
+                    }
+                    u2.x = u2.x.min(1.0 - f32::EPSILON);
+                }
+                let q = disk_area_point(disk, u1);
+                let d = to_world(cosine_hemisphere(u2), n).normalize();
+                (Ray::new(crate::math::offset_origin(q, n, d), d), n)
+            }
             Light::Triangle {
                 vertices: v, two_sided, ..
             } => {
@@ -589,6 +668,11 @@ impl Light {
         match self {
             Light::Point { .. } => (0.0, 1.0 / (4.0 * PI)),
             Light::Sphere { sphere, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / PI),
+            Light::Disk { disk, two_sided, .. } => {
+                let cos = n.dot(ray.d).max(0.0);
+                let side = if *two_sided { 0.5 } else { 1.0 };
+                (1.0 / disk.area(), side * cos / PI)
+            }
             Light::Triangle {
                 vertices, two_sided, ..
             } => {
@@ -641,6 +725,14 @@ pub fn smoothstep(v: f32, a: f32, b: f32) -> f32 {
     }
     let t = ((v - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
+}
+
+/// A point uniformly distributed in area over a disk or annulus.
+fn disk_area_point(disk: &Disk, u: Vec2) -> Vec3 {
+    let (r0, r1) = (disk.inner_radius, disk.radius);
+    let r = (r0 * r0 + u.x * (r1 * r1 - r0 * r0)).sqrt();
+    let phi = std::f32::consts::TAU * u.y;
+    disk.centre + (disk.axes[0] * phi.cos() + disk.axes[1] * phi.sin()) * r
 }
 
 /// Unit normal (v1 - v0) x (v2 - v0) of a triangle (zero if degenerate).

@@ -391,7 +391,7 @@ impl Scene {
                 return Err(Error::Scene(format!("invalid sphere {:?}", s.sphere)));
             }
         }
-        let disks = desc
+        let mut disks = desc
             .disks
             .iter()
             .enumerate()
@@ -448,6 +448,11 @@ impl Scene {
                     normals.push(None);
                     uvs.push(None);
                 }
+                Light::Disk { disk, .. } => disks.push(DiskObject {
+                    disk: *disk,
+                    material: black,
+                    light: Some(i as u32),
+                }),
                 // Point, spot and distant lights have no surface; infinite
                 // lights are seen by the rays that escape (`infinite_lights`).
                 Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => {}

@@ -418,6 +418,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         LightKind::Point => "point",
         LightKind::Triangle => "triangle",
         LightKind::Quad => "quad",
+        LightKind::Disk => "disk",
         LightKind::Spot => "spot",
         LightKind::Distant => "distant",
         LightKind::Infinite => "infinite",
@@ -427,16 +428,19 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         return Err(err("light power and colour must be >= 0".into()));
     }
     let area_light = matches!(l.kind, LightKind::Triangle | LightKind::Quad);
+    let disk = l.kind == LightKind::Disk;
     let at_infinity = matches!(l.kind, LightKind::Distant | LightKind::Infinite);
     let spot = l.kind == LightKind::Spot;
     // Keys that belong to another kind of light are mistakes, not options.
     let given = [
-        ("centre", l.centre.is_some(), !area_light && l.kind == LightKind::Sphere),
-        ("radius", l.radius.is_some(), l.kind == LightKind::Sphere),
+        ("centre", l.centre.is_some(), l.kind == LightKind::Sphere || disk),
+        ("radius", l.radius.is_some(), l.kind == LightKind::Sphere || disk),
+        ("normal", l.normal.is_some(), disk),
+        ("inner_radius", l.inner_radius.is_some(), disk),
         ("position", l.position.is_some(), l.kind == LightKind::Point || spot),
         ("vertices", l.vertices.is_some(), area_light),
-        ("radiance", l.radiance.is_some(), area_light || at_infinity),
-        ("two_sided", l.two_sided.is_some(), area_light),
+        ("radiance", l.radiance.is_some(), area_light || disk || at_infinity),
+        ("two_sided", l.two_sided.is_some(), area_light || disk),
         ("power", l.power.is_some(), !at_infinity),
         ("direction", l.direction.is_some(), spot || l.kind == LightKind::Distant),
         ("intensity", l.intensity.is_some(), spot),
@@ -458,6 +462,20 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
     let power = || -> Result<Vec3> {
         let p = l.power.ok_or_else(|| err(format!("{kind} light: missing `power`")))?;
         Ok(colour * p.0)
+    };
+    // An area light's radiance, given or from its total power over the
+    // emitting sides: L = Phi / (pi A sides).
+    let area_radiance = |area: f32, two_sided: bool| -> Result<Vec3> {
+        match (l.radiance, l.power) {
+            (Some(r), None) => {
+                if r.0.min_element() < 0.0 {
+                    return Err(err(format!("{kind} light: radiance must be >= 0")));
+                }
+                Ok(r.0 * colour)
+            }
+            (None, Some(_)) => Ok(power()? / (std::f32::consts::PI * area * if two_sided { 2.0 } else { 1.0 })),
+            _ => Err(err(format!("{kind} light: give `radiance` or `power`, one of them"))),
+        }
     };
     let scale = l.scale.map_or(1.0, |s| s.0);
     if scale < 0.0 {
@@ -515,17 +533,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             if !(area > 0.0 && area.is_finite()) {
                 return Err(err(format!("{kind} light: its area is zero")));
             }
-            let radiance = match (l.radiance, l.power) {
-                (Some(r), None) => {
-                    if r.0.min_element() < 0.0 {
-                        return Err(err(format!("{kind} light: radiance must be >= 0")));
-                    }
-                    r.0 * colour
-                }
-                // Total power over the emitting sides: L = Phi / (pi A sides).
-                (None, Some(_)) => power()? / (std::f32::consts::PI * area * if two_sided { 2.0 } else { 1.0 }),
-                _ => return Err(err(format!("{kind} light: give `radiance` or `power`, one of them"))),
-            };
+            let radiance = area_radiance(area, two_sided)?;
             Ok(tris
                 .into_iter()
                 .map(|vertices| Light::Triangle {
@@ -534,6 +542,20 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                     two_sided,
                 })
                 .collect())
+        }
+        LightKind::Disk => {
+            let centre = l.centre.ok_or_else(|| err("disk light: missing `centre`".into()))?.0;
+            let radius = l.radius.ok_or_else(|| err("disk light: missing `radius`".into()))?.0;
+            let normal = l.normal.ok_or_else(|| err("disk light: missing `normal`".into()))?.0;
+            let inner = l.inner_radius.map_or(0.0, |r| r.0);
+            let disk = crate::geometry::Disk::new(centre, normal, radius, inner, None)
+                .map_err(|m| err(format!("disk light: {m}")))?;
+            let two_sided = l.two_sided.unwrap_or(false);
+            Ok(vec![Light::Disk {
+                disk,
+                radiance: area_radiance(disk.area(), two_sided)?,
+                two_sided,
+            }])
         }
         LightKind::Spot => {
             let position = l

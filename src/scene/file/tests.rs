@@ -573,3 +573,47 @@ fn bad_lights_are_one_line_errors_at_their_line() {
         // Exit status 2 is the binary's for every such error (tests/cli.rs).
     }
 }
+
+#[test]
+fn disk_lights_are_read_and_bad_ones_refused() {
+    let base = "[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 40\n[[lights]]\ntype = \"disk\"\n";
+    let ok = parse_str(&format!(
+        "{base}centre = [0, -1, 0]\nnormal = [0, 2, 0]\nradius = 0.5\npower = 10\n"
+    ))
+    .unwrap();
+    match &ok.desc.lights[..] {
+        [Light::Disk {
+            disk,
+            radiance,
+            two_sided: false,
+        }] => {
+            assert_eq!(disk.normal, Vec3::Y);
+            // L = Phi / (pi A) for one side.
+            let want = 10.0 / (std::f32::consts::PI * std::f32::consts::PI * 0.25);
+            assert!((radiance.x - want).abs() < 1e-4 * want, "{radiance}");
+        }
+        other => panic!("{other:?}"),
+    }
+    for (bad, what) in [
+        (
+            "centre = [0, 0, 0]\nnormal = [0, 0, 0]\nradius = 1\npower = 1\n",
+            "normal",
+        ),
+        (
+            "centre = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 0\npower = 1\n",
+            "radius",
+        ),
+        (
+            "centre = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\ninner_radius = 1\npower = 1\n",
+            "inner_radius",
+        ),
+        ("centre = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\n", "power"),
+        (
+            "centre = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\npower = 1\nvertices = [[0, 0, 0]]\n",
+            "vertices",
+        ),
+    ] {
+        let e = parse_str(&format!("{base}{bad}")).unwrap_err().to_string();
+        assert!(e.contains(":5") && e.contains(what) && !e.contains('\n'), "{what}: {e}");
+    }
+}

@@ -77,6 +77,7 @@ pub(super) enum LightKind {
     Point,
     Triangle,
     Quad,
+    Disk,
     Spot,
     Distant,
     Infinite,
@@ -108,6 +109,9 @@ pub(super) struct LightSpec {
     pub(super) file: Option<String>,
     pub(super) mapping: Option<String>,
     pub(super) rotate: Option<Vec3Spec>,
+    /// Disk lights: the side the disk faces, the radius of its hole.
+    pub(super) normal: Option<Vec3Spec>,
+    pub(super) inner_radius: Option<Num>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]

@@ -1244,6 +1244,11 @@ fn reflect(desc: &mut SceneDesc) {
                 *direction = vector(*direction);
             }
             Light::Distant { direction, .. } => *direction = vector(*direction),
+            Light::Disk { disk, .. } => {
+                disk.centre = point(disk.centre);
+                disk.normal = vector(disk.normal);
+                disk.axes = disk.axes.map(vector);
+            }
             Light::Infinite { to_world, .. } => {
                 *to_world = glam::Mat3::from_cols(
                     vector(to_world.x_axis),
