@@ -663,6 +663,68 @@ impl<'a> Conv<'a> {
                     desc.lights.push(Light::Point { position, power });
                     self.read.push(p);
                 }
+                "spot" => {
+                    let Some(i) = self.light_colour(p, "I", &l.loc)? else {
+                        self.skipped_lights += 1;
+                        continue;
+                    };
+                    let mut scale = p.get_float("scale", 1.0)?;
+                    let cone_angle = p.get_float("coneangle", 30.0)?;
+                    let cone_delta = p.get_float("conedelta", 5.0)?;
+                    let from = p.get_point3("from", Vec3::ZERO)?;
+                    let to = p.get_point3("to", Vec3::Z)?;
+                    let m = l.world_from_light;
+                    let position = m.transform_point3(from);
+                    let direction = m.transform_vector3(to - from);
+                    if !(direction.length() > 0.0 && direction.is_finite() && position.is_finite()) {
+                        return Err(located(&l.loc, "spot: \"from\" and \"to\" must differ"));
+                    }
+                    if !(cone_angle > 0.0 && cone_angle <= 180.0 && (0.0..=cone_angle).contains(&cone_delta)) {
+                        return Err(located(
+                            &l.loc,
+                            format!("spot: coneangle {cone_angle} and conedelta {cone_delta} out of range"),
+                        ));
+                    }
+                    let phi = p.get_float("power", -1.0)?;
+                    if phi > 0.0 {
+                        // pbrt-v4: the power of intensity 1 over the cone and its falloff.
+                        let cos_end = cone_angle.to_radians().cos();
+                        let cos_start = (cone_angle - cone_delta).to_radians().cos();
+                        let k_e = 2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
+                        scale *= phi / k_e;
+                    }
+                    desc.lights
+                        .push(Light::spot(position, direction, i * scale, cone_angle, cone_delta));
+                    self.read.push(p);
+                }
+                "distant" => {
+                    let Some(radiance) = self.light_colour(p, "L", &l.loc)? else {
+                        self.skipped_lights += 1;
+                        continue;
+                    };
+                    let mut scale = p.get_float("scale", 1.0)?;
+                    let from = p.get_point3("from", Vec3::ZERO)?;
+                    let to = p.get_point3("to", Vec3::Z)?;
+                    // pbrt-v4: light arrives from (from - to), so it travels along to - from.
+                    let direction = l.world_from_light.transform_vector3(to - from);
+                    if !(direction.length() > 0.0 && direction.is_finite()) {
+                        return Err(located(&l.loc, "distant: \"from\" and \"to\" must differ"));
+                    }
+                    let e = p.get_float("illuminance", -1.0)?;
+                    if e > 0.0 {
+                        scale *= e;
+                    }
+                    desc.lights.push(Light::distant(direction, radiance * scale));
+                    self.read.push(p);
+                }
+                "infinite" => {
+                    if let Some(light) = self.infinite(l)? {
+                        desc.lights.push(light);
+                        self.read.push(p);
+                    } else {
+                        self.skipped_lights += 1;
+                    }
+                }
                 other => {
                     self.problem(Kind::Light, &l.loc, format!("light \"{other}\" is not supported"));
                     self.skipped_lights += 1;
@@ -670,6 +732,68 @@ impl<'a> Conv<'a> {
             }
         }
         Ok(())
+    }
+
+    /// pbrt-v4's `infinite` light: constant `L`, or an equal-area
+    /// octahedral image `filename`, times `scale`, turned by the light's
+    /// transformation (a rotation, possibly with uniform scale); None when
+    /// unsupported (reported).
+    fn infinite(&mut self, l: &super::ir::Light) -> Result<Option<Light>> {
+        use crate::light::{EnvMap, EnvMapping};
+        let p = &l.params;
+        let mut scale = p.get_float("scale", 1.0)?;
+        if p.has("portal") {
+            self.problem(
+                Kind::Light,
+                place(p, "portal", &l.loc),
+                "infinite: \"portal\" is not supported",
+            );
+            return Ok(None);
+        }
+        let Some((_, s)) = similarity(l.world_from_light) else {
+            self.problem(
+                Kind::Light,
+                &l.loc,
+                "infinite: a transformation other than rotation and uniform scale is not supported",
+            );
+            return Ok(None);
+        };
+        let to_world = glam::Mat3::from_mat4(l.world_from_light) * (1.0 / s);
+        let e = p.get_float("illuminance", -1.0)?;
+        let Some(file) = p.get_string("filename")? else {
+            let Some(radiance) = self.light_colour(p, "L", &l.loc)? else {
+                return Ok(None);
+            };
+            if e > 0.0 {
+                // pbrt-v4: constant radiance 1 gives illuminance pi.
+                scale *= e / PI;
+            }
+            return Ok(Some(Light::infinite(radiance * scale, None, to_world)));
+        };
+        let at = place(p, "filename", &l.loc).clone();
+        if p.has("L") {
+            return Err(located(&at, "infinite: give \"L\" or \"filename\", not both"));
+        }
+        if e > 0.0 {
+            self.problem(
+                Kind::Light,
+                place(p, "illuminance", &l.loc),
+                "infinite: \"illuminance\" with an image is not supported",
+            );
+            return Ok(None);
+        }
+        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(located(&at, format!("infinite: image \"{file}\" not found")));
+        };
+        let film =
+            crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
+            .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        Ok(Some(Light::infinite(
+            Vec3::splat(scale),
+            Some(std::sync::Arc::new(map)),
+            to_world,
+        )))
     }
 
     /// A light's colour parameter as RGB (pbrt's default: the colour space's
@@ -1407,6 +1531,91 @@ mod tests {
     }
 
     #[test]
+    fn spot_distant_and_infinite_lights_follow_the_transform() {
+        let c = ok("WorldBegin\nAttributeBegin\nTranslate 1 2 3\n\
+             LightSource \"spot\" \"rgb I\" [ 1 2 3 ] \"float scale\" [ 2 ] \"point3 from\" [ 1 0 0 ] \
+             \"point3 to\" [ 1 0 5 ] \"float coneangle\" [ 40 ] \"float conedelta\" [ 10 ]\n\
+             Rotate 90 0 0 1\n\
+             LightSource \"distant\" \"rgb L\" [ 1 1 1 ] \"point3 from\" [ 0 0 0 ] \"point3 to\" [ 1 0 0 ] \
+             \"float scale\" [ 3 ]\n\
+             LightSource \"infinite\" \"rgb L\" [ 0.5 0.5 0.5 ]\n\
+             AttributeEnd\n\
+             LightSource \"spot\" \"float power\" [ 10 ] \"float coneangle\" [ 30 ] \"float conedelta\" [ 30 ]\n\
+             LightSource \"infinite\" \"float illuminance\" [ 2 ]\n");
+        // The identity camera: the scene is reflected across x = 0.
+        assert!(c.mirrored);
+        let m = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        let Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_falloff_start,
+            cos_falloff_end,
+        } = c.desc.lights[0]
+        else {
+            panic!("{:?}", c.desc.lights)
+        };
+        assert!(position.abs_diff_eq(m(Vec3::new(2.0, 2.0, 3.0)), 1e-5), "{position}");
+        assert!(direction.abs_diff_eq(Vec3::Z, 1e-6), "{direction}");
+        assert_eq!(intensity, Vec3::new(2.0, 4.0, 6.0));
+        assert!((cos_falloff_start - 30f32.to_radians().cos()).abs() < 1e-6);
+        assert!((cos_falloff_end - 40f32.to_radians().cos()).abs() < 1e-6);
+        // Travelling along +x turned 90 degrees about z: +y.
+        let Light::Distant {
+            direction, radiance, ..
+        } = c.desc.lights[1]
+        else {
+            panic!()
+        };
+        assert!(direction.abs_diff_eq(m(Vec3::Y), 1e-6), "{direction}");
+        assert_eq!(radiance, Vec3::splat(3.0));
+        let Light::Infinite {
+            radiance,
+            to_world,
+            map,
+            ..
+        } = &c.desc.lights[2]
+        else {
+            panic!()
+        };
+        assert!(map.is_none() && *radiance == Vec3::splat(0.5));
+        // The light's x axis is the world's y (then mirrored).
+        assert!((*to_world * Vec3::X).abs_diff_eq(m(Vec3::Y), 1e-6));
+        // power: pbrt-v4's k_e for a cone all falloff is 2 pi (1 - cos) / 2.
+        let Light::Spot { intensity, .. } = c.desc.lights[3] else {
+            panic!()
+        };
+        let k_e = PI * (1.0 - 30f32.to_radians().cos());
+        assert!(intensity.abs_diff_eq(Vec3::splat(10.0 / k_e), 1e-3), "{intensity}");
+        let Light::Infinite { radiance, .. } = c.desc.lights[4] else {
+            panic!()
+        };
+        assert!(radiance.abs_diff_eq(Vec3::splat(2.0 / PI), 1e-6));
+    }
+
+    #[test]
+    fn infinite_light_image() {
+        let dir = std::env::temp_dir().join(format!("pbrt-env-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut film = crate::film::Film::new(4, 4);
+        film.pixels.fill(Vec3::new(1.0, 2.0, 3.0));
+        crate::image_io::write_image(&film, &dir.join("sky.pfm"), 0.0).unwrap();
+        let path = dir.join("main.pbrt");
+        let text = "WorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.pfm\" \"float scale\" [ 2 ]\n";
+        let scene = super::super::parse_bytes(&path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk).unwrap();
+        let c = convert(&scene, &path, false).unwrap();
+        let Light::Infinite { radiance, map, .. } = &c.desc.lights[0] else {
+            panic!()
+        };
+        assert!(map.is_some() && *radiance == Vec3::splat(2.0));
+        let missing = text.replace("sky.pfm", "none.exr");
+        let scene = super::super::parse_bytes(&path, missing.as_bytes().to_vec(), &crate::scene::mesh::Disk).unwrap();
+        let e = convert(&scene, &path, false).unwrap_err().to_string();
+        assert!(e.contains("main.pbrt:2: infinite: image \"none.exr\" not found"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn materials_and_settings() {
         let c = ok(&format!(
             "Integrator \"path\" \"integer maxdepth\" [ 7 ]\nSampler \"zsobol\" \"integer pixelsamples\" [ 32 ]\n\
@@ -1445,13 +1654,13 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"hair\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"disk\"\nLightSource \"spot\"\nLightSource \"distant\"\nLightSource \"infinite\"\n",
+             Shape \"curve\"\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
         assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
         assert!(
-            e.contains("dir/main.pbrt:5: shape \"disk\"") && e.contains("and 1 more"),
+            e.contains("dir/main.pbrt:5: shape \"curve\"") && e.contains("and 1 more"),
             "{e}"
         );
         assert!(!e.contains('\n'));
