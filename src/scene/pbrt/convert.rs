@@ -38,6 +38,7 @@ use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
+use crate::scene::DiskDesc;
 use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::settings::{Layer, Origin, SceneSettings, Value};
 use crate::texture::Texture;
@@ -920,10 +921,7 @@ impl<'a> Conv<'a> {
                     self.skip_shape(shape);
                     continue;
                 }
-                Geometry::Disk(d) => {
-                    if !d.is_partial() {
-                        self.problem(Kind::Shape, &shape.loc, "shape \"disk\" is not supported");
-                    }
+                Geometry::Disk(d) if d.is_partial() => {
                     self.skip_shape(shape);
                     continue;
                 }
@@ -1043,6 +1041,46 @@ impl<'a> Conv<'a> {
                         let material = self.material(desc, shape.material)?;
                         desc.spheres.push(SphereDesc { sphere, material });
                     }
+                }
+                Geometry::Disk(d) => {
+                    let Some((_, scale)) = similarity(m) else {
+                        self.problem(
+                            Kind::Shape,
+                            &shape.loc,
+                            "a disk under a transformation other than rotation, uniform scale and translation is not supported",
+                        );
+                        self.skip_shape(shape);
+                        continue;
+                    };
+                    if emission.is_some() {
+                        self.problem(
+                            Kind::Light,
+                            &shape.loc,
+                            "an area light on a disk is not supported (there are no disk lights)",
+                        );
+                        self.skipped_lights += 1;
+                        continue;
+                    }
+                    if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
+                        return Err(located(
+                            &shape.loc,
+                            format!(
+                                "disk: radius {} must be > 0 and innerradius {} in [0, radius)",
+                                d.radius, d.inner_radius
+                            ),
+                        ));
+                    }
+                    let material = self.material(desc, shape.material)?;
+                    let centre = m.transform_point3(Vec3::new(0.0, 0.0, d.height));
+                    let axes = [
+                        m.transform_vector3(Vec3::X) / scale,
+                        m.transform_vector3(Vec3::Y) / scale,
+                    ];
+                    let normal = m.inverse().transpose().transform_vector3(Vec3::Z).normalize();
+                    let normal = if shape.flips_normals() { -normal } else { normal };
+                    let mut disk = DiskDesc::new(centre, normal, d.radius * scale, d.inner_radius * scale, material);
+                    disk.axes = Some(axes);
+                    desc.disks.push(disk);
                 }
                 _ => unreachable!("skipped above"),
             }
@@ -1353,6 +1391,11 @@ fn reflect(desc: &mut SceneDesc) {
     for s in &mut desc.spheres {
         s.sphere.centre = point(s.sphere.centre);
     }
+    for d in &mut desc.disks {
+        d.centre = point(d.centre);
+        d.normal = vector(d.normal);
+        d.axes = d.axes.map(|a| a.map(vector));
+    }
     for l in &mut desc.lights {
         match l {
             Light::Sphere { sphere, .. } => sphere.centre = point(sphere.centre),
@@ -1591,6 +1634,45 @@ mod tests {
             panic!()
         };
         assert!(radiance.abs_diff_eq(Vec3::splat(2.0 / PI), 1e-6));
+    }
+
+    #[test]
+    fn disks_follow_the_transform() {
+        let c = ok(
+            "WorldBegin\nAttributeBegin\nTranslate 1 0 4\nRotate 90 0 1 0\nScale 2 2 2\n\
+             Shape \"disk\" \"float height\" [ 0.5 ] \"float radius\" [ 1 ] \"float innerradius\" [ 0.25 ]\n\
+             AttributeEnd\n",
+        );
+        assert!(c.mirrored);
+        let m = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        let d = &c.desc.disks[0];
+        // Rotate 90 about y takes z to x: centre (1, 0, 4) + 2 * 0.5 x.
+        assert!(
+            d.centre.abs_diff_eq(m(Vec3::new(2.0, 0.0, 4.0)), 1e-5),
+            "{:?}",
+            d.centre
+        );
+        assert!(d.normal.abs_diff_eq(m(Vec3::X), 1e-5), "{:?}", d.normal);
+        assert!((d.radius - 2.0).abs() < 1e-5 && (d.inner_radius - 0.5).abs() < 1e-5);
+        let [a, b] = d.axes.unwrap();
+        assert!(
+            a.abs_diff_eq(m(-Vec3::Z), 1e-5) && b.abs_diff_eq(Vec3::Y, 1e-5),
+            "{a} {b}"
+        );
+        // A ray from the camera (origin, looking along +z) through the ring hits it.
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let ray = crate::math::Ray::new(Vec3::ZERO, Vec3::new(-2.0, 0.0, 5.0).normalize());
+        let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the ring");
+        assert!((hit.t - Vec3::new(-2.0, 0.0, 5.0).length()).abs() < 1e-3, "{}", hit.t);
+        // The disk with an area light is refused.
+        let e = convert_text("WorldBegin\nAreaLightSource \"diffuse\"\nShape \"disk\"\n", false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("dir/main.pbrt:3: an area light on a disk is not supported"),
+            "{e}"
+        );
+        assert_eq!(c.desc.disks.len(), 1);
     }
 
     #[test]
