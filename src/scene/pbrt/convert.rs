@@ -29,7 +29,7 @@
 //!   mesh is one light per triangle there, so each triangle emits `power`.
 
 use super::error::Loc;
-use super::ir::{Geometry, PbrtScene, Shape};
+use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::error::{Error, Result};
@@ -46,6 +46,7 @@ use glam::Mat4;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::f32::consts::PI;
 use std::path::Path;
+use std::sync::Arc;
 
 /// How many unsupported places an error lists before "and N more".
 const LISTED: usize = 4;
@@ -885,7 +886,7 @@ impl<'a> Conv<'a> {
             (None, Some(l)) => format!("{} ({})", m.ty, l.file_line()),
             (None, None) => "default".into(),
         };
-        let converted = match convert_material(&m.ty, &m.params, &loc)? {
+        let converted = match convert_material(scene, &m.ty, &m.params, &loc)? {
             Ok(mat) => {
                 self.read.push(&m.params);
                 mat
@@ -997,7 +998,7 @@ impl<'a> Conv<'a> {
                             desc.triangles.push(TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
-                                uvs: None,
+                                uvs: mesh.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize])),
                                 material,
                             });
                         }
@@ -1123,7 +1124,12 @@ fn reflects(m: &super::ir::Material) -> bool {
 }
 
 /// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`).
-fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Result<Material, String>> {
+fn convert_material(
+    scene: &PbrtScene,
+    ty: &str,
+    p: &Params,
+    loc: &Loc,
+) -> Result<std::result::Result<Material, String>> {
     for (n, what) in [("displacement", "displacement"), ("normalmap", "normal maps")] {
         if p.has(n) {
             return Ok(Err(format!("{what} are not supported")));
@@ -1134,9 +1140,12 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             let albedo = match p.get_spectrum_or_texture("reflectance")? {
                 None => Vec3::splat(0.5),
                 Some(SpectrumOrTexture::Texture(t)) => {
-                    return Ok(Err(format!(
-                        "a textured reflectance (texture \"{t}\") is not supported"
-                    )));
+                    let at = place(p, "reflectance", loc);
+                    return Ok(texture(scene, &t, TextureKind::Spectrum, at, 0)?.map(|reflectance| {
+                        Material::Diffuse {
+                            reflectance: clamped(reflectance),
+                        }
+                    }));
                 }
                 Some(SpectrumOrTexture::Value(v)) => {
                     if let Some(cs) = colour_space(p, "reflectance") {
@@ -1239,12 +1248,8 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            let reflectance = match if p.has("reflectance") {
-                colour(p, "reflectance", loc)?
-            } else {
-                Ok(Vec3::splat(0.5))
-            } {
-                Ok(r) => r.clamp(Vec3::ZERO, Vec3::ONE),
+            let reflectance = match spectrum_texture(scene, p, "reflectance", 0.5, loc)? {
+                Ok(r) => clamped(r),
                 Err(why) => return Ok(Err(why)),
             };
             let eta = p.get_float("eta", 1.5)?;
@@ -1256,7 +1261,7 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
                 ));
             }
             Ok(Ok(Material::CoatedDiffuse {
-                reflectance: Texture::from(reflectance),
+                reflectance,
                 roughness,
                 eta,
                 thickness,
@@ -1264,22 +1269,229 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
         }
         "diffusetransmission" => {
             let scale = p.get_float("scale", 1.0)?;
-            let mut rt = [Vec3::splat(0.25); 2];
-            for (i, n) in ["reflectance", "transmittance"].into_iter().enumerate() {
-                if p.has(n) {
-                    match colour(p, n, loc)? {
-                        Ok(c) => rt[i] = c,
-                        Err(why) => return Ok(Err(why)),
-                    }
+            let mut rt = Vec::new();
+            for n in ["reflectance", "transmittance"] {
+                match spectrum_texture(scene, p, n, 0.25, loc)? {
+                    Ok(Texture::Constant(c)) => rt.push(Texture::from((c * scale).clamp(Vec3::ZERO, Vec3::ONE))),
+                    Ok(t) if scale == 1.0 => rt.push(clamped(t)),
+                    Ok(t) => rt.push(clamped(Texture::Scale {
+                        tex: Arc::new(t),
+                        scale: Arc::new(Texture::from(Vec3::splat(scale))),
+                    })),
+                    Err(why) => return Ok(Err(why)),
                 }
             }
-            let [r, t] = rt.map(|c| (c * scale).clamp(Vec3::ZERO, Vec3::ONE));
+            let transmittance = rt.pop().unwrap_or_default_texture();
+            let reflectance = rt.pop().unwrap_or_default_texture();
             Ok(Ok(Material::DiffuseTransmission {
-                reflectance: Texture::from(r),
-                transmittance: Texture::from(t),
+                reflectance,
+                transmittance,
             }))
         }
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
+    }
+}
+
+trait OrDefaultTexture {
+    fn unwrap_or_default_texture(self) -> Texture;
+}
+
+impl OrDefaultTexture for Option<Texture> {
+    fn unwrap_or_default_texture(self) -> Texture {
+        self.unwrap_or_else(|| Texture::from(Vec3::ZERO))
+    }
+}
+
+/// A reflectance kept within [0, 1]: a constant is clamped; a texture is
+/// left as it is (an image's texels are reflectances already).
+fn clamped(t: Texture) -> Texture {
+    match t {
+        Texture::Constant(c) => Texture::from(c.clamp(Vec3::ZERO, Vec3::ONE)),
+        t => t,
+    }
+}
+
+/// A spectrum parameter of a material that may be a texture (`default`
+/// grey when absent).
+fn spectrum_texture(
+    scene: &PbrtScene,
+    p: &Params,
+    name: &str,
+    default: f32,
+    loc: &Loc,
+) -> Result<std::result::Result<Texture, String>> {
+    match p.get_spectrum_or_texture(name)? {
+        None => Ok(Ok(Texture::from(Vec3::splat(default)))),
+        Some(SpectrumOrTexture::Texture(t)) => texture(scene, &t, TextureKind::Spectrum, place(p, name, loc), 0),
+        Some(SpectrumOrTexture::Value(_)) => Ok(colour(p, name, loc)?.map(Texture::from)),
+    }
+}
+
+/// An operand of a texture: a value or another texture of `kind`.
+fn operand(
+    scene: &PbrtScene,
+    t: &super::ir::Texture,
+    name: &str,
+    kind: TextureKind,
+    default: f32,
+    depth: usize,
+) -> Result<std::result::Result<Texture, String>> {
+    let p = &t.params;
+    let reference = match kind {
+        TextureKind::Float => match p.get_float_or_texture(name)? {
+            None => return Ok(Ok(Texture::from(Vec3::splat(default)))),
+            Some(FloatOrTexture::Value(v)) => return Ok(Ok(Texture::from(Vec3::splat(v)))),
+            Some(FloatOrTexture::Texture(r)) => r,
+        },
+        TextureKind::Spectrum => match p.get_spectrum_or_texture(name)? {
+            None => return Ok(Ok(Texture::from(Vec3::splat(default)))),
+            Some(SpectrumOrTexture::Value(_)) => return Ok(colour(p, name, &t.loc)?.map(Texture::from)),
+            Some(SpectrumOrTexture::Texture(r)) => r,
+        },
+    };
+    texture(scene, &reference, kind, place(p, name, &t.loc), depth + 1)
+}
+
+/// The texture named `name` of `kind`, referred to at `at`: an unknown
+/// name or a missing image is an error there; an unsupported texture is
+/// `Ok(Err(why))`.
+fn texture(
+    scene: &PbrtScene,
+    name: &str,
+    kind: TextureKind,
+    at: &Loc,
+    depth: usize,
+) -> Result<std::result::Result<Texture, String>> {
+    use crate::texture::{Encoding, ImageOptions, UvMapping, WrapMode};
+    let kind_name = match kind {
+        TextureKind::Float => "float",
+        TextureKind::Spectrum => "spectrum",
+    };
+    let Some(t) = scene.texture(name, kind) else {
+        return Err(located(at, format!("{kind_name} texture \"{name}\" is not defined")));
+    };
+    if depth > 64 {
+        return Err(located(&t.loc, format!("texture \"{name}\": textures nested too deep")));
+    }
+    let p = &t.params;
+    let mapping = p.get_string_or("mapping", "uv")?;
+    if mapping != "uv" && t.class != "constant" && t.class != "scale" && t.class != "mix" {
+        return Ok(Err(format!(
+            "texture \"{name}\": mapping \"{mapping}\" is not supported"
+        )));
+    }
+    let uv = |p: &Params| -> Result<UvMapping> {
+        Ok(UvMapping {
+            su: p.get_float("uscale", 1.0)?,
+            sv: p.get_float("vscale", 1.0)?,
+            du: p.get_float("udelta", 0.0)?,
+            dv: p.get_float("vdelta", 0.0)?,
+        })
+    };
+    let arc = |t: Texture| Arc::new(t);
+    match t.class.as_str() {
+        "constant" => operand(scene, t, "value", kind, 1.0, depth),
+        "scale" => {
+            let tex = match operand(scene, t, "tex", kind, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            let scale = match operand(scene, t, "scale", TextureKind::Float, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::Scale {
+                tex: arc(tex),
+                scale: arc(scale),
+            }))
+        }
+        "mix" => {
+            let mut v = Vec::new();
+            for (n, k, d) in [
+                ("tex1", kind, 0.0),
+                ("tex2", kind, 1.0),
+                ("amount", TextureKind::Float, 0.5),
+            ] {
+                match operand(scene, t, n, k, d, depth)? {
+                    Ok(x) => v.push(arc(x)),
+                    Err(why) => return Ok(Err(why)),
+                }
+            }
+            let amount = v.pop().expect("three");
+            let b = v.pop().expect("three");
+            let a = v.pop().expect("three");
+            Ok(Ok(Texture::Mix { a, b, amount }))
+        }
+        "checkerboard" => {
+            let dimension = p.get_int("dimension", 2)?;
+            if dimension != 2 {
+                return Ok(Err(format!(
+                    "texture \"{name}\": a {dimension}D checkerboard is not supported"
+                )));
+            }
+            let m = uv(p)?;
+            if m.du != 0.0 || m.dv != 0.0 {
+                return Ok(Err(format!(
+                    "texture \"{name}\": a checkerboard with udelta/vdelta is not supported"
+                )));
+            }
+            let even = match operand(scene, t, "tex1", kind, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            let odd = match operand(scene, t, "tex2", kind, 0.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::Checkerboard {
+                even: arc(even),
+                odd: arc(odd),
+                u_scale: m.su,
+                v_scale: m.sv,
+            }))
+        }
+        "imagemap" => {
+            let Some(file) = p.get_string("filename")? else {
+                return Err(located(&t.loc, format!("imagemap \"{name}\": \"filename\" is missing")));
+            };
+            let file_at = place(p, "filename", &t.loc).clone();
+            let Some(path) = scene.candidates(&file_at, &file).into_iter().find(|c| c.is_file()) else {
+                return Err(located(
+                    &file_at,
+                    format!("imagemap \"{name}\": image \"{file}\" not found"),
+                ));
+            };
+            let wrap_name = p.get_string_or("wrap", "repeat")?;
+            let Some(wrap) = WrapMode::parse(&wrap_name) else {
+                return Err(located(
+                    &t.loc,
+                    format!("imagemap \"{name}\": unknown wrap \"{wrap_name}\""),
+                ));
+            };
+            // pbrt-v4: sRGB for 8-bit (PNG and the like), linear otherwise.
+            let lower = file.to_ascii_lowercase();
+            let eight_bit = [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
+                .iter()
+                .any(|e| lower.ends_with(e));
+            let enc_name = p.get_string_or("encoding", if eight_bit { "sRGB" } else { "linear" })?;
+            let Some(encoding) = Encoding::parse(&enc_name) else {
+                return Err(located(
+                    &t.loc,
+                    format!("imagemap \"{name}\": unknown encoding \"{enc_name}\""),
+                ));
+            };
+            let opts = ImageOptions {
+                wrap,
+                encoding,
+                scale: p.get_float("scale", 1.0)?,
+                invert: p.get_bool("invert", false)?,
+                mapping: uv(p)?,
+            };
+            let tex =
+                Texture::image(&path, &opts).map_err(|e| located(&file_at, format!("imagemap \"{name}\": {e}")))?;
+            Ok(Ok(tex))
+        }
+        other => Ok(Err(format!("texture \"{name}\" of class \"{other}\" is not supported"))),
     }
 }
 
@@ -1386,6 +1598,9 @@ fn reflect(desc: &mut SceneDesc) {
         if let Some(ns) = &mut t.normals {
             let [a, b, c] = ns.map(vector);
             *ns = [a, c, b];
+        }
+        if let Some([a, b, c]) = t.uvs {
+            t.uvs = Some([a, c, b]);
         }
     }
     for s in &mut desc.spheres {
@@ -1673,6 +1888,56 @@ mod tests {
             "{e}"
         );
         assert_eq!(c.desc.disks.len(), 1);
+    }
+
+    #[test]
+    fn checkerboard_quad_gives_two_reflectances() {
+        let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+             Texture \"a\" \"spectrum\" \"constant\" \"rgb value\" [ 0.8 0.1 0.1 ]\n\
+             Texture \"check\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"a\" \"rgb tex2\" [ 0.1 0.1 0.8 ] \
+             \"float uscale\" [ 2 ] \"float vscale\" [ 1 ]\n\
+             Material \"diffuse\" \"texture reflectance\" \"check\"\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -1 -0.5 0  1 -0.5 0  1 0.5 0  -1 0.5 0 ] \
+             \"point2 uv\" [ 0 0  1 0  1 1  0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n";
+        let c = ok(text);
+        assert!(c.desc.triangles.iter().all(|t| t.uvs.is_some()));
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let albedo = |x: f32| {
+            let ray = crate::math::Ray::new(Vec3::new(x, 0.0, -5.0), Vec3::Z);
+            let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the quad");
+            let Material::Diffuse { reflectance } = &scene.materials[hit.material as usize] else {
+                panic!()
+            };
+            reflectance.evaluate(&crate::texture::TexCoord { uv: hit.uv, p: hit.p })
+        };
+        let (a, b) = (albedo(-0.5), albedo(0.5));
+        assert!(a != b, "{a} {b}");
+        let red = Vec3::new(0.8, 0.1, 0.1);
+        let blue = Vec3::new(0.1, 0.1, 0.8);
+        // u < 0.5 (pbrt's x < 0, here x > 0 after the reflection) is tex1.
+        assert!(a == blue && b == red, "{a} {b}");
+        // An unknown texture, a missing image: one line naming the place.
+        let e = convert_text(&text.replace("\"check\"\n", "\"nope\"\n"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:7: spectrum texture \"nope\" is not defined"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        let missing = text
+            .replace(
+                "Material",
+                "Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"none.png\"\nMaterial",
+            )
+            .replace("\"check\"\n", "\"img\"\n");
+        let e = convert_text(&missing, false).unwrap_err().to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:7: imagemap \"img\": image \"none.png\" not found"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
     }
 
     #[test]
