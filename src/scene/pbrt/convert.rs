@@ -29,7 +29,7 @@
 //!   mesh is one light per triangle there, so each triangle emits `power`.
 
 use super::error::Loc;
-use super::ir::{Geometry, PbrtScene, Shape};
+use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::error::{Error, Result};
@@ -38,6 +38,7 @@ use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
+use crate::scene::DiskDesc;
 use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::settings::{Layer, Origin, SceneSettings, Value};
 use crate::texture::Texture;
@@ -45,6 +46,7 @@ use glam::Mat4;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::f32::consts::PI;
 use std::path::Path;
+use std::sync::Arc;
 
 /// How many unsupported places an error lists before "and N more".
 const LISTED: usize = 4;
@@ -663,6 +665,68 @@ impl<'a> Conv<'a> {
                     desc.lights.push(Light::Point { position, power });
                     self.read.push(p);
                 }
+                "spot" => {
+                    let Some(i) = self.light_colour(p, "I", &l.loc)? else {
+                        self.skipped_lights += 1;
+                        continue;
+                    };
+                    let mut scale = p.get_float("scale", 1.0)?;
+                    let cone_angle = p.get_float("coneangle", 30.0)?;
+                    let cone_delta = p.get_float("conedelta", 5.0)?;
+                    let from = p.get_point3("from", Vec3::ZERO)?;
+                    let to = p.get_point3("to", Vec3::Z)?;
+                    let m = l.world_from_light;
+                    let position = m.transform_point3(from);
+                    let direction = m.transform_vector3(to - from);
+                    if !(direction.length() > 0.0 && direction.is_finite() && position.is_finite()) {
+                        return Err(located(&l.loc, "spot: \"from\" and \"to\" must differ"));
+                    }
+                    if !(cone_angle > 0.0 && cone_angle <= 180.0 && (0.0..=cone_angle).contains(&cone_delta)) {
+                        return Err(located(
+                            &l.loc,
+                            format!("spot: coneangle {cone_angle} and conedelta {cone_delta} out of range"),
+                        ));
+                    }
+                    let phi = p.get_float("power", -1.0)?;
+                    if phi > 0.0 {
+                        // pbrt-v4: the power of intensity 1 over the cone and its falloff.
+                        let cos_end = cone_angle.to_radians().cos();
+                        let cos_start = (cone_angle - cone_delta).to_radians().cos();
+                        let k_e = 2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
+                        scale *= phi / k_e;
+                    }
+                    desc.lights
+                        .push(Light::spot(position, direction, i * scale, cone_angle, cone_delta));
+                    self.read.push(p);
+                }
+                "distant" => {
+                    let Some(radiance) = self.light_colour(p, "L", &l.loc)? else {
+                        self.skipped_lights += 1;
+                        continue;
+                    };
+                    let mut scale = p.get_float("scale", 1.0)?;
+                    let from = p.get_point3("from", Vec3::ZERO)?;
+                    let to = p.get_point3("to", Vec3::Z)?;
+                    // pbrt-v4: light arrives from (from - to), so it travels along to - from.
+                    let direction = l.world_from_light.transform_vector3(to - from);
+                    if !(direction.length() > 0.0 && direction.is_finite()) {
+                        return Err(located(&l.loc, "distant: \"from\" and \"to\" must differ"));
+                    }
+                    let e = p.get_float("illuminance", -1.0)?;
+                    if e > 0.0 {
+                        scale *= e;
+                    }
+                    desc.lights.push(Light::distant(direction, radiance * scale));
+                    self.read.push(p);
+                }
+                "infinite" => {
+                    if let Some(light) = self.infinite(l)? {
+                        desc.lights.push(light);
+                        self.read.push(p);
+                    } else {
+                        self.skipped_lights += 1;
+                    }
+                }
                 other => {
                     self.problem(Kind::Light, &l.loc, format!("light \"{other}\" is not supported"));
                     self.skipped_lights += 1;
@@ -670,6 +734,68 @@ impl<'a> Conv<'a> {
             }
         }
         Ok(())
+    }
+
+    /// pbrt-v4's `infinite` light: constant `L`, or an equal-area
+    /// octahedral image `filename`, times `scale`, turned by the light's
+    /// transformation (a rotation, possibly with uniform scale); None when
+    /// unsupported (reported).
+    fn infinite(&mut self, l: &super::ir::Light) -> Result<Option<Light>> {
+        use crate::light::{EnvMap, EnvMapping};
+        let p = &l.params;
+        let mut scale = p.get_float("scale", 1.0)?;
+        if p.has("portal") {
+            self.problem(
+                Kind::Light,
+                place(p, "portal", &l.loc),
+                "infinite: \"portal\" is not supported",
+            );
+            return Ok(None);
+        }
+        let Some((_, s)) = similarity(l.world_from_light) else {
+            self.problem(
+                Kind::Light,
+                &l.loc,
+                "infinite: a transformation other than rotation and uniform scale is not supported",
+            );
+            return Ok(None);
+        };
+        let to_world = glam::Mat3::from_mat4(l.world_from_light) * (1.0 / s);
+        let e = p.get_float("illuminance", -1.0)?;
+        let Some(file) = p.get_string("filename")? else {
+            let Some(radiance) = self.light_colour(p, "L", &l.loc)? else {
+                return Ok(None);
+            };
+            if e > 0.0 {
+                // pbrt-v4: constant radiance 1 gives illuminance pi.
+                scale *= e / PI;
+            }
+            return Ok(Some(Light::infinite(radiance * scale, None, to_world)));
+        };
+        let at = place(p, "filename", &l.loc).clone();
+        if p.has("L") {
+            return Err(located(&at, "infinite: give \"L\" or \"filename\", not both"));
+        }
+        if e > 0.0 {
+            self.problem(
+                Kind::Light,
+                place(p, "illuminance", &l.loc),
+                "infinite: \"illuminance\" with an image is not supported",
+            );
+            return Ok(None);
+        }
+        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(located(&at, format!("infinite: image \"{file}\" not found")));
+        };
+        let film =
+            crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
+            .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        Ok(Some(Light::infinite(
+            Vec3::splat(scale),
+            Some(std::sync::Arc::new(map)),
+            to_world,
+        )))
     }
 
     /// A light's colour parameter as RGB (pbrt's default: the colour space's
@@ -760,7 +886,7 @@ impl<'a> Conv<'a> {
             (None, Some(l)) => format!("{} ({})", m.ty, l.file_line()),
             (None, None) => "default".into(),
         };
-        let converted = match convert_material(&m.ty, &m.params, &loc)? {
+        let converted = match convert_material(scene, &m.ty, &m.params, &loc)? {
             Ok(mat) => {
                 self.read.push(&m.params);
                 mat
@@ -796,10 +922,7 @@ impl<'a> Conv<'a> {
                     self.skip_shape(shape);
                     continue;
                 }
-                Geometry::Disk(d) => {
-                    if !d.is_partial() {
-                        self.problem(Kind::Shape, &shape.loc, "shape \"disk\" is not supported");
-                    }
+                Geometry::Disk(d) if d.is_partial() => {
                     self.skip_shape(shape);
                     continue;
                 }
@@ -875,7 +998,7 @@ impl<'a> Conv<'a> {
                             desc.triangles.push(TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
-                                uvs: None,
+                                uvs: mesh.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize])),
                                 material,
                             });
                         }
@@ -920,6 +1043,46 @@ impl<'a> Conv<'a> {
                         desc.spheres.push(SphereDesc { sphere, material });
                     }
                 }
+                Geometry::Disk(d) => {
+                    let Some((_, scale)) = similarity(m) else {
+                        self.problem(
+                            Kind::Shape,
+                            &shape.loc,
+                            "a disk under a transformation other than rotation, uniform scale and translation is not supported",
+                        );
+                        self.skip_shape(shape);
+                        continue;
+                    };
+                    if emission.is_some() {
+                        self.problem(
+                            Kind::Light,
+                            &shape.loc,
+                            "an area light on a disk is not supported (there are no disk lights)",
+                        );
+                        self.skipped_lights += 1;
+                        continue;
+                    }
+                    if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
+                        return Err(located(
+                            &shape.loc,
+                            format!(
+                                "disk: radius {} must be > 0 and innerradius {} in [0, radius)",
+                                d.radius, d.inner_radius
+                            ),
+                        ));
+                    }
+                    let material = self.material(desc, shape.material)?;
+                    let centre = m.transform_point3(Vec3::new(0.0, 0.0, d.height));
+                    let axes = [
+                        m.transform_vector3(Vec3::X) / scale,
+                        m.transform_vector3(Vec3::Y) / scale,
+                    ];
+                    let normal = m.inverse().transpose().transform_vector3(Vec3::Z).normalize();
+                    let normal = if shape.flips_normals() { -normal } else { normal };
+                    let mut disk = DiskDesc::new(centre, normal, d.radius * scale, d.inner_radius * scale, material);
+                    disk.axes = Some(axes);
+                    desc.disks.push(disk);
+                }
                 _ => unreachable!("skipped above"),
             }
             self.read.push(p);
@@ -961,7 +1124,12 @@ fn reflects(m: &super::ir::Material) -> bool {
 }
 
 /// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`).
-fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Result<Material, String>> {
+fn convert_material(
+    scene: &PbrtScene,
+    ty: &str,
+    p: &Params,
+    loc: &Loc,
+) -> Result<std::result::Result<Material, String>> {
     for (n, what) in [("displacement", "displacement"), ("normalmap", "normal maps")] {
         if p.has(n) {
             return Ok(Err(format!("{what} are not supported")));
@@ -972,9 +1140,12 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
             let albedo = match p.get_spectrum_or_texture("reflectance")? {
                 None => Vec3::splat(0.5),
                 Some(SpectrumOrTexture::Texture(t)) => {
-                    return Ok(Err(format!(
-                        "a textured reflectance (texture \"{t}\") is not supported"
-                    )));
+                    let at = place(p, "reflectance", loc);
+                    return Ok(texture(scene, &t, TextureKind::Spectrum, at, 0)?.map(|reflectance| {
+                        Material::Diffuse {
+                            reflectance: clamped(reflectance),
+                        }
+                    }));
                 }
                 Some(SpectrumOrTexture::Value(v)) => {
                     if let Some(cs) = colour_space(p, "reflectance") {
@@ -1077,12 +1248,8 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            let reflectance = match if p.has("reflectance") {
-                colour(p, "reflectance", loc)?
-            } else {
-                Ok(Vec3::splat(0.5))
-            } {
-                Ok(r) => r.clamp(Vec3::ZERO, Vec3::ONE),
+            let reflectance = match spectrum_texture(scene, p, "reflectance", 0.5, loc)? {
+                Ok(r) => clamped(r),
                 Err(why) => return Ok(Err(why)),
             };
             let eta = p.get_float("eta", 1.5)?;
@@ -1094,7 +1261,7 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
                 ));
             }
             Ok(Ok(Material::CoatedDiffuse {
-                reflectance: Texture::from(reflectance),
+                reflectance,
                 roughness,
                 eta,
                 thickness,
@@ -1102,22 +1269,229 @@ fn convert_material(ty: &str, p: &Params, loc: &Loc) -> Result<std::result::Resu
         }
         "diffusetransmission" => {
             let scale = p.get_float("scale", 1.0)?;
-            let mut rt = [Vec3::splat(0.25); 2];
-            for (i, n) in ["reflectance", "transmittance"].into_iter().enumerate() {
-                if p.has(n) {
-                    match colour(p, n, loc)? {
-                        Ok(c) => rt[i] = c,
-                        Err(why) => return Ok(Err(why)),
-                    }
+            let mut rt = Vec::new();
+            for n in ["reflectance", "transmittance"] {
+                match spectrum_texture(scene, p, n, 0.25, loc)? {
+                    Ok(Texture::Constant(c)) => rt.push(Texture::from((c * scale).clamp(Vec3::ZERO, Vec3::ONE))),
+                    Ok(t) if scale == 1.0 => rt.push(clamped(t)),
+                    Ok(t) => rt.push(clamped(Texture::Scale {
+                        tex: Arc::new(t),
+                        scale: Arc::new(Texture::from(Vec3::splat(scale))),
+                    })),
+                    Err(why) => return Ok(Err(why)),
                 }
             }
-            let [r, t] = rt.map(|c| (c * scale).clamp(Vec3::ZERO, Vec3::ONE));
+            let transmittance = rt.pop().unwrap_or_default_texture();
+            let reflectance = rt.pop().unwrap_or_default_texture();
             Ok(Ok(Material::DiffuseTransmission {
-                reflectance: Texture::from(r),
-                transmittance: Texture::from(t),
+                reflectance,
+                transmittance,
             }))
         }
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
+    }
+}
+
+trait OrDefaultTexture {
+    fn unwrap_or_default_texture(self) -> Texture;
+}
+
+impl OrDefaultTexture for Option<Texture> {
+    fn unwrap_or_default_texture(self) -> Texture {
+        self.unwrap_or_else(|| Texture::from(Vec3::ZERO))
+    }
+}
+
+/// A reflectance kept within [0, 1]: a constant is clamped; a texture is
+/// left as it is (an image's texels are reflectances already).
+fn clamped(t: Texture) -> Texture {
+    match t {
+        Texture::Constant(c) => Texture::from(c.clamp(Vec3::ZERO, Vec3::ONE)),
+        t => t,
+    }
+}
+
+/// A spectrum parameter of a material that may be a texture (`default`
+/// grey when absent).
+fn spectrum_texture(
+    scene: &PbrtScene,
+    p: &Params,
+    name: &str,
+    default: f32,
+    loc: &Loc,
+) -> Result<std::result::Result<Texture, String>> {
+    match p.get_spectrum_or_texture(name)? {
+        None => Ok(Ok(Texture::from(Vec3::splat(default)))),
+        Some(SpectrumOrTexture::Texture(t)) => texture(scene, &t, TextureKind::Spectrum, place(p, name, loc), 0),
+        Some(SpectrumOrTexture::Value(_)) => Ok(colour(p, name, loc)?.map(Texture::from)),
+    }
+}
+
+/// An operand of a texture: a value or another texture of `kind`.
+fn operand(
+    scene: &PbrtScene,
+    t: &super::ir::Texture,
+    name: &str,
+    kind: TextureKind,
+    default: f32,
+    depth: usize,
+) -> Result<std::result::Result<Texture, String>> {
+    let p = &t.params;
+    let reference = match kind {
+        TextureKind::Float => match p.get_float_or_texture(name)? {
+            None => return Ok(Ok(Texture::from(Vec3::splat(default)))),
+            Some(FloatOrTexture::Value(v)) => return Ok(Ok(Texture::from(Vec3::splat(v)))),
+            Some(FloatOrTexture::Texture(r)) => r,
+        },
+        TextureKind::Spectrum => match p.get_spectrum_or_texture(name)? {
+            None => return Ok(Ok(Texture::from(Vec3::splat(default)))),
+            Some(SpectrumOrTexture::Value(_)) => return Ok(colour(p, name, &t.loc)?.map(Texture::from)),
+            Some(SpectrumOrTexture::Texture(r)) => r,
+        },
+    };
+    texture(scene, &reference, kind, place(p, name, &t.loc), depth + 1)
+}
+
+/// The texture named `name` of `kind`, referred to at `at`: an unknown
+/// name or a missing image is an error there; an unsupported texture is
+/// `Ok(Err(why))`.
+fn texture(
+    scene: &PbrtScene,
+    name: &str,
+    kind: TextureKind,
+    at: &Loc,
+    depth: usize,
+) -> Result<std::result::Result<Texture, String>> {
+    use crate::texture::{Encoding, ImageOptions, UvMapping, WrapMode};
+    let kind_name = match kind {
+        TextureKind::Float => "float",
+        TextureKind::Spectrum => "spectrum",
+    };
+    let Some(t) = scene.texture(name, kind) else {
+        return Err(located(at, format!("{kind_name} texture \"{name}\" is not defined")));
+    };
+    if depth > 64 {
+        return Err(located(&t.loc, format!("texture \"{name}\": textures nested too deep")));
+    }
+    let p = &t.params;
+    let mapping = p.get_string_or("mapping", "uv")?;
+    if mapping != "uv" && t.class != "constant" && t.class != "scale" && t.class != "mix" {
+        return Ok(Err(format!(
+            "texture \"{name}\": mapping \"{mapping}\" is not supported"
+        )));
+    }
+    let uv = |p: &Params| -> Result<UvMapping> {
+        Ok(UvMapping {
+            su: p.get_float("uscale", 1.0)?,
+            sv: p.get_float("vscale", 1.0)?,
+            du: p.get_float("udelta", 0.0)?,
+            dv: p.get_float("vdelta", 0.0)?,
+        })
+    };
+    let arc = |t: Texture| Arc::new(t);
+    match t.class.as_str() {
+        "constant" => operand(scene, t, "value", kind, 1.0, depth),
+        "scale" => {
+            let tex = match operand(scene, t, "tex", kind, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            let scale = match operand(scene, t, "scale", TextureKind::Float, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::Scale {
+                tex: arc(tex),
+                scale: arc(scale),
+            }))
+        }
+        "mix" => {
+            let mut v = Vec::new();
+            for (n, k, d) in [
+                ("tex1", kind, 0.0),
+                ("tex2", kind, 1.0),
+                ("amount", TextureKind::Float, 0.5),
+            ] {
+                match operand(scene, t, n, k, d, depth)? {
+                    Ok(x) => v.push(arc(x)),
+                    Err(why) => return Ok(Err(why)),
+                }
+            }
+            let amount = v.pop().expect("three");
+            let b = v.pop().expect("three");
+            let a = v.pop().expect("three");
+            Ok(Ok(Texture::Mix { a, b, amount }))
+        }
+        "checkerboard" => {
+            let dimension = p.get_int("dimension", 2)?;
+            if dimension != 2 {
+                return Ok(Err(format!(
+                    "texture \"{name}\": a {dimension}D checkerboard is not supported"
+                )));
+            }
+            let m = uv(p)?;
+            if m.du != 0.0 || m.dv != 0.0 {
+                return Ok(Err(format!(
+                    "texture \"{name}\": a checkerboard with udelta/vdelta is not supported"
+                )));
+            }
+            let even = match operand(scene, t, "tex1", kind, 1.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            let odd = match operand(scene, t, "tex2", kind, 0.0, depth)? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::Checkerboard {
+                even: arc(even),
+                odd: arc(odd),
+                u_scale: m.su,
+                v_scale: m.sv,
+            }))
+        }
+        "imagemap" => {
+            let Some(file) = p.get_string("filename")? else {
+                return Err(located(&t.loc, format!("imagemap \"{name}\": \"filename\" is missing")));
+            };
+            let file_at = place(p, "filename", &t.loc).clone();
+            let Some(path) = scene.candidates(&file_at, &file).into_iter().find(|c| c.is_file()) else {
+                return Err(located(
+                    &file_at,
+                    format!("imagemap \"{name}\": image \"{file}\" not found"),
+                ));
+            };
+            let wrap_name = p.get_string_or("wrap", "repeat")?;
+            let Some(wrap) = WrapMode::parse(&wrap_name) else {
+                return Err(located(
+                    &t.loc,
+                    format!("imagemap \"{name}\": unknown wrap \"{wrap_name}\""),
+                ));
+            };
+            // pbrt-v4: sRGB for 8-bit (PNG and the like), linear otherwise.
+            let lower = file.to_ascii_lowercase();
+            let eight_bit = [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
+                .iter()
+                .any(|e| lower.ends_with(e));
+            let enc_name = p.get_string_or("encoding", if eight_bit { "sRGB" } else { "linear" })?;
+            let Some(encoding) = Encoding::parse(&enc_name) else {
+                return Err(located(
+                    &t.loc,
+                    format!("imagemap \"{name}\": unknown encoding \"{enc_name}\""),
+                ));
+            };
+            let opts = ImageOptions {
+                wrap,
+                encoding,
+                scale: p.get_float("scale", 1.0)?,
+                invert: p.get_bool("invert", false)?,
+                mapping: uv(p)?,
+            };
+            let tex =
+                Texture::image(&path, &opts).map_err(|e| located(&file_at, format!("imagemap \"{name}\": {e}")))?;
+            Ok(Ok(tex))
+        }
+        other => Ok(Err(format!("texture \"{name}\" of class \"{other}\" is not supported"))),
     }
 }
 
@@ -1225,9 +1599,17 @@ fn reflect(desc: &mut SceneDesc) {
             let [a, b, c] = ns.map(vector);
             *ns = [a, c, b];
         }
+        if let Some([a, b, c]) = t.uvs {
+            t.uvs = Some([a, c, b]);
+        }
     }
     for s in &mut desc.spheres {
         s.sphere.centre = point(s.sphere.centre);
+    }
+    for d in &mut desc.disks {
+        d.centre = point(d.centre);
+        d.normal = vector(d.normal);
+        d.axes = d.axes.map(|a| a.map(vector));
     }
     for l in &mut desc.lights {
         match l {
@@ -1412,6 +1794,180 @@ mod tests {
     }
 
     #[test]
+    fn spot_distant_and_infinite_lights_follow_the_transform() {
+        let c = ok("WorldBegin\nAttributeBegin\nTranslate 1 2 3\n\
+             LightSource \"spot\" \"rgb I\" [ 1 2 3 ] \"float scale\" [ 2 ] \"point3 from\" [ 1 0 0 ] \
+             \"point3 to\" [ 1 0 5 ] \"float coneangle\" [ 40 ] \"float conedelta\" [ 10 ]\n\
+             Rotate 90 0 0 1\n\
+             LightSource \"distant\" \"rgb L\" [ 1 1 1 ] \"point3 from\" [ 0 0 0 ] \"point3 to\" [ 1 0 0 ] \
+             \"float scale\" [ 3 ]\n\
+             LightSource \"infinite\" \"rgb L\" [ 0.5 0.5 0.5 ]\n\
+             AttributeEnd\n\
+             LightSource \"spot\" \"float power\" [ 10 ] \"float coneangle\" [ 30 ] \"float conedelta\" [ 30 ]\n\
+             LightSource \"infinite\" \"float illuminance\" [ 2 ]\n");
+        // The identity camera: the scene is reflected across x = 0.
+        assert!(c.mirrored);
+        let m = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        let Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_falloff_start,
+            cos_falloff_end,
+        } = c.desc.lights[0]
+        else {
+            panic!("{:?}", c.desc.lights)
+        };
+        assert!(position.abs_diff_eq(m(Vec3::new(2.0, 2.0, 3.0)), 1e-5), "{position}");
+        assert!(direction.abs_diff_eq(Vec3::Z, 1e-6), "{direction}");
+        assert_eq!(intensity, Vec3::new(2.0, 4.0, 6.0));
+        assert!((cos_falloff_start - 30f32.to_radians().cos()).abs() < 1e-6);
+        assert!((cos_falloff_end - 40f32.to_radians().cos()).abs() < 1e-6);
+        // Travelling along +x turned 90 degrees about z: +y.
+        let Light::Distant {
+            direction, radiance, ..
+        } = c.desc.lights[1]
+        else {
+            panic!()
+        };
+        assert!(direction.abs_diff_eq(m(Vec3::Y), 1e-6), "{direction}");
+        assert_eq!(radiance, Vec3::splat(3.0));
+        let Light::Infinite {
+            radiance,
+            to_world,
+            map,
+            ..
+        } = &c.desc.lights[2]
+        else {
+            panic!()
+        };
+        assert!(map.is_none() && *radiance == Vec3::splat(0.5));
+        // The light's x axis is the world's y (then mirrored).
+        assert!((*to_world * Vec3::X).abs_diff_eq(m(Vec3::Y), 1e-6));
+        // power: pbrt-v4's k_e for a cone all falloff is 2 pi (1 - cos) / 2.
+        let Light::Spot { intensity, .. } = c.desc.lights[3] else {
+            panic!()
+        };
+        let k_e = PI * (1.0 - 30f32.to_radians().cos());
+        assert!(intensity.abs_diff_eq(Vec3::splat(10.0 / k_e), 1e-3), "{intensity}");
+        let Light::Infinite { radiance, .. } = c.desc.lights[4] else {
+            panic!()
+        };
+        assert!(radiance.abs_diff_eq(Vec3::splat(2.0 / PI), 1e-6));
+    }
+
+    #[test]
+    fn disks_follow_the_transform() {
+        let c = ok(
+            "WorldBegin\nAttributeBegin\nTranslate 1 0 4\nRotate 90 0 1 0\nScale 2 2 2\n\
+             Shape \"disk\" \"float height\" [ 0.5 ] \"float radius\" [ 1 ] \"float innerradius\" [ 0.25 ]\n\
+             AttributeEnd\n",
+        );
+        assert!(c.mirrored);
+        let m = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        let d = &c.desc.disks[0];
+        // Rotate 90 about y takes z to x: centre (1, 0, 4) + 2 * 0.5 x.
+        assert!(
+            d.centre.abs_diff_eq(m(Vec3::new(2.0, 0.0, 4.0)), 1e-5),
+            "{:?}",
+            d.centre
+        );
+        assert!(d.normal.abs_diff_eq(m(Vec3::X), 1e-5), "{:?}", d.normal);
+        assert!((d.radius - 2.0).abs() < 1e-5 && (d.inner_radius - 0.5).abs() < 1e-5);
+        let [a, b] = d.axes.unwrap();
+        assert!(
+            a.abs_diff_eq(m(-Vec3::Z), 1e-5) && b.abs_diff_eq(Vec3::Y, 1e-5),
+            "{a} {b}"
+        );
+        // A ray from the camera (origin, looking along +z) through the ring hits it.
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let ray = crate::math::Ray::new(Vec3::ZERO, Vec3::new(-2.0, 0.0, 5.0).normalize());
+        let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the ring");
+        assert!((hit.t - Vec3::new(-2.0, 0.0, 5.0).length()).abs() < 1e-3, "{}", hit.t);
+        // The disk with an area light is refused.
+        let e = convert_text("WorldBegin\nAreaLightSource \"diffuse\"\nShape \"disk\"\n", false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("dir/main.pbrt:3: an area light on a disk is not supported"),
+            "{e}"
+        );
+        assert_eq!(c.desc.disks.len(), 1);
+    }
+
+    #[test]
+    fn checkerboard_quad_gives_two_reflectances() {
+        let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+             Texture \"a\" \"spectrum\" \"constant\" \"rgb value\" [ 0.8 0.1 0.1 ]\n\
+             Texture \"check\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"a\" \"rgb tex2\" [ 0.1 0.1 0.8 ] \
+             \"float uscale\" [ 2 ] \"float vscale\" [ 1 ]\n\
+             Material \"diffuse\" \"texture reflectance\" \"check\"\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -1 -0.5 0  1 -0.5 0  1 0.5 0  -1 0.5 0 ] \
+             \"point2 uv\" [ 0 0  1 0  1 1  0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n";
+        let c = ok(text);
+        assert!(c.desc.triangles.iter().all(|t| t.uvs.is_some()));
+        let scene = Scene::build(c.desc.clone()).unwrap();
+        let albedo = |x: f32| {
+            let ray = crate::math::Ray::new(Vec3::new(x, 0.0, -5.0), Vec3::Z);
+            let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the quad");
+            let Material::Diffuse { reflectance } = &scene.materials[hit.material as usize] else {
+                panic!()
+            };
+            reflectance.evaluate(&crate::texture::TexCoord { uv: hit.uv, p: hit.p })
+        };
+        let (a, b) = (albedo(-0.5), albedo(0.5));
+        assert!(a != b, "{a} {b}");
+        let red = Vec3::new(0.8, 0.1, 0.1);
+        let blue = Vec3::new(0.1, 0.1, 0.8);
+        // u < 0.5 (pbrt's x < 0, here x > 0 after the reflection) is tex1.
+        assert!(a == blue && b == red, "{a} {b}");
+        // An unknown texture, a missing image: one line naming the place.
+        let e = convert_text(&text.replace("\"check\"\n", "\"nope\"\n"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:7: spectrum texture \"nope\" is not defined"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        let missing = text
+            .replace(
+                "Material",
+                "Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"none.png\"\nMaterial",
+            )
+            .replace("\"check\"\n", "\"img\"\n");
+        let e = convert_text(&missing, false).unwrap_err().to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:7: imagemap \"img\": image \"none.png\" not found"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+    }
+
+    #[test]
+    fn infinite_light_image() {
+        let dir = std::env::temp_dir().join(format!("pbrt-env-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut film = crate::film::Film::new(4, 4);
+        film.pixels.fill(Vec3::new(1.0, 2.0, 3.0));
+        crate::image_io::write_image(&film, &dir.join("sky.pfm"), 0.0).unwrap();
+        let path = dir.join("main.pbrt");
+        let text = "WorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.pfm\" \"float scale\" [ 2 ]\n";
+        let scene = super::super::parse_bytes(&path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk).unwrap();
+        let c = convert(&scene, &path, false).unwrap();
+        let Light::Infinite { radiance, map, .. } = &c.desc.lights[0] else {
+            panic!()
+        };
+        assert!(map.is_some() && *radiance == Vec3::splat(2.0));
+        let missing = text.replace("sky.pfm", "none.exr");
+        let scene = super::super::parse_bytes(&path, missing.as_bytes().to_vec(), &crate::scene::mesh::Disk).unwrap();
+        let e = convert(&scene, &path, false).unwrap_err().to_string();
+        assert!(e.contains("main.pbrt:2: infinite: image \"none.exr\" not found"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn materials_and_settings() {
         let c = ok(&format!(
             "Integrator \"path\" \"integer maxdepth\" [ 7 ]\nSampler \"zsobol\" \"integer pixelsamples\" [ 32 ]\n\
@@ -1450,13 +2006,13 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"hair\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"disk\"\nLightSource \"spot\"\nLightSource \"distant\"\nLightSource \"infinite\"\n",
+             Shape \"curve\"\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
         assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
         assert!(
-            e.contains("dir/main.pbrt:5: shape \"disk\"") && e.contains("and 1 more"),
+            e.contains("dir/main.pbrt:5: shape \"curve\"") && e.contains("and 1 more"),
             "{e}"
         );
         assert!(!e.contains('\n'));

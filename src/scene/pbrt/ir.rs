@@ -197,9 +197,9 @@ pub struct Disk {
 }
 
 impl Disk {
-    /// Whether it has a hole or is cut by phimax.
+    /// Whether it is cut by phimax (a hole, `innerradius`, is supported).
     pub fn is_partial(&self) -> bool {
-        self.inner_radius > 0.0 || self.phimax_deg.clamp(0.0, 360.0) < 360.0
+        self.phimax_deg.clamp(0.0, 360.0) < 360.0
     }
 }
 

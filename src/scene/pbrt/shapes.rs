@@ -143,10 +143,9 @@ pub fn disk(params: &Params, found: &mut Findings) -> Result<Disk> {
         phimax_deg: params.get_float("phimax", 360.0)?,
     };
     if d.is_partial() {
-        found.unsupported.push(format!(
-            "a partial disk (innerradius {}, phimax {}) is not supported",
-            d.inner_radius, d.phimax_deg
-        ));
+        found
+            .unsupported
+            .push(format!("a partial disk (phimax {}) is not supported", d.phimax_deg));
     }
     Ok(d)
 }

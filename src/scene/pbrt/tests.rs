@@ -889,7 +889,6 @@ fn meshes_spheres_and_disks_are_decoded() {
         unsupported,
         [
             (5, "a partial sphere (zmin -2, zmax 1, phimax 360) is not supported"),
-            (7, "a partial disk (innerradius 0.5, phimax 360) is not supported"),
             (8, "shape \"cylinder\" is not supported"),
             (9, "\"teapot\" is not a pbrt-v4 shape type"),
         ]
