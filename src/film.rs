@@ -1,10 +1,15 @@
 //! The film: pixel storage, the reconstruction filter, and tone mapping.
 //!
-//! Filtering is done by importance sampling the filter (pbrt-v4 5.4.3): each
-//! camera sample's offset from the pixel centre is drawn from the filter's
-//! distribution and every sample carries weight one. A pixel then depends only
-//! on its own samples, so tiles and crops stitch exactly and no sample is
-//! shared between threads.
+//! Filtering splats (pbrt-v3 7.8, Mitsuba 3's image blocks): camera samples
+//! are uniform over their pixel and each adds its radiance, weighted by the
+//! filter, to every pixel whose filter covers it; a pixel is the weighted sum
+//! over the weights' sum. Against importance sampling the filter (pbrt-v4
+//! 5.4.3, one pixel a sample), a tent of radius one then has 4/9 of the noise
+//! variance per pixel at the same samples. The sums are fixed point
+//! ([`PixelSum`]), so that adding them is exact and the order in which tiles,
+//! threads, passes or crops deliver them cannot change a bit of the image.
+//! SPPM, whose visible points belong to one pixel, still importance-samples
+//! the filter ([`Filter::sample`]).
 
 use crate::math::{Vec2, Vec3};
 use crate::sampling::sample_tent;
@@ -36,6 +41,39 @@ impl Filter {
         Self::ALL.into_iter().find(|f| f.name() == name)
     }
 
+    /// Radius of the filter's support, in pixels.
+    pub fn radius(self) -> f32 {
+        match self {
+            Filter::Box => 0.5,
+            Filter::Tent => 1.0,
+            Filter::Gaussian => GAUSS_RADIUS as f32,
+        }
+    }
+
+    /// The filter's value at offset `v` (pixels) from a pixel's centre; the
+    /// Gaussian less its value at the radius, as pbrt-v4's, so that it falls
+    /// to zero there.
+    pub fn eval(self, v: Vec2) -> f32 {
+        let r = self.radius();
+        if v.x.abs() >= r || v.y.abs() >= r {
+            return 0.0;
+        }
+        match self {
+            Filter::Box => 1.0,
+            Filter::Tent => (1.0 - v.x.abs()) * (1.0 - v.y.abs()),
+            Filter::Gaussian => {
+                let g = |x: f32| ((-0.5 * (x as f64 / GAUSS_SIGMA).powi(2)).exp() - GAUSS_EDGE).max(0.0);
+                (g(v.x) * g(v.y)) as f32
+            }
+        }
+    }
+
+    /// Pixels a sample reaches beyond its own on each side, when samples are
+    /// uniform over their pixel.
+    pub fn reach(self) -> u32 {
+        (self.radius() - 0.5).ceil().max(0.0) as u32
+    }
+
     /// Offset from the pixel centre, in pixels, for a stratified sample `u` in [0,1)^2.
     pub fn sample(&self, u: Vec2) -> Vec2 {
         match self {
@@ -48,12 +86,27 @@ impl Filter {
 
 const GAUSS_SIGMA: f64 = 0.5;
 const GAUSS_RADIUS: f64 = 1.5;
+/// exp(-r^2 / (2 sigma^2)) at the radius: exp(-4.5).
+const GAUSS_EDGE: f64 = 0.011_108_996_538_242_306;
 
+/// Inverts the CDF of the filter's 1D profile g(x) - g(r) on [-r, r] by
+/// bisection (SPPM's visible points sample the filter).
 fn truncated_gaussian(u: f32) -> f32 {
-    let lo = normal_cdf(-GAUSS_RADIUS / GAUSS_SIGMA);
-    let hi = normal_cdf(GAUSS_RADIUS / GAUSS_SIGMA);
-    let p = (lo + (hi - lo) * u as f64).clamp(1e-12, 1.0 - 1e-12);
-    (inverse_normal_cdf(p) * GAUSS_SIGMA).clamp(-GAUSS_RADIUS, GAUSS_RADIUS) as f32
+    let cdf = |x: f64| {
+        let area = GAUSS_SIGMA * (2.0 * std::f64::consts::PI).sqrt();
+        area * (normal_cdf(x / GAUSS_SIGMA) - normal_cdf(-GAUSS_RADIUS / GAUSS_SIGMA)) - GAUSS_EDGE * (x + GAUSS_RADIUS)
+    };
+    let target = cdf(GAUSS_RADIUS) * u as f64;
+    let (mut lo, mut hi) = (-GAUSS_RADIUS, GAUSS_RADIUS);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if cdf(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)) as f32
 }
 
 fn normal_cdf(x: f64) -> f64 {
@@ -70,53 +123,6 @@ fn erf(x: f64) -> f64 {
             * t
             * (-x * x).exp();
     s * y
-}
-
-/// Acklam's rational approximation of the normal quantile (relative error < 1.2e-9).
-fn inverse_normal_cdf(p: f64) -> f64 {
-    const A: [f64; 6] = [
-        -3.969_683_028_665_376e1,
-        2.209_460_984_245_205e2,
-        -2.759_285_104_469_687e2,
-        1.383_577_518_672_69e2,
-        -3.066_479_806_614_716e1,
-        2.506_628_277_459_239,
-    ];
-    const B: [f64; 5] = [
-        -5.447_609_879_822_406e1,
-        1.615_858_368_580_409e2,
-        -1.556_989_798_598_866e2,
-        6.680_131_188_771_972e1,
-        -1.328_068_155_288_572e1,
-    ];
-    const C: [f64; 6] = [
-        -7.784_894_002_430_293e-3,
-        -3.223_964_580_411_365e-1,
-        -2.400_758_277_161_838,
-        -2.549_732_539_343_734,
-        4.374_664_141_464_968,
-        2.938_163_982_698_783,
-    ];
-    const D: [f64; 4] = [
-        7.784_695_709_041_462e-3,
-        3.224_671_290_700_398e-1,
-        2.445_134_137_142_996,
-        3.754_408_661_907_416,
-    ];
-    let tail = |q: f64| {
-        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
-            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
-    };
-    if p < 0.02425 {
-        tail((-2.0 * p.ln()).sqrt())
-    } else if p > 1.0 - 0.02425 {
-        -tail((-2.0 * (1.0 - p).ln()).sqrt())
-    } else {
-        let q = p - 0.5;
-        let r = q * q;
-        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
-            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
-    }
 }
 
 /// A rectangle of pixels [x0, x1) x [y0, y1) within a full frame.
@@ -181,6 +187,115 @@ impl FrameWindow {
     }
 }
 
+/// Fractional bits of [`PixelSum`]'s fixed point: a resolution of 3.6e-15
+/// and room for sums up to 6e23, far beyond any radiance times sample count.
+const FIXED_ONE: f64 = (1u64 << 48) as f64;
+
+/// One pixel's filter-weighted radiance sum and weight sum, in fixed point.
+/// Integer addition is associative (wrapping, it is exact modulo 2^128), so
+/// sums merged in any order are the same bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelSum {
+    pub rgb: [i128; 3],
+    pub weight: i128,
+}
+
+impl PixelSum {
+    fn fixed(v: f64) -> i128 {
+        (v * FIXED_ONE) as i128
+    }
+
+    /// Adds radiance `l` with filter weight `w`.
+    pub fn add(&mut self, l: Vec3, w: f32) {
+        let w64 = w as f64;
+        for (s, c) in self.rgb.iter_mut().zip(l.to_array()) {
+            *s = s.wrapping_add(Self::fixed(c as f64 * w64));
+        }
+        self.weight = self.weight.wrapping_add(Self::fixed(w64));
+    }
+
+    pub fn merge(&mut self, o: &PixelSum) {
+        for (s, c) in self.rgb.iter_mut().zip(o.rgb) {
+            *s = s.wrapping_add(c);
+        }
+        self.weight = self.weight.wrapping_add(o.weight);
+    }
+
+    /// The weighted mean: black for a pixel no sample reached.
+    pub fn value(&self) -> Vec3 {
+        if self.weight <= 0 {
+            return Vec3::ZERO;
+        }
+        let w = self.weight as f64;
+        let [r, g, b] = self.rgb.map(|c| (c as f64 / w) as f32);
+        Vec3::new(r, g, b)
+    }
+
+    /// The four numbers as a flat list (for checkpoints).
+    pub fn to_array(&self) -> [i128; 4] {
+        [self.rgb[0], self.rgb[1], self.rgb[2], self.weight]
+    }
+
+    pub fn from_array(a: [i128; 4]) -> Self {
+        PixelSum {
+            rgb: [a[0], a[1], a[2]],
+            weight: a[3],
+        }
+    }
+}
+
+/// The pixel sums of a rectangle of the frame that samples are splatted
+/// into: one per tile, merged into the render's sums when the tile is done.
+#[derive(Clone, Debug)]
+pub struct SplatBlock {
+    rect: PixelRect,
+    filter: Filter,
+    pub sums: Vec<PixelSum>,
+}
+
+impl SplatBlock {
+    pub fn new(rect: PixelRect, filter: Filter) -> Self {
+        SplatBlock {
+            rect,
+            filter,
+            sums: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
+        }
+    }
+
+    pub fn rect(&self) -> PixelRect {
+        self.rect
+    }
+
+    /// Adds radiance `l` of a sample at `pos` (frame coordinates, pixel (x, y)
+    /// spanning [x, x+1) x [y, y+1)) taken in pixel `px` to the pixels of the
+    /// block its filter covers. The box filter keeps the sample in `px` (the
+    /// pixel it was taken in, even on its edge).
+    pub fn splat(&mut self, px: (u32, u32), pos: Vec2, l: Vec3) {
+        let r = self.rect;
+        let mut add = |x: u32, y: u32, w: f32| {
+            if w > 0.0 && x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1 {
+                let k = (y - r.y0) as usize * r.width() as usize + (x - r.x0) as usize;
+                self.sums[k].add(l, w);
+            }
+        };
+        if self.filter == Filter::Box {
+            add(px.0, px.1, 1.0);
+            return;
+        }
+        let reach = self.filter.reach() as i64;
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let (x, y) = (px.0 as i64 + dx, px.1 as i64 + dy);
+                if x < 0 || y < 0 {
+                    continue;
+                }
+                let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                add(x as u32, y as u32, self.filter.eval(pos - centre));
+            }
+        }
+    }
+}
+
 /// Linear RGB radiance per pixel, rows from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
@@ -195,6 +310,15 @@ impl Film {
             width,
             height,
             pixels: vec![Vec3::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// The film of pixel sums: each pixel their weighted mean.
+    pub fn from_sums(width: u32, height: u32, sums: &[PixelSum]) -> Self {
+        Film {
+            width,
+            height,
+            pixels: sums.iter().map(PixelSum::value).collect(),
         }
     }
 
@@ -286,11 +410,34 @@ pub fn srgb_oetf(v: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::ONE_MINUS_EPS;
 
     #[test]
-    fn gaussian_quantile_inverts_cdf() {
-        for &x in &[-2.0, -0.5, 0.0, 0.3, 1.7] {
-            assert!((inverse_normal_cdf(normal_cdf(x)) - x).abs() < 1e-5);
+    fn sampled_filters_follow_their_profiles() {
+        // Histogram of 1D samples against the integral of the filter's
+        // profile over each bin (both normalised).
+        for f in [Filter::Tent, Filter::Gaussian] {
+            let (bins, n) = (24usize, 48_000u32);
+            let r = f.radius();
+            let mut hist = vec![0f64; bins];
+            for i in 0..n {
+                let x = f.sample(Vec2::new((i as f32 + 0.5) / n as f32, 0.5)).x;
+                hist[(((x + r) / (2.0 * r) * bins as f32) as usize).min(bins - 1)] += 1.0 / n as f64;
+            }
+            let profile: Vec<f64> = (0..bins)
+                .map(|b| {
+                    (0..100)
+                        .map(|k| {
+                            let x = -r + 2.0 * r * (b as f32 + (k as f32 + 0.5) / 100.0) / bins as f32;
+                            f.eval(Vec2::new(x, 0.0)) as f64
+                        })
+                        .sum::<f64>()
+                })
+                .collect();
+            let total: f64 = profile.iter().sum();
+            for (b, (h, p)) in hist.iter().zip(&profile).enumerate() {
+                assert!((h - p / total).abs() < 4e-4, "{f:?} bin {b}: {h} against {}", p / total);
+            }
         }
     }
 
@@ -309,6 +456,93 @@ mod tests {
             }
             assert!((mean / (n * n) as f32).length() < 1e-3);
         }
+    }
+
+    #[test]
+    fn filters_vanish_beyond_the_reach_of_a_sample_in_its_pixel() {
+        for f in Filter::ALL {
+            let reach = f.reach() as f32;
+            for i in 0..=16 {
+                for j in 0..=16 {
+                    // A sample anywhere in pixel (0, 0), and the centre of the
+                    // first pixel beyond the reach, along x and along y.
+                    let pos = Vec2::new(i as f32 / 16.0, j as f32 / 16.0).min(Vec2::splat(ONE_MINUS_EPS));
+                    for c in [Vec2::new(reach + 1.5, 0.5), Vec2::new(-reach - 0.5, 0.5)] {
+                        assert_eq!(f.eval(pos - c), 0.0, "{f:?} at {pos:?} reaches {c:?}");
+                        assert_eq!(f.eval(pos - Vec2::new(c.y, c.x)), 0.0);
+                    }
+                }
+            }
+            assert!(f.eval(Vec2::ZERO) > 0.0);
+        }
+    }
+
+    #[test]
+    fn splatted_pixels_are_weighted_means_whatever_the_order() {
+        let rect = PixelRect::full(5, 4);
+        for f in Filter::ALL {
+            let mut rng = crate::sampling::Rng::new(7, 1);
+            let samples: Vec<((u32, u32), Vec2, Vec3)> = (0..400)
+                .map(|i| {
+                    let (x, y) = (i % 5, (i / 5) % 4);
+                    let pos = Vec2::new(x as f32, y as f32) + rng.next_2d();
+                    ((x, y), pos, Vec3::new(2.0, 0.5, 0.125))
+                })
+                .collect();
+            let mut forward = SplatBlock::new(rect, f);
+            for &(px, pos, l) in &samples {
+                forward.splat(px, pos, l);
+            }
+            // The same samples in reverse, split over two blocks merged after.
+            let mut a = SplatBlock::new(rect, f);
+            let mut b = SplatBlock::new(rect, f);
+            for (k, &(px, pos, l)) in samples.iter().rev().enumerate() {
+                if k % 2 == 0 { &mut a } else { &mut b }.splat(px, pos, l);
+            }
+            for (s, o) in a.sums.iter_mut().zip(&b.sums) {
+                s.merge(o);
+            }
+            assert_eq!(forward.sums, a.sums, "{f:?}");
+            // Constant radiance gives that constant in every pixel.
+            for s in &forward.sums {
+                let v = s.value();
+                assert!(
+                    (v - Vec3::new(2.0, 0.5, 0.125)).abs().max_element() < 1e-6,
+                    "{f:?}: {v:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn splatting_a_tent_lowers_the_noise_of_a_pixel() {
+        // White noise per sample: the variance of a pixel of n samples is
+        // 1/n importance-sampling the filter (every sample weight one), and
+        // (4/9)/n for a splatted tent (sum of squared weights over squared
+        // sum of weights, four times 1/9 of the samples from each pixel).
+        let (w, n) = (40u32, 16u32);
+        let rect = PixelRect::full(w, w);
+        let mut block = SplatBlock::new(rect, Filter::Tent);
+        let mut rng = crate::sampling::Rng::new(11, 3);
+        for y in 0..w {
+            for x in 0..w {
+                for _ in 0..n {
+                    let pos = Vec2::new(x as f32, y as f32) + rng.next_2d();
+                    let l = Vec3::splat(rng.next_f32() * 2.0);
+                    block.splat((x, y), pos, l);
+                }
+            }
+        }
+        // Inner pixels only (the frame's edge has fewer neighbours).
+        let vals: Vec<f64> = (2..w - 2)
+            .flat_map(|y| (2..w - 2).map(move |x| (x, y)))
+            .map(|(x, y)| block.sums[(y * w + x) as usize].value().x as f64)
+            .collect();
+        let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+        let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (vals.len() - 1) as f64;
+        let one_pixel = (1.0 / 3.0) / n as f64; // variance of U(0, 2) over n
+        let ratio = var / one_pixel;
+        assert!((0.3..0.6).contains(&ratio), "variance ratio {ratio}");
     }
 
     fn part(x0: u32, y0: u32, x1: u32, y1: u32) -> (Film, FrameWindow) {

@@ -8,7 +8,8 @@
 //! (leaving its state as it was when a pass is interrupted), and exposes the
 //! state as named numeric buffers. [`run`] drives any of them: passes,
 //! interruption, the checkpoint timer and the files. The path tracer
-//! (`path::Progressive`) keeps one buffer, the per-pixel sample sums; SPPM
+//! (`path::Progressive`) keeps one buffer, the per-pixel fixed-point sums of
+//! filter-weighted samples and weights; SPPM
 //! (`sppm::Progressive`) keeps its per-pixel direct-light sums, radius,
 //! photon count N and flux tau (its visible points are recomputed each pass,
 //! so they need no saving), with pass k's photons keyed by k so that a
@@ -21,7 +22,7 @@
 //! ```text
 //! passes done  u32
 //! buffer count u32 (at most 64)
-//! per buffer:  tag (u8 length + ASCII), element type u8 (1: f32, 2: f64),
+//! per buffer:  tag (u8 length + ASCII), element type u8 (1: f32, 2: f64, 3: i128),
 //!              element count u64, the elements little-endian
 //! ```
 //!
@@ -30,7 +31,6 @@
 
 use super::RenderSettings;
 use crate::error::{Error, Result};
-use crate::film::Film;
 use crate::scene::Scene;
 use crate::state_file::{self, Header};
 use std::path::Path;
@@ -45,6 +45,8 @@ const MAX_BUFFERS: u32 = 64;
 pub enum Buffer {
     F32(Vec<f32>),
     F64(Vec<f64>),
+    /// Fixed-point sums (`film::PixelSum`).
+    I128(Vec<i128>),
 }
 
 impl Buffer {
@@ -52,6 +54,7 @@ impl Buffer {
         match self {
             Buffer::F32(v) => v.len(),
             Buffer::F64(v) => v.len(),
+            Buffer::I128(v) => v.len(),
         }
     }
 
@@ -168,6 +171,13 @@ pub fn write(path: &Path, header: &Header, passes: u32, buffers: &[(String, Buff
                         w.bytes(&c.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())?;
                     }
                 }
+                Buffer::I128(v) => {
+                    w.bytes(&[3])?;
+                    w.u64(v.len() as u64)?;
+                    for c in v.chunks(4096) {
+                        w.bytes(&c.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>())?;
+                    }
+                }
             }
         }
         Ok(())
@@ -190,6 +200,7 @@ pub fn read(path: &Path, header: &Header) -> Result<(u32, Vec<(String, Buffer)>)
             let b = match kind {
                 1 => Buffer::F32(r.records::<_, 4>(n, |b| Ok(f32::from_le_bytes(*b)))?),
                 2 => Buffer::F64(r.records::<_, 8>(n, |b| Ok(f64::from_le_bytes(*b)))?),
+                3 => Buffer::I128(r.records::<_, 16>(n, |b| Ok(i128::from_le_bytes(*b)))?),
                 k => return Err(r.error(format!("corrupt checkpoint: buffer '{tag}' of unknown type {k}"))),
             };
             buffers.push((tag, b));
@@ -198,20 +209,10 @@ pub fn read(path: &Path, header: &Header) -> Result<(u32, Vec<(String, Buffer)>)
     })
 }
 
-/// The film of per-pixel sums divided by the sample count (black for none).
-pub fn film_of_sums(width: u32, height: u32, sums: &[crate::math::Vec3], samples: u32) -> Film {
-    let mut film = Film::new(width, height);
-    if samples > 0 {
-        for (p, sum) in film.pixels.iter_mut().zip(sums) {
-            *p = *sum / samples as f32;
-        }
-    }
-    film
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::film::Film;
     use crate::integrator::{render, render_tiles, IntegratorKind, StateFiles};
 
     fn scene() -> Scene {

@@ -14,7 +14,7 @@ pub mod photon;
 pub mod sppm;
 
 use crate::error::{Error, Result};
-use crate::film::{Film, FrameWindow, PixelRect};
+use crate::film::{Film, FrameWindow, PixelRect, PixelSum, SplatBlock};
 use crate::math::{Ray, Vec2, Vec3};
 use crate::photon::PhotonStats;
 use crate::sampling::{hammersley_shifted, stratified, Rng};
@@ -277,33 +277,32 @@ pub fn render_tiles(
     let cam = &scene.camera;
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
     let spp = settings.samples_per_pixel();
-    let mut sums = vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize];
+    let mut sums = vec![PixelSum::default(); rect.width() as usize * rect.height() as usize];
     let never = AtomicBool::new(false);
     let (stats, done) = accumulate_tiles(scene, settings, est, 0..spp, &mut sums, &never, on_tile).unwrap_or_default();
-    let mut film = Film::new(rect.width(), rect.height());
-    for (p, sum) in film.pixels.iter_mut().zip(sums) {
-        *p = sum / spp as f32;
-    }
-    (film, stats, done)
+    (Film::from_sums(rect.width(), rect.height(), &sums), stats, done)
 }
 
 /// Adds camera samples `samples` (indices into each pixel's fixed sequence of
-/// `samples_per_pixel` samples) to the per-pixel sums of the crop rectangle (the whole
-/// frame without one), tile by tile.
+/// `samples_per_pixel` samples), splatted through the pixel filter, to the
+/// pixel sums of the crop rectangle (the whole frame without one), tile by
+/// tile.
 ///
-/// A render is this over `0..spp` followed by a division by spp; the preview
-/// window runs it over consecutive ranges. Each pixel's samples are added in
-/// index order onto its running sum, so any split into ranges gives the same
-/// bits as one pass. `sums` holds one entry per pixel of the rectangle, rows
-/// from the top. `cancel` is checked before every row of a tile; when it is
-/// set, `sums` is left untouched and `None` returned. Tiles not started when
-/// `on_tile`'s cancel token is set are skipped; the count of tiles done says so.
+/// A render is this over `0..spp`; the preview window runs it over
+/// consecutive ranges. The sums are exact (fixed point), so any split into
+/// ranges, tiles or threads gives the same bits. Samples of pixels just
+/// outside a crop whose filter reaches into it are taken too (by the tiles on
+/// the crop's edge), so that crops stitch into the full frame's image.
+/// `sums` holds one entry per pixel of the rectangle, rows from the top.
+/// `cancel` is checked before every row of a tile; when it is set, `sums` is
+/// left untouched and `None` returned. Tiles not started when `on_tile`'s
+/// cancel token is set are skipped; the count of tiles done says so.
 pub fn accumulate_tiles(
     scene: &Scene,
     settings: &RenderSettings,
     est: &dyn RadianceEstimator,
     samples: Range<u32>,
-    sums: &mut [Vec3],
+    sums: &mut [PixelSum],
     cancel: &AtomicBool,
     on_tile: Progress,
 ) -> Option<(RayStats, u64)> {
@@ -311,52 +310,75 @@ pub fn accumulate_tiles(
     let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
     let (rw, rh) = (rect.width(), rect.height());
     assert_eq!(sums.len(), rw as usize * rh as usize, "one sum per pixel");
+    let reach = settings.filter.reach();
     let tiles_x = rw.div_ceil(TILE);
     let ntiles = tile_count(rw, rh) as u32;
-    let prior: &[Vec3] = sums;
-    let tiles: Option<Vec<(u32, Vec<Vec3>, RayStats)>> = (0..ntiles)
+    let pass = std::sync::Mutex::new(vec![PixelSum::default(); sums.len()]);
+    let tiles: Option<Vec<RayStats>> = (0..ntiles)
         .into_par_iter()
         .filter(|_| !on_tile.stopped())
         .map(|t| {
-            // Tile bounds relative to the rectangle.
-            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let (x1, y1) = ((x0 + TILE).min(rw), (y0 + TILE).min(rh));
+            // The tile's pixels in the frame.
+            let (x0, y0) = (rect.x0 + (t % tiles_x) * TILE, rect.y0 + (t / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(rect.x1), (y0 + TILE).min(rect.y1));
+            // Pixels whose samples it takes: its own, and on the crop's edge
+            // those beyond it that the filter reaches in from.
+            let (sx0, sy0) = (
+                if x0 == rect.x0 { x0.saturating_sub(reach) } else { x0 },
+                if y0 == rect.y0 { y0.saturating_sub(reach) } else { y0 },
+            );
+            let (sx1, sy1) = (
+                if x1 == rect.x1 { (x1 + reach).min(cam.width) } else { x1 },
+                if y1 == rect.y1 {
+                    (y1 + reach).min(cam.height)
+                } else {
+                    y1
+                },
+            );
+            let block_rect = PixelRect {
+                x0: x0.saturating_sub(reach).max(rect.x0),
+                y0: y0.saturating_sub(reach).max(rect.y0),
+                x1: (x1 + reach).min(rect.x1),
+                y1: (y1 + reach).min(rect.y1),
+            };
+            let mut block = SplatBlock::new(block_rect, settings.filter);
             let mut stats = RayStats::default();
-            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            for y in y0..y1 {
+            for y in sy0..sy1 {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                for x in x0..x1 {
-                    let mut sum = prior[y as usize * rw as usize + x as usize];
-                    let (fx, fy) = (rect.x0 + x, rect.y0 + y);
-                    add_pixel_samples(scene, settings, est, fx, fy, samples.clone(), &mut sum, &mut stats);
-                    out.push(sum);
+                for x in sx0..sx1 {
+                    add_pixel_samples(scene, settings, est, x, y, samples.clone(), &mut block, &mut stats);
                 }
             }
+            let mut pass = pass.lock().unwrap_or_else(|e| e.into_inner());
+            let br = block.rect();
+            for (i, s) in block.sums.iter().enumerate() {
+                let (x, y) = (br.x0 + i as u32 % br.width(), br.y0 + i as u32 / br.width());
+                pass[(y - rect.y0) as usize * rw as usize + (x - rect.x0) as usize].merge(s);
+            }
+            drop(pass);
             on_tile.tile_done();
-            Some((t, out, stats))
+            Some(stats)
         })
         .collect();
     let tiles = tiles?;
-    let done = tiles.len() as u64;
-    let mut stats = RayStats::default();
-    for (t, px, s) in tiles {
-        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-        let tw = (x0 + TILE).min(rw) - x0;
-        for (i, p) in px.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            sums[y as usize * rw as usize + x as usize] = p;
-        }
-        stats.add(&s);
+    let pass = pass.into_inner().unwrap_or_else(|e| e.into_inner());
+    for (s, p) in sums.iter_mut().zip(&pass) {
+        s.merge(p);
     }
-    Some((stats, done))
+    let mut stats = RayStats::default();
+    for s in &tiles {
+        stats.add(s);
+    }
+    Some((stats, tiles.len() as u64))
 }
 
-/// Adds samples `samples` of pixel (x, y) to `sum`, in index order, with
-/// random numbers keyed by (seed, pixel, s). When the sample count is a square
-/// n^2, sample s is jittered in stratum s of an n x n grid; otherwise the
-/// pixel's samples form a Hammersley set shifted per pixel.
+/// Splats samples `samples` of pixel (x, y) into `block`, with random
+/// numbers keyed by (seed, pixel, s). The samples are uniform over the pixel:
+/// when their count is a square n^2, sample s is jittered in stratum s of an
+/// n x n grid; otherwise the pixel's samples form a Hammersley set shifted
+/// per pixel.
 #[allow(clippy::too_many_arguments)]
 pub fn add_pixel_samples(
     scene: &Scene,
@@ -365,7 +387,7 @@ pub fn add_pixel_samples(
     x: u32,
     y: u32,
     samples: Range<u32>,
-    sum: &mut Vec3,
+    block: &mut SplatBlock,
     stats: &mut RayStats,
 ) {
     let cam = &scene.camera;
@@ -385,13 +407,13 @@ pub fn add_pixel_samples(
         } else {
             hammersley_shifted(s, spp, shift)
         };
-        let off = settings.filter.sample(u);
-        let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+        let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
+        let ray = cam.generate_ray(pos.x, pos.y);
         stats.camera_rays += 1;
         let l = est.li(scene, &ray, &mut rng, stats);
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
-            *sum += l;
+            block.splat((x, y), pos, l);
         }
     }
 }

@@ -34,7 +34,7 @@ use super::checkpoint::{self, Buffer};
 use super::direct::{emitted_radiance, escaped_radiance, sample_direct};
 use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::bsdf::TransportMode;
-use crate::film::{Film, PixelRect};
+use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -133,7 +133,7 @@ pub struct Progressive<'a> {
     settings: &'a RenderSettings,
     est: PathTracer,
     rect: PixelRect,
-    sums: Vec<Vec3>,
+    sums: Vec<PixelSum>,
     stats: RayStats,
 }
 
@@ -148,7 +148,7 @@ impl<'a> Progressive<'a> {
                 light_sampling: settings.light_sampling,
             },
             rect,
-            sums: vec![Vec3::ZERO; rect.width() as usize * rect.height() as usize],
+            sums: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
             stats: RayStats::default(),
         }
     }
@@ -166,15 +166,10 @@ impl<'a> Progressive<'a> {
         (passes * Self::samples_per_pass(self.settings.spp)).min(self.settings.spp)
     }
 
-    /// The image after `passes` passes (the average of the samples so far)
-    /// and the rays this run traced.
-    pub fn finish(self, passes: u32) -> (Film, RayStats) {
-        let film = checkpoint::film_of_sums(
-            self.rect.width(),
-            self.rect.height(),
-            &self.sums,
-            self.samples_after(passes),
-        );
+    /// The image after `passes` passes (the filter-weighted mean of the
+    /// samples so far) and the rays this run traced.
+    pub fn finish(self, _passes: u32) -> (Film, RayStats) {
+        let film = Film::from_sums(self.rect.width(), self.rect.height(), &self.sums);
         (film, self.stats)
     }
 }
@@ -184,7 +179,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         let s = self.settings;
         let r = self.rect;
         format!(
-            "integrator=path spp={} samples_per_pass={} max_depth={:?} light_sampling={} filter={:?} seed={} crop={},{},{},{}",
+            "integrator=path film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} filter={:?} seed={} crop={},{},{},{}",
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
@@ -234,19 +229,19 @@ impl checkpoint::Progressive for Progressive<'_> {
 
     fn save(&self) -> Vec<(String, Buffer)> {
         let flat = self.sums.iter().flat_map(|v| v.to_array()).collect();
-        vec![("sums".into(), Buffer::F32(flat))]
+        vec![("sums".into(), Buffer::I128(flat))]
     }
 
     fn restore(&mut self, buffers: Vec<(String, Buffer)>) -> std::result::Result<(), String> {
-        let want = self.sums.len() * 3;
+        let want = self.sums.len() * 4;
         match &buffers[..] {
-            [(tag, Buffer::F32(v))] if tag == "sums" && v.len() == want => {
-                for (s, c) in self.sums.iter_mut().zip(v.chunks_exact(3)) {
-                    *s = Vec3::new(c[0], c[1], c[2]);
+            [(tag, Buffer::I128(v))] if tag == "sums" && v.len() == want => {
+                for (s, c) in self.sums.iter_mut().zip(v.chunks_exact(4)) {
+                    *s = PixelSum::from_array([c[0], c[1], c[2], c[3]]);
                 }
                 Ok(())
             }
-            _ => Err(format!("expected one f32 buffer 'sums' of {want} values")),
+            _ => Err(format!("expected one i128 buffer 'sums' of {want} values")),
         }
     }
 }

@@ -44,7 +44,8 @@ pub const SETTINGS: &[Spec] = &[
         kind: Kind::Choice(FILTERS),
         default: DefaultValue::Name("box"),
         doc: "Pixel reconstruction filter: box (the pixel's area), tent (radius one pixel), gaussian (sigma 0.5, \
-              truncated at 1.5 pixels)",
+              truncated at 1.5 pixels, less its value there, as pbrt-v4's); samples are splatted into every pixel \
+              the filter covers (SPPM samples the filter instead)",
         in_scene_file: true,
         only_for: &[],
     },

@@ -18,7 +18,7 @@
 //! keeping the photon chunks already traced, so a camera move costs no
 //! photons at all.
 //!
-use crate::film::Film;
+use crate::film::{Film, PixelSum};
 use crate::integrator::photon::{map_settings, with_caustics, PhotonPipeline};
 use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstimator, RayStats, RenderSettings};
 use crate::math::Vec3;
@@ -202,7 +202,7 @@ pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
 pub struct Progressive {
     width: u32,
     height: u32,
-    sums: Vec<Vec3>,
+    sums: Vec<PixelSum>,
     done: u32,
     target: u32,
     /// Rays of the completed passes since the last reset.
@@ -216,7 +216,7 @@ impl Progressive {
         Progressive {
             width,
             height,
-            sums: vec![Vec3::ZERO; width as usize * height as usize],
+            sums: vec![PixelSum::default(); width as usize * height as usize],
             done: 0,
             target: settings.ssaa * settings.ssaa,
             stats: RayStats::default(),
@@ -225,7 +225,7 @@ impl Progressive {
 
     /// Forgets every sample (the camera or the light moved).
     pub fn reset(&mut self) {
-        self.sums.fill(Vec3::ZERO);
+        self.sums.fill(PixelSum::default());
         self.done = 0;
         self.stats = RayStats::default();
     }
@@ -290,13 +290,7 @@ impl Progressive {
     /// The mean of the samples so far (black before the first pass); the
     /// same division as the offline render, so equal to it once complete.
     pub fn film(&self) -> Film {
-        let mut film = Film::new(self.width, self.height);
-        if self.done > 0 {
-            for (p, s) in film.pixels.iter_mut().zip(&self.sums) {
-                *p = *s / self.done as f32;
-            }
-        }
-        film
+        Film::from_sums(self.width, self.height, &self.sums)
     }
 }
 
