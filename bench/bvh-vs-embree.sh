@@ -51,8 +51,8 @@ function field(name,   i, kv) {
 $1 == "build" {
     t = field("threads"); im = field("impl"); tris = field("triangles")
     q = field("quality")
-    if (im == "ours" && t != 1) { wall["ours/all"] = field("ms"); all = t }
-    else if (im == "embree") { wall[im, q, t] = field("ms"); cpu[im, q, t] = field("cpu_ms") }
+    if (im == "ours" && t != 1) { wall["ours/all"] = field("ms"); pcpu["ours/all"] = field("process_cpu_ms"); all = t }
+    else if (im == "embree") { wall[im, q, t] = field("ms"); cpu[im, q, t] = field("cpu_ms"); pcpu[im, q, t] = field("process_cpu_ms") }
     else { wall[im] = field("ms"); cpu[im] = field("cpu_ms") }
 }
 $1 == "result" {
@@ -74,12 +74,13 @@ END {
         if (d > 1e-4 * h["embree", s] + 1) { printf "  hit counts disagree: ours %d, Embree %d\n", h["ours", s], h["embree", s]; bad = 1 }
         else printf "  hits: ours %d, Embree %d (MEDIUM %d), obvhs %d\n", h["ours", s], h["embree", s], h["embree-medium", s], h["obvhs", s]
     }
-    printf "\nBVH build over %s triangles (median; ms wall clock / ms CPU of the building thread):\n", tris
-    printf "  ours             %s threads: %s\n", all, wall["ours/all"]
+    printf "\nBVH build over %s triangles (median; ms wall clock / ms CPU of the building thread;\n", tris
+    printf "for two threads, ms wall clock / ms CPU of all threads):\n"
+    printf "  ours             %s threads: %s / %s\n", all, wall["ours/all"], pcpu["ours/all"]
     printf "  ours             1 thread:  %s / %s\n", wall["ours"], cpu["ours"]
-    printf "  Embree MEDIUM    2 threads: %s\n", wall["embree", "medium", 2]
+    printf "  Embree MEDIUM    2 threads: %s / %s\n", wall["embree", "medium", 2], pcpu["embree", "medium", 2]
     printf "  Embree MEDIUM    1 thread:  %s / %s\n", wall["embree", "medium", 1], cpu["embree", "medium", 1]
-    printf "  Embree HIGH      2 threads: %s\n", wall["embree", "high", 2]
+    printf "  Embree HIGH      2 threads: %s / %s\n", wall["embree", "high", 2], pcpu["embree", "high", 2]
     printf "  Embree HIGH      1 thread:  %s / %s\n", wall["embree", "high", 1], cpu["embree", "high", 1]
     printf "  obvhs            1 thread:  %s / %s (medium_build)\n", wall["obvhs"], cpu["obvhs"]
     exit bad
