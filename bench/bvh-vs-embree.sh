@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Times our BVH, Embree 3 and the obvhs crate on the same cornell-bunny ray
 # sets, single-threaded, one after the other, and prints a table with the
-# ratios to Embree. Installs Embree (Debian's libembree-dev) when its header
-# is missing. See BENCHMARKS.md.
+# ratios to Embree, the build times (Embree at quality MEDIUM and HIGH, on one
+# and two threads) and the instruction set Embree's kernels use. Installs
+# Embree (Debian's libembree-dev) when its header is missing. See
+# BENCHMARKS.md.
 #
 # Usage: bench/bvh-vs-embree.sh [reps] [builds]
 #   reps    timed passes over each ray set; the best is kept (default 5)
@@ -26,6 +28,17 @@ cargo build --release --example bvh_rays
 
 echo "== ours and obvhs"
 target/release/examples/bvh_rays --write "$work/rays.bin" --reps "$reps" --builds "$builds" | tee "$work/out.txt"
+echo "== Embree's kernels (device \"threads=1,verbose=2\")"
+"$work/embree_bench" --kernels "$work/rays.bin" >"$work/kernels.txt" 2>&1 || true
+# The CPU's instruction sets and the ones this Embree was compiled for (what
+# verbose=1 prints), then the builder and single-ray kernel per build quality.
+awk '/^ +ISA +:/ && !isa { isa = 1; sub(/^ +ISA +: */, ""); print "CPU:                    " $0 }
+     /^ +Targets +:.*supported/ { sub(/^ +Targets +: */, ""); print "Embree can use:         " $0; t = 1; next }
+     t { sub(/^ */, ""); print "Embree was compiled for: " $0; t = 0 }
+     /^kernels quality=/ { q = substr($2, 9) }
+     /^building / { print "quality " q ": builds " $2 " with " $4 }
+     /intersector1 *=/ && !(q in done) { done[q] = 1; print "quality " q ": rays with " $3 }' "$work/kernels.txt"
+
 echo "== Embree"
 "$work/embree_bench" "$work/rays.bin" "$reps" "$builds" | tee -a "$work/out.txt"
 
@@ -37,7 +50,9 @@ function field(name,   i, kv) {
 }
 $1 == "build" {
     t = field("threads"); im = field("impl"); tris = field("triangles")
-    if (im == "ours" && t != 1) { wall["ours/all"] = field("ms"); all = t }
+    q = field("quality")
+    if (im == "ours" && t != 1) { wall["ours/all"] = field("ms"); pcpu["ours/all"] = field("process_cpu_ms"); all = t }
+    else if (im == "embree") { wall[im, q, t] = field("ms"); cpu[im, q, t] = field("cpu_ms"); pcpu[im, q, t] = field("process_cpu_ms") }
     else { wall[im] = field("ms"); cpu[im] = field("cpu_ms") }
 }
 $1 == "result" {
@@ -46,22 +61,27 @@ $1 == "result" {
     r[im, s] = field("mrays_per_s"); h[im, s] = field("hits")
 }
 END {
-    printf "Rays per second, single thread (thread CPU time, best of the passes):\n"
-    printf "%-11s %12s %12s %12s %11s %12s\n", "ray set", "ours Mray/s", "Embree", "obvhs", "ours/Embree", "obvhs/Embree"
+    printf "Rays per second (millions), single thread (thread CPU time, best of the passes);\n"
+    printf "Embree at build quality HIGH, and MEDIUM in the last column:\n"
+    printf "%-11s %8s %8s %8s %11s %12s %13s\n", "ray set", "ours", "Embree", "obvhs", "ours/Embree", "obvhs/Embree", "Embree MEDIUM"
     bad = 0
     for (k = 1; k <= n; k++) {
         s = order[k]
-        printf "%-11s %12.2f %12.2f %12.2f %11.2f %12.2f\n", s, r["ours", s], r["embree", s], r["obvhs", s],
-            r["ours", s] / r["embree", s], r["obvhs", s] / r["embree", s]
+        printf "%-11s %8.2f %8.2f %8.2f %11.2f %12.2f %13.2f\n", s, r["ours", s], r["embree", s], r["obvhs", s],
+            r["ours", s] / r["embree", s], r["obvhs", s] / r["embree", s], r["embree-medium", s]
         # Sanity: the same rays must find (almost) the same number of hits.
         d = h["ours", s] - h["embree", s]; if (d < 0) d = -d
         if (d > 1e-4 * h["embree", s] + 1) { printf "  hit counts disagree: ours %d, Embree %d\n", h["ours", s], h["embree", s]; bad = 1 }
-        else printf "  hits: ours %d, Embree %d, obvhs %d\n", h["ours", s], h["embree", s], h["obvhs", s]
+        else printf "  hits: ours %d, Embree %d (MEDIUM %d), obvhs %d\n", h["ours", s], h["embree", s], h["embree-medium", s], h["obvhs", s]
     }
-    printf "\nBVH build over %s triangles (median; ms wall clock / ms CPU of the building thread):\n", tris
-    printf "  ours     %s threads: %s\n", all, wall["ours/all"]
-    printf "  ours     1 thread:  %s / %s\n", wall["ours"], cpu["ours"]
-    printf "  Embree   1 thread:  %s / %s (RTC_BUILD_QUALITY_HIGH)\n", wall["embree"], cpu["embree"]
-    printf "  obvhs    1 thread:  %s / %s (medium_build)\n", wall["obvhs"], cpu["obvhs"]
+    printf "\nBVH build over %s triangles (median; ms wall clock / ms CPU of the building thread;\n", tris
+    printf "for two threads, ms wall clock / ms CPU of all threads):\n"
+    printf "  ours             %s threads: %s / %s\n", all, wall["ours/all"], pcpu["ours/all"]
+    printf "  ours             1 thread:  %s / %s\n", wall["ours"], cpu["ours"]
+    printf "  Embree MEDIUM    2 threads: %s / %s\n", wall["embree", "medium", 2], pcpu["embree", "medium", 2]
+    printf "  Embree MEDIUM    1 thread:  %s / %s\n", wall["embree", "medium", 1], cpu["embree", "medium", 1]
+    printf "  Embree HIGH      2 threads: %s / %s\n", wall["embree", "high", 2], pcpu["embree", "high", 2]
+    printf "  Embree HIGH      1 thread:  %s / %s\n", wall["embree", "high", 1], cpu["embree", "high", 1]
+    printf "  obvhs            1 thread:  %s / %s (medium_build)\n", wall["obvhs"], cpu["obvhs"]
     exit bad
 }' "$work/out.txt"
