@@ -36,7 +36,7 @@ use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, Render
 use crate::bsdf::TransportMode;
 use crate::film::{Film, PixelRect};
 use crate::math::{offset_origin, Ray, Vec3};
-use crate::sampling::Rng;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
 
@@ -56,7 +56,7 @@ pub struct PathTracer {
 }
 
 impl RadianceEstimator for PathTracer {
-    fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         let mut ray = *camera_ray;
@@ -98,9 +98,9 @@ impl RadianceEstimator for PathTracer {
             }
             if flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf {
                 let mis = self.light_sampling == LightSampling::Mis;
-                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, rng, stats);
+                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, sampler, stats);
             }
-            let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+            let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
                 break;
             };
             if !hit.keeps_side(wo, bs.wi, bs.flags) {
@@ -116,7 +116,7 @@ impl RadianceEstimator for PathTracer {
             from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
             if depth >= ROULETTE_DEPTH {
                 let q = (beta * eta_scale).max_element().min(MAX_SURVIVAL);
-                if rng.next_f32() >= q {
+                if sampler.next_f32() >= q {
                     break;
                 }
                 beta /= q;
@@ -184,11 +184,13 @@ impl checkpoint::Progressive for Progressive<'_> {
         let s = self.settings;
         let r = self.rect;
         format!(
-            "integrator=path spp={} samples_per_pass={} max_depth={:?} light_sampling={} filter={:?} seed={} crop={},{},{},{}",
+            "integrator=path spp={} samples_per_pass={} max_depth={:?} light_sampling={} sampler={} filter={:?} seed={} \
+             crop={},{},{},{}",
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
             s.light_sampling.name(),
+            s.sampler.name(),
             s.filter,
             s.seed,
             r.x0,
@@ -434,39 +436,52 @@ mod tests {
     #[test]
     fn light_bsdf_and_mis_sampling_agree_with_the_form_factor() {
         use super::{LightSampling, PathTracer};
-        use crate::integrator::{RadianceEstimator, RayStats};
+        use crate::integrator::{RadianceEstimator, RayStats, SamplerKind};
         use crate::math::Ray;
-        use crate::sampling::Rng;
+        use crate::sampling::Sampler;
         let scene = floor_under_quad();
         // Reflected radiance albedo / pi * E, E = L pi F (the rectangle form factor, a = b = 1).
         let f = 2.0 * (1.0 / 2f64.sqrt()) * (1.0 / 2f64.sqrt()).atan() / (2.0 * std::f64::consts::PI);
         let expected = 0.5 * 2.0 * f;
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0));
-        let mut errors = vec![];
-        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
-            let est = PathTracer {
-                max_depth: Some(1),
-                light_sampling: mode,
-            };
-            let n = 40_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            let mut stats = RayStats::default();
-            for i in 0..n {
-                let mut rng = Rng::keyed(3, i, 0);
-                let v = est.li(&scene, &ray, &mut rng, &mut stats).x as f64;
-                sum += v;
-                sum2 += v * v;
+        // Pixels of 16 samples: a pixel's Sobol samples are stratified
+        // together, different pixels' are independent, so the standard error
+        // comes from the spread of the pixel means.
+        let (pixels, spp) = (2500u64, 16u32);
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            let mut errors = vec![];
+            for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+                let est = PathTracer {
+                    max_depth: Some(1),
+                    light_sampling: mode,
+                };
+                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                let mut stats = RayStats::default();
+                for pixel in 0..pixels {
+                    let mut pixel_sum = 0.0f64;
+                    for i in 0..spp {
+                        let mut sampler = Sampler::new(kind, 3, pixel, i);
+                        pixel_sum += est.li(&scene, &ray, &mut sampler, &mut stats).x as f64;
+                    }
+                    let v = pixel_sum / spp as f64;
+                    sum += v;
+                    sum2 += v * v;
+                }
+                let mean = sum / pixels as f64;
+                let std_err = ((sum2 / pixels as f64 - mean * mean) / pixels as f64).sqrt();
+                // Within four standard errors (and the estimators really differ).
+                assert!(
+                    (mean - expected).abs() < 4.0 * std_err + 1e-4,
+                    "{kind:?} {mode:?}: {mean} vs {expected} (standard error {std_err})"
+                );
+                errors.push(std_err);
             }
-            let mean = sum / n as f64;
-            let std_err = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-            // Within four standard errors (and the estimators really differ).
+            // Light sampling beats BSDF sampling here, and MIS keeps close to the better one.
             assert!(
-                (mean - expected).abs() < 4.0 * std_err + 1e-4,
-                "{mode:?}: {mean} vs {expected} (standard error {std_err})"
+                errors[1] < errors[2] && errors[0] < 1.5 * errors[1],
+                "{kind:?}: {errors:?}"
             );
-            errors.push(std_err);
+            eprintln!("{kind:?}: standard errors (mis, light, bsdf) {errors:?}");
         }
-        // Light sampling beats BSDF sampling here, and MIS keeps close to the better one.
-        assert!(errors[1] < errors[2] && errors[0] < 1.5 * errors[1], "{errors:?}");
     }
 }
