@@ -1,9 +1,11 @@
 //! Random numbers and sample warps.
 //!
-//! Every random number is a pure function of (seed, pixel, sample index,
-//! dimension): a PCG32 stream is keyed by a hash of (seed, pixel, sample) and
-//! read in a fixed order. That is what makes renders bit-identical for any
-//! thread count, tile order or crop (pbrt-v4's sampler discipline).
+//! Every random number of a render is a pure function of (seed, pixel, sample
+//! index, dimension): a camera sample's [`Sampler`] reads Owen-scrambled
+//! Sobol points keyed by a hash of (seed, pixel, dimension), or a PCG32
+//! stream keyed by a hash of (seed, pixel, sample) read in a fixed order.
+//! That is what makes renders bit-identical for any thread count, tile order
+//! or crop (pbrt-v4's sampler discipline).
 //! Warps follow pbrt-v4, chapter A.5 ("Sampling Multidimensional Functions").
 
 use crate::math::{Vec2, Vec3};
@@ -60,6 +62,202 @@ impl Rng {
     pub fn next_2d(&mut self) -> Vec2 {
         let x = self.next_f32();
         Vec2::new(x, self.next_f32())
+    }
+}
+
+/// The second dimension of the Sobol sequence: the column of its generator
+/// matrix for index bit i (the first dimension's is `1 << (31 - i)`, the
+/// radical inverse). Its direction numbers are all one (primitive polynomial
+/// x + 1), so each column is the last one xored with itself shifted right:
+/// Pascal's triangle mod 2.
+const SOBOL_1: [u32; 32] = {
+    let mut m = [0u32; 32];
+    let mut v = 1u32 << 31;
+    let mut i = 0;
+    while i < 32 {
+        m[i] = v;
+        v ^= v >> 1;
+        i += 1;
+    }
+    m
+};
+
+/// `SOBOL_1` by bytes: entry [k][b] is the xor of the columns that the set
+/// bits of byte b select among index bits 8k..8k + 8.
+const SOBOL_1_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            let mut v = 0;
+            let mut j = 0;
+            while j < 8 {
+                if b & (1 << j) != 0 {
+                    v ^= SOBOL_1[8 * k + j];
+                }
+                j += 1;
+            }
+            t[k][b] = v;
+            b += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// Sobol point `index` in dimension 0 or 1, as a 0.32 fixed-point fraction.
+pub fn sobol_u32(index: u32, dim: u32) -> u32 {
+    if dim == 0 {
+        return index.reverse_bits();
+    }
+    let t = &SOBOL_1_BYTES;
+    let i = index as usize;
+    t[0][i & 255] ^ t[1][(i >> 8) & 255] ^ t[2][(i >> 16) & 255] ^ t[3][i >> 24]
+}
+
+/// Burley's improved Laine-Karras hash: each output bit depends only on the
+/// input bits at or below it, and it is a bijection.
+fn laine_karras(mut v: u32, seed: u32) -> u32 {
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50_b47c);
+    v ^= v.wrapping_mul(0xb82f_1e52);
+    v ^= v.wrapping_mul(0xc7af_e638);
+    v ^ v.wrapping_mul(0x8d22_f6e6)
+}
+
+/// Nested uniform (Owen) scrambling of a 0.32 fraction, keyed by `seed`
+/// (Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4), with its
+/// improved Laine-Karras hash): each bit is flipped by a hash of the bits
+/// above it. Every output bit depends only on the input bits at or above it,
+/// and the map is a bijection, so dyadic intervals go to dyadic intervals of
+/// the same size: nets stay nets. Applied to a sample index it is Burley's
+/// shuffle: indices 0..2^k map one to one onto an aligned block of 2^k.
+pub fn owen_scramble(x: u32, seed: u32) -> u32 {
+    // In reversed order the hash's carries run from the top bit down.
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// Three 32-bit seeds from a request's 64-bit key: the shuffle's, then the
+/// scrambles' of dimensions 0 and 1.
+fn seeds(key: u64) -> (u32, u32, u32) {
+    let k2 = (key ^ (key >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    (key as u32, (key >> 32) as u32, (k2 >> 32) as u32)
+}
+
+/// The point of a 1D request of a padded, shuffled and Owen-scrambled Sobol
+/// sampler: `key` hashes (seed, pixel, dimension).
+fn sobol_1d(index: u32, key: u64) -> u32 {
+    let (s0, s1, _) = seeds(key);
+    let shuffled = owen_scramble(index, s0);
+    // owen_scramble(sobol_u32(shuffled, 0), s1), one reversal fewer.
+    laine_karras(shuffled, s1).reverse_bits()
+}
+
+/// The point of a 2D request: Sobol dimensions 0 and 1 at the same shuffled
+/// index, each scrambled with its own seed.
+fn sobol_2d(index: u32, key: u64) -> (u32, u32) {
+    let (s0, s1, s2) = seeds(key);
+    let shuffled = owen_scramble(index, s0);
+    (
+        laine_karras(shuffled, s1).reverse_bits(),
+        owen_scramble(sobol_u32(shuffled, 1), s2),
+    )
+}
+
+/// A 0.32 fixed-point fraction as an f32 in [0, 1) (24 bits kept).
+fn fraction(v: u32) -> f32 {
+    (v >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// Which random numbers a camera sample's estimate uses.
+pub use crate::settings::SamplerKind;
+
+/// The random numbers of one camera sample (pixel, sample index), read one
+/// request at a time by the integrators (`next_f32`, `next_2d`).
+///
+/// `Independent`: the keyed PCG32 stream of (seed, pixel, sample).
+/// `Sobol`: pbrt-v4's `PaddedSobolSampler` with Burley's (2020) hash-based
+/// Owen scrambling. Request d (1D or 2D) of sample i takes dimension d: the
+/// index i is shuffled by a nested uniform scramble keyed by hash(seed,
+/// pixel, d), the shuffled index picks a point of Sobol dimension 0 (and 1
+/// for a 2D request), and the point is Owen-scrambled with another hash of
+/// (seed, pixel, d). So each request's values over a pixel's first 2^k
+/// samples are stratified (a (0, k, 2)-net in 2D), requests are independent
+/// of each other (their own shuffles and scrambles), and every value is a
+/// pure function of (seed, pixel, sample index, dimension), for any number
+/// of samples per pixel, and in any order. After `SOBOL_DIMENSIONS`
+/// requests (long paths) the rest come from the keyed PCG32 stream.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    sobol: bool,
+    /// hash(seed, pixel)
+    key: u64,
+    index: u32,
+    dim: u32,
+    rng: Rng,
+}
+
+/// Requests a Sobol sampler answers before handing over to its PCG32 stream.
+pub const SOBOL_DIMENSIONS: u32 = 64;
+
+impl Sampler {
+    /// The sampler of sample `index` of `pixel` (a pixel's index in the full frame).
+    pub fn new(kind: SamplerKind, seed: u64, pixel: u64, index: u32) -> Self {
+        Sampler {
+            sobol: kind == SamplerKind::Sobol,
+            key: mix64(seed ^ mix64(pixel ^ 0x2545_F491_4F6C_DD1D)),
+            index,
+            dim: 0,
+            rng: Rng::keyed(seed, pixel, index as u64),
+        }
+    }
+
+    /// A sampler that reads `rng` alone.
+    pub fn independent(rng: Rng) -> Self {
+        Sampler {
+            sobol: false,
+            key: 0,
+            index: 0,
+            dim: 0,
+            rng,
+        }
+    }
+
+    pub fn is_sobol(&self) -> bool {
+        self.sobol
+    }
+
+    /// The key of the next Sobol request, or `None` for the PCG32 stream.
+    fn next_key(&mut self) -> Option<u64> {
+        if !self.sobol || self.dim >= SOBOL_DIMENSIONS {
+            return None;
+        }
+        let d = self.dim;
+        self.dim += 1;
+        // SplitMix64's stream from the pixel's key.
+        Some(mix64(
+            self.key.wrapping_add((d as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
+        ))
+    }
+
+    /// Uniform in [0, 1).
+    pub fn next_f32(&mut self) -> f32 {
+        match self.next_key() {
+            Some(key) => fraction(sobol_1d(self.index, key)),
+            None => self.rng.next_f32(),
+        }
+    }
+
+    /// Uniform in [0, 1)^2.
+    pub fn next_2d(&mut self) -> Vec2 {
+        match self.next_key() {
+            Some(key) => {
+                let (x, y) = sobol_2d(self.index, key);
+                Vec2::new(fraction(x), fraction(y))
+            }
+            None => self.rng.next_2d(),
+        }
     }
 }
 
@@ -383,6 +581,175 @@ mod tests {
         }
         assert!(same < 5, "streams with different keys must differ");
         assert!((sum / 10_000.0 - 0.5).abs() < 0.01);
+    }
+
+    /// Whether every elementary interval of `2^a x 2^(m - a)` cells, for every
+    /// a, holds exactly one of the 2^m points: a (0, m, 2)-net in base 2.
+    fn is_02_net(points: &[(u32, u32)], m: u32) -> bool {
+        assert_eq!(points.len(), 1 << m);
+        (0..=m).all(|a| {
+            let mut seen = vec![false; 1 << m];
+            points.iter().all(|&(x, y)| {
+                let (cx, cy) = (
+                    x.checked_shr(32 - a).unwrap_or(0),
+                    y.checked_shr(32 - (m - a)).unwrap_or(0),
+                );
+                let cell = ((cy << a) | cx) as usize;
+                !std::mem::replace(&mut seen[cell], true)
+            })
+        })
+    }
+
+    #[test]
+    fn sobol_dimensions_0_and_1_form_02_nets_scrambled_or_not() {
+        // The first 2^m points, any aligned block of 2^m, and the same scrambled.
+        for m in 0..=10 {
+            let n = 1u32 << m;
+            for start in [0, n, 5 * n] {
+                let raw: Vec<_> = (start..start + n).map(|i| (sobol_u32(i, 0), sobol_u32(i, 1))).collect();
+                assert!(is_02_net(&raw, m), "m {m} start {start}");
+                let scrambled: Vec<_> = raw
+                    .iter()
+                    .map(|&(x, y)| (owen_scramble(x, 0xdead_beef), owen_scramble(y, 0x1234_5678)))
+                    .collect();
+                assert!(is_02_net(&scrambled, m), "scrambled, m {m} start {start}");
+            }
+        }
+        // Dimension 1 is not dimension 0 again (that would be a diagonal, no net).
+        assert!(!is_02_net(
+            &(0..16).map(|i| (sobol_u32(i, 0), sobol_u32(i, 0))).collect::<Vec<_>>(),
+            4
+        ));
+        assert_eq!(
+            (0..8).map(|i| sobol_u32(i, 1) >> 29).collect::<Vec<_>>(),
+            [0, 4, 6, 2, 5, 1, 3, 7]
+        );
+        // The byte tables agree with the generator matrix column by column.
+        let mut r = Rng::new(8, 0);
+        for _ in 0..1000 {
+            let i = r.next_u32();
+            let by_bits = (0..32).filter(|b| i >> b & 1 == 1).fold(0, |v, b| v ^ SOBOL_1[b]);
+            assert_eq!(sobol_u32(i, 1), by_bits, "{i:#x}");
+        }
+    }
+
+    #[test]
+    fn owen_scramble_shuffles_an_index_prefix_onto_an_aligned_block() {
+        for seed in [0, 1, 0x9e37_79b9, u32::MAX] {
+            for k in [0, 3, 8] {
+                let block: Vec<u32> = (0..1u32 << k).map(|i| owen_scramble(i, seed)).collect();
+                let base = block[0] >> k;
+                assert!(block.iter().all(|&j| j >> k == base), "seed {seed} k {k}");
+                let mut low: Vec<u32> = block.iter().map(|&j| j & ((1 << k) - 1)).collect();
+                low.sort();
+                assert!(low.iter().enumerate().all(|(i, &j)| i as u32 == j), "seed {seed} k {k}");
+            }
+        }
+        // The scramble depends on its seed, and moves points.
+        assert_ne!(owen_scramble(0x8000_0000, 1), owen_scramble(0x8000_0000, 2));
+        assert!((0..64).any(|i| owen_scramble(i << 26, 7) != i << 26));
+    }
+
+    /// The values of request `skip` (after `skip` 1D requests) of samples
+    /// 0..n of one pixel, as 2D points (x only for a 1D request).
+    fn request(kind: SamplerKind, pixel: u64, skip: u32, n: u32, two_d: bool) -> Vec<Vec2> {
+        (0..n)
+            .map(|i| {
+                let mut s = Sampler::new(kind, 42, pixel, i);
+                for _ in 0..skip {
+                    s.next_f32();
+                }
+                if two_d {
+                    s.next_2d()
+                } else {
+                    Vec2::new(s.next_f32(), 0.0)
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sobol_sampler_requests_are_stratified_in_unit_interval_and_deterministic() {
+        let to_u32 = |v: f32| {
+            assert!((0.0..1.0).contains(&v), "{v}");
+            (v as f64 * 4294967296.0) as u32
+        };
+        for pixel in [0, 7, 123_456] {
+            for skip in [0, 1, 5, SOBOL_DIMENSIONS - 1] {
+                for m in [2, 6, 9] {
+                    let n = 1u32 << m;
+                    let pts = request(SamplerKind::Sobol, pixel, skip, n, true);
+                    assert_eq!(pts, request(SamplerKind::Sobol, pixel, skip, n, true));
+                    let fixed: Vec<_> = pts.iter().map(|p| (to_u32(p.x), to_u32(p.y))).collect();
+                    assert!(is_02_net(&fixed, m), "pixel {pixel} request {skip} m {m}");
+                    // 1D: one point in each of the 2^m intervals.
+                    let mut cells = vec![0; n as usize];
+                    for p in request(SamplerKind::Sobol, pixel, skip, n, false) {
+                        cells[(to_u32(p.x) >> (32 - m)) as usize] += 1;
+                    }
+                    assert!(cells.iter().all(|&c| c == 1), "1D pixel {pixel} request {skip} m {m}");
+                }
+            }
+        }
+        // Independent samples are not stratified like that (64 points in 64 cells).
+        let mut cells = [0; 64];
+        for p in request(SamplerKind::Independent, 3, 0, 64, false) {
+            cells[(p.x * 64.0) as usize] += 1;
+        }
+        assert!(cells.iter().any(|&c| c != 1));
+        // Pixels and requests are scrambled apart.
+        let a = request(SamplerKind::Sobol, 1, 0, 16, true);
+        assert_ne!(a, request(SamplerKind::Sobol, 2, 0, 16, true));
+        assert_ne!(a, request(SamplerKind::Sobol, 1, 1, 16, true));
+    }
+
+    #[test]
+    fn samplers_fall_back_to_the_keyed_stream() {
+        // Independent: the keyed PCG32 stream itself.
+        let mut s = Sampler::new(SamplerKind::Independent, 9, 11, 13);
+        let mut r = Rng::keyed(9, 11, 13);
+        for _ in 0..100 {
+            assert_eq!(s.next_f32(), r.next_f32());
+            assert_eq!(s.next_2d(), r.next_2d());
+        }
+        // Sobol: that stream after its last Sobol dimension.
+        let mut s = Sampler::new(SamplerKind::Sobol, 9, 11, 13);
+        let mut r = Rng::keyed(9, 11, 13);
+        let first = s.next_f32();
+        assert_ne!(first, r.clone().next_f32());
+        for _ in 1..SOBOL_DIMENSIONS {
+            s.next_2d();
+        }
+        for _ in 0..100 {
+            let x = s.next_f32();
+            assert!((0.0..1.0).contains(&x));
+            assert_eq!(x, r.next_f32());
+        }
+    }
+
+    #[test]
+    fn sobol_sampler_is_unbiased_and_integrates_smooth_functions_better() {
+        // A smooth function on the square with a known integral:
+        // f = exp(x) sin(pi y) + x y, integral (e - 1) 2 / pi + 1 / 4.
+        let f = |p: Vec2| (p.x as f64).exp() * (std::f64::consts::PI * p.y as f64).sin() + (p.x * p.y) as f64;
+        let exact = (std::f64::consts::E - 1.0) * 2.0 / std::f64::consts::PI + 0.25;
+        let pixels = 200;
+        let mut mse = [0.0f64; 2];
+        let mut mean = [0.0f64; 2];
+        for (k, kind) in [SamplerKind::Sobol, SamplerKind::Independent].into_iter().enumerate() {
+            for pixel in 0..pixels {
+                // A later request too: every dimension must be as good.
+                let skip = (pixel % 7) as u32;
+                let est = request(kind, pixel, skip, 256, true).into_iter().map(f).sum::<f64>() / 256.0;
+                mse[k] += (est - exact).powi(2) / pixels as f64;
+                mean[k] += est / pixels as f64;
+            }
+        }
+        // Independent: standard error of the mean over 200 x 256 samples is ~0.0014.
+        assert!((mean[1] - exact).abs() < 0.006, "{mean:?} vs {exact}");
+        // Scrambled Sobol: unbiased, with an error far below.
+        assert!((mean[0] - exact).abs() < 0.001, "{mean:?} vs {exact}");
+        assert!(mse[0] < mse[1] / 50.0, "mean squared errors {mse:?}");
     }
 
     #[test]

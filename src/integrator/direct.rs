@@ -12,7 +12,7 @@ use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::light::LightSample;
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
-use crate::sampling::{hammersley_shifted, Rng};
+use crate::sampling::{hammersley_shifted, Sampler};
 use crate::scene::{Hit, Scene};
 
 #[derive(Clone, Copy, Debug)]
@@ -24,9 +24,9 @@ pub struct DirectLighting {
 pub const MAX_SPECULAR_DEPTH: u32 = 16;
 
 impl RadianceEstimator for DirectLighting {
-    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        walk_camera_path(scene, *ray, rng, stats, |v, rng, stats| {
-            (direct_radiance(scene, v, self.shadow_samples, rng, stats), true)
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+        walk_camera_path(scene, *ray, sampler, stats, |v, sampler, stats| {
+            (direct_radiance(scene, v, self.shadow_samples, sampler, stats), true)
         })
     }
 }
@@ -67,9 +67,9 @@ pub struct DiffuseVertex {
 pub fn walk_camera_path(
     scene: &Scene,
     mut ray: Ray,
-    rng: &mut Rng,
+    sampler: &mut Sampler,
     stats: &mut RayStats,
-    mut at_diffuse: impl FnMut(&DiffuseVertex, &mut Rng, &mut RayStats) -> (Vec3, bool),
+    mut at_diffuse: impl FnMut(&DiffuseVertex, &mut Sampler, &mut RayStats) -> (Vec3, bool),
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
@@ -98,16 +98,16 @@ pub fn walk_camera_path(
         let mut only_specular = false;
         if flags.is_diffuse() {
             let v = DiffuseVertex { hit, wo, bsdf, beta };
-            let (lv, go_on) = at_diffuse(&v, rng, stats);
+            let (lv, go_on) = at_diffuse(&v, sampler, stats);
             l += beta * lv;
             if !go_on || !flags.is_specular() {
                 break;
             }
             only_specular = true;
         } else if flags.is_glossy() {
-            l += beta * sample_direct(scene, &hit, wo, &bsdf, true, rng, stats);
+            l += beta * sample_direct(scene, &hit, wo, &bsdf, true, sampler, stats);
         }
-        let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+        let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
             break;
         };
         if only_specular && !bs.is_specular() {
@@ -162,10 +162,10 @@ pub fn sample_direct(
     wo: Vec3,
     bsdf: &Bsdf,
     mis: bool,
-    rng: &mut Rng,
+    sampler: &mut Sampler,
     stats: &mut RayStats,
 ) -> Vec3 {
-    let (uc, u) = (rng.next_f32(), rng.next_2d());
+    let (uc, u) = (sampler.next_f32(), sampler.next_2d());
     let Some((li, pmf)) = scene.pick_light(uc) else {
         return Vec3::ZERO;
     };
@@ -189,13 +189,13 @@ pub fn sample_direct(
 
 /// Direct light reflected towards the vertex's `wo` from every light, `n`
 /// stratified samples each: (1/N) sum f Li |cos| / pdf.
-pub fn direct_radiance(scene: &Scene, v: &DiffuseVertex, n: u32, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+pub fn direct_radiance(scene: &Scene, v: &DiffuseVertex, n: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
     if n == 0 {
         return Vec3::ZERO;
     }
     let mut l = Vec3::ZERO;
     for li in 0..scene.lights.len() {
-        let shift = rng.next_2d();
+        let shift = sampler.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
             let u = hammersley_shifted(i, n, shift);
@@ -273,11 +273,11 @@ mod tests {
             bsdf,
             beta: Vec3::ONE,
         };
-        let mut rng = Rng::new(1, 2);
+        let mut sampler = Sampler::independent(crate::sampling::Rng::new(1, 2));
         let mut stats = RayStats::default();
         let n = 2000;
         let l: Vec3 = (0..n)
-            .map(|_| direct_radiance(&scene, &v, 4, &mut rng, &mut stats))
+            .map(|_| direct_radiance(&scene, &v, 4, &mut sampler, &mut stats))
             .sum::<Vec3>()
             / n as f32;
         // Reflected radiance = albedo / pi * E.

@@ -17,14 +17,14 @@ use crate::error::{Error, Result};
 use crate::film::{Film, FrameWindow, PixelRect, PixelSum, SplatBlock};
 use crate::math::{Ray, Vec2, Vec3};
 use crate::photon::PhotonStats;
-use crate::sampling::{hammersley_shifted, stratified, Rng};
+use crate::sampling::{hammersley_shifted, stratified, Rng, Sampler};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
-pub use crate::settings::{IntegratorKind, LightSampling, RenderSettings, StateFiles};
+pub use crate::settings::{IntegratorKind, LightSampling, RenderSettings, SamplerKind, StateFiles};
 
 pub const TILE: u32 = 32;
 
@@ -165,7 +165,7 @@ impl RenderOutput {
 
 /// The radiance carried along one camera ray.
 pub trait RadianceEstimator: Sync {
-    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3;
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3;
 }
 
 /// Runs `f` on a pool of `threads` workers (all cores when `None`).
@@ -374,11 +374,13 @@ pub fn accumulate_tiles(
     Some((stats, tiles.len() as u64))
 }
 
-/// Splats samples `samples` of pixel (x, y) into `block`, with random
-/// numbers keyed by (seed, pixel, s). The samples are uniform over the pixel:
-/// when their count is a square n^2, sample s is jittered in stratum s of an
-/// n x n grid; otherwise the pixel's samples form a Hammersley set shifted
-/// per pixel.
+/// Splats samples `samples` of pixel (x, y) into `block`, each with its
+/// [`Sampler`] keyed by (seed, pixel, s). The samples are uniform over the
+/// pixel. With the Sobol sampler the pixel position is its first 2D request
+/// (a (0, 2)-net over any power-of-two prefix of the pixel's samples). With
+/// independent samples, when the sample count is a square n^2, sample s is
+/// jittered in stratum s of an n x n grid; otherwise the pixel's samples form
+/// a Hammersley set shifted per pixel.
 #[allow(clippy::too_many_arguments)]
 pub fn add_pixel_samples(
     scene: &Scene,
@@ -392,25 +394,28 @@ pub fn add_pixel_samples(
 ) {
     let cam = &scene.camera;
     let spp = settings.samples_per_pixel();
+    let sobol = settings.sampler == SamplerKind::Sobol;
     let n = (spp as f64).sqrt().round() as u32;
     let grid = n * n == spp;
     let pixel = y as u64 * cam.width as u64 + x as u64;
-    let shift = if grid {
+    let shift = if grid || sobol {
         Vec2::ZERO
     } else {
         Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
     };
     for s in samples {
-        let mut rng = Rng::keyed(settings.seed, pixel, s as u64);
-        let u = if grid {
-            stratified(s, n, rng.next_2d())
+        let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, s);
+        let u = if sobol {
+            sampler.next_2d()
+        } else if grid {
+            stratified(s, n, sampler.next_2d())
         } else {
             hammersley_shifted(s, spp, shift)
         };
         let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
         let ray = cam.generate_ray(pos.x, pos.y);
         stats.camera_rays += 1;
-        let l = est.li(scene, &ray, &mut rng, stats);
+        let l = est.li(scene, &ray, &mut sampler, stats);
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
             block.splat((x, y), pos, l);

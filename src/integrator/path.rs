@@ -13,12 +13,13 @@
 //! it). `light_sampling` can keep either one alone (weight 1), for
 //! comparisons. After a specular bounce there is no next-event estimation (a
 //! shadow ray cannot hit the one direction a delta lobe scatters into), so a
-//! light hit then, or by a camera ray, gives its whole Le. From the third
-//! vertex on, Russian roulette on the throughput times the square of the
-//! relative index of refraction crossed (so that radiance compressed by
-//! refraction into glass is not killed for it), with survival probability at
-//! most 0.95. Emissive surfaces are not sampled by shadow rays, so their Le
-//! counts wherever a path hits them.
+//! light hit then, or by a camera ray, gives its whole Le. From the sixth
+//! vertex on (as Mitsuba; pbrt-v4 starts at the third), Russian roulette on
+//! the throughput times the square of the relative index of refraction
+//! crossed (so that radiance compressed by refraction into glass is not
+//! killed for it), with survival probability at most 0.95. Emissive
+//! surfaces are not sampled by shadow rays, so their Le counts wherever a
+//! path hits them.
 //!
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
@@ -36,15 +37,17 @@ use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, Render
 use crate::bsdf::TransportMode;
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
-use crate::sampling::Rng;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
 
 /// A render is cut into at most this many passes.
 const MAX_PASSES: u32 = 64;
 
-/// Roulette starts after this many bounces.
-const ROULETTE_DEPTH: u32 = 2;
+/// Roulette starts after this many bounces: Mitsuba's `rr_depth` of 5 rather
+/// than pbrt-v4's 2, since the noise the longer paths save outweighs their
+/// time (BENCHMARKS.md, "Low-discrepancy samples and roulette depth").
+const ROULETTE_DEPTH: u32 = 5;
 /// Survival probability cap, so that paths in a white furnace end too.
 const MAX_SURVIVAL: f32 = 0.95;
 
@@ -56,7 +59,7 @@ pub struct PathTracer {
 }
 
 impl RadianceEstimator for PathTracer {
-    fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
+    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         let mut ray = *camera_ray;
@@ -98,9 +101,9 @@ impl RadianceEstimator for PathTracer {
             }
             if flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf {
                 let mis = self.light_sampling == LightSampling::Mis;
-                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, rng, stats);
+                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, sampler, stats);
             }
-            let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+            let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
                 break;
             };
             if !hit.keeps_side(wo, bs.wi, bs.flags) {
@@ -116,7 +119,7 @@ impl RadianceEstimator for PathTracer {
             from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
             if depth >= ROULETTE_DEPTH {
                 let q = (beta * eta_scale).max_element().min(MAX_SURVIVAL);
-                if rng.next_f32() >= q {
+                if sampler.next_f32() >= q {
                     break;
                 }
                 beta /= q;
@@ -179,11 +182,13 @@ impl checkpoint::Progressive for Progressive<'_> {
         let s = self.settings;
         let r = self.rect;
         format!(
-            "integrator=path film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} filter={:?} seed={} crop={},{},{},{}",
+            "integrator=path film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} sampler={} \
+             filter={:?} seed={} crop={},{},{},{}",
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
             s.light_sampling.name(),
+            s.sampler.name(),
             s.filter,
             s.seed,
             r.x0,
@@ -294,9 +299,9 @@ mod tests {
             None,
             8,
         );
-        // The first two path vertices are always traced (exact); later ones
+        // The first five path vertices are always traced (exact); later ones
         // face Russian roulette (right on average).
-        for (d, tolerance) in [(0u32, 1e-4), (1, 1e-4), (2, 0.01), (4, 0.01)] {
+        for (d, tolerance) in [(0u32, 1e-4), (1, 1e-4), (4, 1e-4), (8, 0.01)] {
             let film = render(&scene, &path(256, Some(d)), &|| {}).unwrap().film;
             let expected = (0..=d).map(|k| a.powi(k as i32)).sum::<f32>() * le;
             let mean = film.mean(0, 0, 8, 8).x;
@@ -429,39 +434,52 @@ mod tests {
     #[test]
     fn light_bsdf_and_mis_sampling_agree_with_the_form_factor() {
         use super::{LightSampling, PathTracer};
-        use crate::integrator::{RadianceEstimator, RayStats};
+        use crate::integrator::{RadianceEstimator, RayStats, SamplerKind};
         use crate::math::Ray;
-        use crate::sampling::Rng;
+        use crate::sampling::Sampler;
         let scene = floor_under_quad();
         // Reflected radiance albedo / pi * E, E = L pi F (the rectangle form factor, a = b = 1).
         let f = 2.0 * (1.0 / 2f64.sqrt()) * (1.0 / 2f64.sqrt()).atan() / (2.0 * std::f64::consts::PI);
         let expected = 0.5 * 2.0 * f;
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0));
-        let mut errors = vec![];
-        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
-            let est = PathTracer {
-                max_depth: Some(1),
-                light_sampling: mode,
-            };
-            let n = 40_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            let mut stats = RayStats::default();
-            for i in 0..n {
-                let mut rng = Rng::keyed(3, i, 0);
-                let v = est.li(&scene, &ray, &mut rng, &mut stats).x as f64;
-                sum += v;
-                sum2 += v * v;
+        // Pixels of 16 samples: a pixel's Sobol samples are stratified
+        // together, different pixels' are independent, so the standard error
+        // comes from the spread of the pixel means.
+        let (pixels, spp) = (2500u64, 16u32);
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            let mut errors = vec![];
+            for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+                let est = PathTracer {
+                    max_depth: Some(1),
+                    light_sampling: mode,
+                };
+                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                let mut stats = RayStats::default();
+                for pixel in 0..pixels {
+                    let mut pixel_sum = 0.0f64;
+                    for i in 0..spp {
+                        let mut sampler = Sampler::new(kind, 3, pixel, i);
+                        pixel_sum += est.li(&scene, &ray, &mut sampler, &mut stats).x as f64;
+                    }
+                    let v = pixel_sum / spp as f64;
+                    sum += v;
+                    sum2 += v * v;
+                }
+                let mean = sum / pixels as f64;
+                let std_err = ((sum2 / pixels as f64 - mean * mean) / pixels as f64).sqrt();
+                // Within four standard errors (and the estimators really differ).
+                assert!(
+                    (mean - expected).abs() < 4.0 * std_err + 1e-4,
+                    "{kind:?} {mode:?}: {mean} vs {expected} (standard error {std_err})"
+                );
+                errors.push(std_err);
             }
-            let mean = sum / n as f64;
-            let std_err = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-            // Within four standard errors (and the estimators really differ).
+            // Light sampling beats BSDF sampling here, and MIS keeps close to the better one.
             assert!(
-                (mean - expected).abs() < 4.0 * std_err + 1e-4,
-                "{mode:?}: {mean} vs {expected} (standard error {std_err})"
+                errors[1] < errors[2] && errors[0] < 1.5 * errors[1],
+                "{kind:?}: {errors:?}"
             );
-            errors.push(std_err);
+            eprintln!("{kind:?}: standard errors (mis, light, bsdf) {errors:?}");
         }
-        // Light sampling beats BSDF sampling here, and MIS keeps close to the better one.
-        assert!(errors[1] < errors[2] && errors[0] < 1.5 * errors[1], "{errors:?}");
     }
 }

@@ -38,7 +38,7 @@ use crate::photon::estimate::{self, PrecomputedIrradiance};
 use crate::photon::file;
 use crate::photon::map::Neighbour;
 use crate::photon::{Admit, Gather, PhotonMap, PhotonSettings, PhotonStats};
-use crate::sampling::{cosine_hemisphere, hammersley_shifted, Rng};
+use crate::sampling::{cosine_hemisphere, hammersley_shifted, Sampler};
 use crate::scene::{Hit, Scene};
 use std::cell::RefCell;
 
@@ -120,12 +120,12 @@ impl PhotonMapping<'_> {
         scene: &Scene,
         map: &PhotonMap,
         v: &DiffuseVertex,
-        rng: &mut Rng,
+        sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Vec3 {
         let hit = &v.hit;
         let n = self.final_gather;
-        let shift = rng.next_2d();
+        let shift = sampler.next_2d();
         let mut sum = Vec3::ZERO;
         for i in 0..n {
             let u = hammersley_shifted(i, n, shift);
@@ -133,7 +133,7 @@ impl PhotonMapping<'_> {
                 // f cos / pdf = albedo for a cosine-distributed direction.
                 (to_world(cosine_hemisphere(u), v.bsdf.frame.z), dif.r, v.bsdf.flags())
             } else {
-                let Some(bs) = v.bsdf.sample_f(v.wo, rng.next_f32(), u, TransportMode::Radiance) else {
+                let Some(bs) = v.bsdf.sample_f(v.wo, sampler.next_f32(), u, TransportMode::Radiance) else {
                     continue;
                 };
                 if bs.is_specular() {
@@ -167,7 +167,7 @@ impl PhotonMapping<'_> {
                     sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));
                     break;
                 }
-                let Some(bs) = bsdf.sample_f(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) else {
+                let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
                     break;
                 };
                 if !y.keeps_side(wo, bs.wi, bs.flags) {
@@ -183,11 +183,11 @@ impl PhotonMapping<'_> {
 
     /// Light reflected at a camera path's diffuse vertex: direct by shadow
     /// rays, caustics by the caustic map, the rest by the global map.
-    fn shade(&self, scene: &Scene, v: &DiffuseVertex, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        let mut l = direct_radiance(scene, v, self.shadow_samples, rng, stats) + self.caustic_radiance(v);
+    fn shade(&self, scene: &Scene, v: &DiffuseVertex, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+        let mut l = direct_radiance(scene, v, self.shadow_samples, sampler, stats) + self.caustic_radiance(v);
         if let Some(map) = self.map {
             l += if self.final_gather > 0 {
-                self.final_gather(scene, map, v, rng, stats)
+                self.final_gather(scene, map, v, sampler, stats)
             } else {
                 let admit = Admit {
                     direct: self.shadow_samples == 0,
@@ -201,9 +201,9 @@ impl PhotonMapping<'_> {
 }
 
 impl RadianceEstimator for PhotonMapping<'_> {
-    fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Vec3 {
-        walk_camera_path(scene, *ray, rng, stats, |v, rng, stats| {
-            (self.shade(scene, v, rng, stats), true)
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+        walk_camera_path(scene, *ray, sampler, stats, |v, sampler, stats| {
+            (self.shade(scene, v, sampler, stats), true)
         })
     }
 }

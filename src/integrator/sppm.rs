@@ -44,7 +44,7 @@ use crate::error::{Error, Result};
 use crate::film::{Film, PixelRect};
 use crate::math::Vec3;
 use crate::photon::{Admit, PhotonMap, PhotonSettings, PhotonStats};
-use crate::sampling::{mix64, Rng};
+use crate::sampling::{mix64, Sampler};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -178,7 +178,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         let ps = &self.photon;
         format!(
             "integrator=sppm passes={} alpha={:?} photons={} radius={:?} max_bounces={} roulette={} \
-             shadow_samples={} filter={:?} seed={} crop={},{},{},{}",
+             shadow_samples={} sampler={} filter={:?} seed={} crop={},{},{},{}",
             s.passes,
             s.alpha,
             ps.photons,
@@ -186,6 +186,7 @@ impl checkpoint::Progressive for Progressive<'_> {
             ps.max_bounces,
             ps.roulette,
             s.shadow_samples,
+            s.sampler.name(),
             s.filter,
             s.seed,
             r.x0,
@@ -234,11 +235,11 @@ impl checkpoint::Progressive for Progressive<'_> {
                 for (i, px) in states.iter_mut().enumerate() {
                     let x = rect.x0 + i as u32;
                     let pixel = y as u64 * cam.width as u64 + x as u64;
-                    let mut rng = Rng::keyed(settings.seed, pixel, pass as u64);
-                    let off = settings.filter.sample(rng.next_2d());
+                    let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass);
+                    let off = settings.filter.sample(sampler.next_2d());
                     let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
                     st.camera_rays += 1;
-                    if let Some(vp) = visible_point(scene, settings, ray, &mut rng, &mut st, px) {
+                    if let Some(vp) = visible_point(scene, settings, ray, &mut sampler, &mut st, px) {
                         update(px, &vp, &map, admit, alpha);
                     }
                 }
@@ -333,12 +334,12 @@ fn visible_point(
     scene: &Scene,
     settings: &RenderSettings,
     ray: crate::math::Ray,
-    rng: &mut Rng,
+    sampler: &mut Sampler,
     stats: &mut RayStats,
     px: &mut PixelState,
 ) -> Option<VisiblePoint> {
     let mut vp = None;
-    let l = walk_camera_path(scene, ray, rng, stats, |v, rng, stats| {
+    let l = walk_camera_path(scene, ray, sampler, stats, |v, sampler, stats| {
         vp = Some(VisiblePoint {
             p: v.hit.p,
             wo: v.wo,
@@ -346,7 +347,10 @@ fn visible_point(
             beta: v.beta,
         });
         // pbrt-v4's SPPM: the path ends at its visible point.
-        (direct_radiance(scene, v, settings.shadow_samples, rng, stats), false)
+        (
+            direct_radiance(scene, v, settings.shadow_samples, sampler, stats),
+            false,
+        )
     });
     // A NaN or infinite sample would poison the pixel; drop it.
     if l.is_finite() {

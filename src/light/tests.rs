@@ -638,7 +638,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         let ray = Ray::new(Vec3::new(x, -1.0, z), Vec3::Y);
         let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
         assert!(hit.p.y.abs() < 1e-4, "{hit:?}");
-        let mut rng = Rng::new(3, 1);
+        let mut sampler = crate::sampling::Sampler::independent(Rng::new(3, 1));
         let mut stats = RayStats::default();
         let n = 4000;
         let mut e = Vec3::ZERO;
@@ -651,7 +651,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
             beta: Vec3::ONE,
         };
         for _ in 0..n {
-            e += direct_radiance(scene, &v, 4, &mut rng, &mut stats);
+            e += direct_radiance(scene, &v, 4, &mut sampler, &mut stats);
         }
         // Reflected by albedo 0.5: radiance = 0.5 / pi * irradiance.
         e.x / n as f32 * PI / 0.5

@@ -116,6 +116,31 @@ impl LightSampling {
     }
 }
 
+/// Where a camera sample's random numbers come from (`sampling::Sampler`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol points, one dimension (pair) per request.
+    #[default]
+    Sobol,
+    /// A PCG32 stream per sample; the pixel position stratified on a grid.
+    Independent,
+}
+
+impl SamplerKind {
+    pub const ALL: [SamplerKind; 2] = [Self::Sobol, Self::Independent];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sobol => "sobol",
+            Self::Independent => "independent",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
 /// How the photons around a shading point are gathered.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gather {
@@ -213,6 +238,8 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Path tracer: how direct light is sampled.
     pub light_sampling: LightSampling,
+    /// Where camera samples' random numbers come from.
+    pub sampler: SamplerKind,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
@@ -262,6 +289,7 @@ impl RenderSettings {
             ("filter", Value::Name(self.filter.name())),
             ("spp", Value::Int(self.spp as u64)),
             ("light_sampling", Value::Name(self.light_sampling.name())),
+            ("sampler", Value::Name(self.sampler.name())),
             ("photons", Value::Int(p.photons)),
             ("max_bounces", Value::Int(p.max_bounces as u64)),
             ("store_first_hit", Value::Bool(p.store_first_hit)),
@@ -649,6 +677,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         spp: int("spp").unwrap_or_default() as u32,
         max_depth: int("max_depth").map(|d| d as u32),
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
+        sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         photon: PhotonSettings {
             photons: int("photons").unwrap_or_default(),
             // SPPM converges to the answer only if photon paths are not cut

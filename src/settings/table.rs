@@ -9,6 +9,7 @@ const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const GATHER_FILTERS: &[&str] = &["none", "normal", "report"];
 const LIGHT_SAMPLING: &[&str] = &["mis", "light", "bsdf"];
+const SAMPLERS: &[&str] = &["sobol", "independent"];
 
 /// Largest count of samples, passes and the like we accept (2^20).
 const MILLION: u64 = 1 << 20;
@@ -27,7 +28,7 @@ pub const SETTINGS: &[Spec] = &[
         name: "ssaa",
         kind: Kind::Count { min: 1, max: 64 },
         default: DefaultValue::Int(4),
-        doc: "Supersampling: NxN stratified, jittered camera samples per pixel (direct and photon integrators)",
+        doc: "Supersampling: NxN stratified camera samples per pixel (direct and photon integrators)",
         in_scene_file: true,
         only_for: &[],
     },
@@ -73,6 +74,16 @@ pub const SETTINGS: &[Spec] = &[
               combined by the power heuristic), light (shadow rays only), bsdf (BSDF-sampled rays only)",
         in_scene_file: true,
         only_for: &["path"],
+    },
+    Spec {
+        name: "sampler",
+        kind: Kind::Choice(SAMPLERS),
+        default: DefaultValue::Name("sobol"),
+        doc: "Random numbers of each camera sample: sobol (Owen-scrambled Sobol points, one dimension per request, \
+              stratified over a pixel's samples), independent (a random stream per sample, the pixel position \
+              stratified on a grid)",
+        in_scene_file: true,
+        only_for: &[],
     },
     Spec {
         name: "photons",

@@ -24,7 +24,7 @@ use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstima
 use crate::math::Vec3;
 use crate::photon::trace::ResumableTrace;
 use crate::photon::{map_from_trace, PhotonMap, PhotonStats};
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Sampler};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -321,8 +321,9 @@ pub fn low_res_pass(
                     let cx = (x0 as f32 + 0.5 * block as f32).min(w as f32);
                     let cy = (y0 as f32 + 0.5 * block as f32).min(h as f32);
                     // Keyed apart from the accumulation passes' sample indices.
-                    let mut rng = Rng::keyed(settings.seed, (by * bw + bx) as u64, u64::MAX);
-                    let l = est.li(scene, &cam.generate_ray(cx, cy), &mut rng, &mut stats);
+                    let rng = Rng::keyed(settings.seed, (by * bw + bx) as u64, u64::MAX);
+                    let mut sampler = Sampler::independent(rng);
+                    let l = est.li(scene, &cam.generate_ray(cx, cy), &mut sampler, &mut stats);
                     if l.is_finite() {
                         l
                     } else {
