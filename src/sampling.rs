@@ -170,9 +170,6 @@ fn fraction(v: u32) -> f32 {
     (v >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
-/// Which random numbers a camera sample's estimate uses.
-pub use crate::settings::SamplerKind;
-
 /// The random numbers of one camera sample (pixel, sample index), read one
 /// request at a time by the integrators (`next_f32`, `next_2d`).
 ///
@@ -202,10 +199,11 @@ pub struct Sampler {
 pub const SOBOL_DIMENSIONS: u32 = 64;
 
 impl Sampler {
-    /// The sampler of sample `index` of `pixel` (a pixel's index in the full frame).
-    pub fn new(kind: SamplerKind, seed: u64, pixel: u64, index: u32) -> Self {
+    /// The sampler of sample `index` of `pixel` (a pixel's index in the full
+    /// frame): Sobol points when `sobol`, else the keyed PCG32 stream.
+    pub fn new(sobol: bool, seed: u64, pixel: u64, index: u32) -> Self {
         Sampler {
-            sobol: kind == SamplerKind::Sobol,
+            sobol,
             key: mix64(seed ^ mix64(pixel ^ 0x2545_F491_4F6C_DD1D)),
             index,
             dim: 0,
@@ -652,7 +650,7 @@ mod tests {
 
     /// The values of request `skip` (after `skip` 1D requests) of samples
     /// 0..n of one pixel, as 2D points (x only for a 1D request).
-    fn request(kind: SamplerKind, pixel: u64, skip: u32, n: u32, two_d: bool) -> Vec<Vec2> {
+    fn request(kind: bool, pixel: u64, skip: u32, n: u32, two_d: bool) -> Vec<Vec2> {
         (0..n)
             .map(|i| {
                 let mut s = Sampler::new(kind, 42, pixel, i);
@@ -678,13 +676,13 @@ mod tests {
             for skip in [0, 1, 5, SOBOL_DIMENSIONS - 1] {
                 for m in [2, 6, 9] {
                     let n = 1u32 << m;
-                    let pts = request(SamplerKind::Sobol, pixel, skip, n, true);
-                    assert_eq!(pts, request(SamplerKind::Sobol, pixel, skip, n, true));
+                    let pts = request(true, pixel, skip, n, true);
+                    assert_eq!(pts, request(true, pixel, skip, n, true));
                     let fixed: Vec<_> = pts.iter().map(|p| (to_u32(p.x), to_u32(p.y))).collect();
                     assert!(is_02_net(&fixed, m), "pixel {pixel} request {skip} m {m}");
                     // 1D: one point in each of the 2^m intervals.
                     let mut cells = vec![0; n as usize];
-                    for p in request(SamplerKind::Sobol, pixel, skip, n, false) {
+                    for p in request(true, pixel, skip, n, false) {
                         cells[(to_u32(p.x) >> (32 - m)) as usize] += 1;
                     }
                     assert!(cells.iter().all(|&c| c == 1), "1D pixel {pixel} request {skip} m {m}");
@@ -693,27 +691,27 @@ mod tests {
         }
         // Independent samples are not stratified like that (64 points in 64 cells).
         let mut cells = [0; 64];
-        for p in request(SamplerKind::Independent, 3, 0, 64, false) {
+        for p in request(false, 3, 0, 64, false) {
             cells[(p.x * 64.0) as usize] += 1;
         }
         assert!(cells.iter().any(|&c| c != 1));
         // Pixels and requests are scrambled apart.
-        let a = request(SamplerKind::Sobol, 1, 0, 16, true);
-        assert_ne!(a, request(SamplerKind::Sobol, 2, 0, 16, true));
-        assert_ne!(a, request(SamplerKind::Sobol, 1, 1, 16, true));
+        let a = request(true, 1, 0, 16, true);
+        assert_ne!(a, request(true, 2, 0, 16, true));
+        assert_ne!(a, request(true, 1, 1, 16, true));
     }
 
     #[test]
     fn samplers_fall_back_to_the_keyed_stream() {
         // Independent: the keyed PCG32 stream itself.
-        let mut s = Sampler::new(SamplerKind::Independent, 9, 11, 13);
+        let mut s = Sampler::new(false, 9, 11, 13);
         let mut r = Rng::keyed(9, 11, 13);
         for _ in 0..100 {
             assert_eq!(s.next_f32(), r.next_f32());
             assert_eq!(s.next_2d(), r.next_2d());
         }
         // Sobol: that stream after its last Sobol dimension.
-        let mut s = Sampler::new(SamplerKind::Sobol, 9, 11, 13);
+        let mut s = Sampler::new(true, 9, 11, 13);
         let mut r = Rng::keyed(9, 11, 13);
         let first = s.next_f32();
         assert_ne!(first, r.clone().next_f32());
@@ -736,7 +734,7 @@ mod tests {
         let pixels = 200;
         let mut mse = [0.0f64; 2];
         let mut mean = [0.0f64; 2];
-        for (k, kind) in [SamplerKind::Sobol, SamplerKind::Independent].into_iter().enumerate() {
+        for (k, kind) in [true, false].into_iter().enumerate() {
             for pixel in 0..pixels {
                 // A later request too: every dimension must be as good.
                 let skip = (pixel % 7) as u32;

@@ -404,7 +404,7 @@ pub fn add_pixel_samples(
         Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
     };
     for s in samples {
-        let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, s);
+        let mut sampler = Sampler::new(sobol, settings.seed, pixel, s);
         let u = if sobol {
             sampler.next_2d()
         } else if grid {

@@ -458,7 +458,7 @@ mod tests {
                 for pixel in 0..pixels {
                     let mut pixel_sum = 0.0f64;
                     for i in 0..spp {
-                        let mut sampler = Sampler::new(kind, 3, pixel, i);
+                        let mut sampler = Sampler::new(kind == SamplerKind::Sobol, 3, pixel, i);
                         pixel_sum += est.li(&scene, &ray, &mut sampler, &mut stats).x as f64;
                     }
                     let v = pixel_sum / spp as f64;

@@ -235,7 +235,12 @@ impl checkpoint::Progressive for Progressive<'_> {
                 for (i, px) in states.iter_mut().enumerate() {
                     let x = rect.x0 + i as u32;
                     let pixel = y as u64 * cam.width as u64 + x as u64;
-                    let mut sampler = Sampler::new(settings.sampler, settings.seed, pixel, pass);
+                    let mut sampler = Sampler::new(
+                        settings.sampler == crate::settings::SamplerKind::Sobol,
+                        settings.seed,
+                        pixel,
+                        pass,
+                    );
                     let off = settings.filter.sample(sampler.next_2d());
                     let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
                     st.camera_rays += 1;
