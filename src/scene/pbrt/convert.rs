@@ -82,6 +82,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
     Ok(LoadedScene {
         desc: converted.desc,
         meshes: vec![report],
+        fov_axis: crate::scene::FovAxis::Shorter,
     })
 }
 
