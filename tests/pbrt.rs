@@ -386,3 +386,63 @@ fn width_and_height_options_frame_a_pbrt_scene_as_pbrt_would() {
         assert!((y as f64 + 0.5 - 45.0).abs() < 3.0, "lit pixel ({x}, {y})");
     }
 }
+
+/// Renders, with direct light only, a few pixels around the origin of a
+/// diffuse floor (reflectance 0.5, the plane y = 0) under a disk light of
+/// radius 0.5 at height 1 whose pbrt normal points down; `light` holds the
+/// AreaLightSource's parameters, `pre` comes before the disk's Shape.
+/// Returns the mean radiance.
+fn floor_under_disk(light: &str, pre: &str) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("disk.pbrt");
+    std::fs::write(
+        &p,
+        format!(
+            "LookAt 1.5 0.6 0  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 1 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\nWorldBegin\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -10 0 -10  10 0 -10  10 0 10  -10 0 10 ] \
+             \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" {light}\n\
+             Translate 0 1 0\nRotate 90 1 0 0\n{pre}Shape \"disk\" \"float radius\" [ 0.5 ]\nAttributeEnd\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out.pfm");
+    let o = raytracer(&[
+        "--scene",
+        p.to_str().unwrap(),
+        "--integrator",
+        "path",
+        "--max-depth",
+        "1",
+        "--spp",
+        "256",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = read_image(&out).unwrap();
+    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+}
+
+#[test]
+fn a_disk_area_light_lights_a_floor_as_the_closed_form_says() {
+    // A disk of radius R and radiance L at height h over a point on its axis
+    // gives irradiance E = pi L R^2 / (h^2 + R^2); the diffuse floor's
+    // radiance is 0.5 E / pi = 0.5 L 0.25 / 1.25 = L / 10.
+    let down = floor_under_disk("\"rgb L\" [ 10 10 10 ]", "");
+    assert!((down - 1.0).abs() < 0.02, "{down} vs 1");
+    // ReverseOrientation turns the emitting side up: the floor is dark...
+    let up = floor_under_disk("\"rgb L\" [ 10 10 10 ]", "ReverseOrientation\n");
+    assert!(up < 1e-6, "{up}");
+    // ...unless the light emits on both sides.
+    let both = floor_under_disk("\"rgb L\" [ 10 10 10 ] \"bool twosided\" true", "ReverseOrientation\n");
+    assert!((both - 1.0).abs() < 0.02, "{both} vs 1");
+    // power: 10 W from one side of a disk of area pi / 4 is L = 40 / pi^2,
+    // so the floor shows 4 / pi^2.
+    let power = floor_under_disk("\"rgb L\" [ 1 1 1 ] \"float power\" [ 10 ]", "");
+    let expected = 4.0 / (std::f64::consts::PI * std::f64::consts::PI);
+    assert!((power / expected - 1.0).abs() < 0.02, "{power} vs {expected}");
+}
