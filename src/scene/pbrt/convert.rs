@@ -127,6 +127,18 @@ struct Emission {
     two_sided: bool,
 }
 
+impl Emission {
+    /// The radiance of one shape of `area`: `power`, when given, is met by
+    /// it (pbrt-v4's k_e: power / (sides area pi) times `scale`).
+    fn radiance_for(&self, area: f32) -> Vec3 {
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        match self.power {
+            Some(phi) => self.radiance * (phi / (sides * area * PI)),
+            None => self.radiance,
+        }
+    }
+}
+
 /// Converts a scene; `path` (the top-level file) names it. Unsupported
 /// features are an error unless `lenient`.
 pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converted> {
@@ -987,11 +999,7 @@ impl<'a> Conv<'a> {
                                 None => cross,
                             };
                             let vertices = if side.dot(cross) < 0.0 { [a, c, b] } else { [a, b, c] };
-                            let sides = if e.two_sided { 2.0 } else { 1.0 };
-                            let radiance = match e.power {
-                                Some(phi) => e.radiance * (phi / (sides * area * PI)),
-                                None => e.radiance,
-                            };
+                            let radiance = e.radiance_for(area);
                             desc.lights.push(Light::Triangle {
                                 vertices,
                                 radiance,
@@ -1035,11 +1043,7 @@ impl<'a> Conv<'a> {
                             continue;
                         }
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
-                        let sides = if e.two_sided { 2.0 } else { 1.0 };
-                        let radiance = match e.power {
-                            Some(phi) => e.radiance * (phi / (sides * area * PI)),
-                            None => e.radiance,
-                        };
+                        let radiance = e.radiance_for(area);
                         desc.lights.push(Light::Sphere {
                             sphere,
                             power: radiance * PI * area,
@@ -1082,11 +1086,7 @@ impl<'a> Conv<'a> {
                         // without a light above).
                         let disk = crate::geometry::Disk::new(centre, normal, radius, inner_radius, Some(axes))
                             .map_err(|msg| located(&shape.loc, format!("disk: {msg}")))?;
-                        let sides = if e.two_sided { 2.0 } else { 1.0 };
-                        let radiance = match e.power {
-                            Some(phi) => e.radiance * (phi / (sides * disk.area() * PI)),
-                            None => e.radiance,
-                        };
+                        let radiance = e.radiance_for(disk.area());
                         desc.lights.push(Light::Disk {
                             disk,
                             radiance,
