@@ -124,3 +124,126 @@ material = "grey"
 scale = [1, 2, 1]
 fit = { height = 0.5, bottom_centre = [0.5, 1, 0.5] }
 """)
+
+# pbrt-v4 scenes: the input up to its first NUL is the scene; what follows is
+# served as any .ply (or .ply.gz) it names; virtual/inc.pbrt is a fixed file
+# (see fuzz_targets/pbrt.rs). Written for the fuzzer in the syntax of the
+# Bitterli scenes, not copied from them.
+pbrt_camera = """Integrator "path" "integer maxdepth" [ 5 ]
+Transform [ 1 0 0 0 0 1 0 0 0 0 -1 0 0 -1 6.8 1 ]
+Sampler "sobol" "integer pixelsamples" [ 4 ]
+PixelFilter "gaussian" "float xradius" [ 1.5 ] "float yradius" [ 1.5 ]
+Film "rgb" "string filename" [ "out.exr" ]
+    "integer yresolution" [ 12 ] "integer xresolution" [ 16 ]
+Camera "perspective" "float fov" [ 19.5 ]
+"""
+put("pbrt", "box.pbrt", pbrt_camera + """
+WorldBegin
+MakeNamedMaterial "Floor"
+    "string type" [ "diffuse" ]
+    "rgb reflectance" [ 0.725 0.71 0.68 ]
+MakeNamedMaterial "Light"
+    "string type" [ "diffuse" ]
+    "rgb reflectance" [ 0 0 0 ]
+NamedMaterial "Floor"
+Shape "trianglemesh"
+    "point2 uv" [ 0 0 1 0 1 1 0 1 ]
+    "normal N" [ 0 1 0 0 1 0 0 1 0 0 1 0 ]
+    "point3 P" [ -1 0 -1 -1 0 1 1 0 1 1 0 -1 ]
+    "integer indices" [ 0 1 2 0 2 3 ]
+AttributeBegin
+    AreaLightSource "diffuse" "rgb L" [ 17 12 4 ]
+    NamedMaterial "Light"
+    Shape "trianglemesh"
+        "point3 P" [ -0.24 1.98 -0.22 0.23 1.98 -0.22 0.23 1.98 0.16 -0.24 1.98 0.16 ]
+        "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+""")
+put("pbrt", "plates-spheres.pbrt", """Integrator "path" "integer maxdepth" [ 3 ]
+LookAt 0 2 15  0 -1 0  0 1 0
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 18 ]
+Camera "perspective" "float fov" [ 20.1 ] "float lensradius" [ 0.05 ] "float focaldistance" [ 15 ]
+WorldBegin
+MakeNamedMaterial "Rough"
+    "string type" [ "conductor" ]
+    "float vroughness" [ 0.1 ] "float uroughness" [ 0.1 ]
+    "bool remaproughness" [ false ]
+    "rgb k" [ 3.91 2.45 2.14 ] "rgb eta" [ 0.2 0.92 1.1 ]
+MakeNamedMaterial "Cu"
+    "string type" [ "conductor" ]
+    "spectrum eta" [ "metal-Cu-eta" ] "spectrum k" [ "metal-Cu-k" ]
+    "float roughness" [ 0.05 ]
+NamedMaterial "Rough"
+Shape "bilinearmesh" "point3 P" [ -2 0 0 2 0 0 -2 1 -1 2 1 -1 ] "integer indices" [ 0 1 2 3 ]
+NamedMaterial "Cu"
+Shape "trianglemesh" "point3 P" [ -2 -1 0 2 -1 0 0 0 -1 ] "integer indices" [ 0 1 2 ]
+AttributeBegin
+    Translate -1.25 0 0
+    AreaLightSource "diffuse" "blackbody L" [ 5500 ] "float power" [ 10 ]
+    Material "diffuse" "rgb reflectance" [ 0 0 0 ]
+    Shape "sphere" "float radius" [ 0.1 ]
+AttributeEnd
+AttributeBegin
+    Translate 1.25 0 0
+    AreaLightSource "diffuse" "rgb L" [ 100 100 100 ] "bool twosided" [ true ]
+    Shape "disk" "float radius" [ 0.3 ] "float innerradius" [ 0.1 ] "float height" [ 0.5 ]
+AttributeEnd
+LightSource "point" "rgb I" [ 5 5 5 ] "point3 from" [ 0 4 0 ]
+""")
+put("pbrt", "transforms-instances.pbrt", """LookAt 0 0 -5  0 0 0  0 1 0
+CoordinateSystem "mycam"
+Scale -1 1 1
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ] "float cropwindow" [ 0 1 0.25 0.75 ]
+Camera "perspective" "float fov" [ 40 ] "float screenwindow" [ -1 1 -1 1 ]
+Sampler "halton" "integer pixelsamples" [ 2 ]
+Option "disablepixeljitter" true
+ColorSpace "srgb"
+WorldBegin
+Attribute "shape" "float radius" [ 0.5 ]
+Texture "checks" "spectrum" "checkerboard" "float uscale" [ 4 ] "float vscale" [ 4 ]
+    "rgb tex1" [ 1 0 0 ] "rgb tex2" [ 0 0 1 ]
+Texture "rough" "float" "constant" "float value" [ 0.2 ]
+Material "diffuse" "texture reflectance" "checks"
+ObjectBegin "quad"
+    Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 1 1 0 0 1 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+ObjectEnd
+AttributeBegin
+    Rotate 30 0 1 0
+    ConcatTransform [ 1 0 0 0 0 1 0 0 0 0 1 0 0.5 0 0 1 ]
+    ReverseOrientation
+    ObjectInstance "quad"
+AttributeEnd
+AttributeBegin
+    CoordSysTransform "mycam"
+    Translate 0 0 1
+    Material "dielectric" "float eta" [ 1.33 ] "texture roughness" "rough"
+    Shape "sphere"
+AttributeEnd
+Include "inc.pbrt"
+LightSource "distant" "point3 from" [ 0 0 0 ] "point3 to" [ 0 0 1 ] "rgb L" [ 3 3 3 ]
+LightSource "infinite" "rgb L" [ 0.1 0.1 0.1 ]
+""")
+put("pbrt", "sppm-plymesh.pbrt", """Integrator "sppm" "integer iterations" [ 4 ]
+    "integer photonsperiteration" [ 1000 ] "float radius" [ 0.05 ]
+LookAt 0 1 -4  0 0 0  0 1 0
+Film "rgb" "integer xresolution" [ 16 ] "integer yresolution" [ 16 ]
+Camera "perspective" "float fov" [ 45 ]
+WorldBegin
+MakeNamedMaterial "Water" "string type" [ "dielectric" ] "float eta" [ 1.33 ]
+NamedMaterial "Water"
+Shape "plymesh" "string filename" [ "models/mesh.ply" ]
+AttributeBegin
+    AreaLightSource "diffuse" "rgb L" [ 10 10 10 ] "float scale" [ 2 ]
+    Shape "trianglemesh" "point3 P" [ -1 3 -1 1 3 -1 0 3 1 ] "integer indices" [ 0 2 1 ]
+AttributeEnd
+""" + "\0" + header.format(fmt="ascii")
+    + "".join(f"{x} {y} {z} 0 0 1 200\n" for x, y, z in verts)
+    + "4 0 1 2 3 7\n3 0 2 3 0\n2 0 1\n")
+put("pbrt", "ply-uv-faceindices.pbrt", """LookAt 0 0 -3  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 30 ]
+WorldBegin
+Shape "plymesh" "string filename" "mesh.ply"
+""" + "\0" + "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+    "property float z\nproperty float u\nproperty float v\nelement face 1\n"
+    "property list uchar int vertex_indices\nproperty int face_indices\nend_header\n"
+    "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2 0\n")

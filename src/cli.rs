@@ -296,13 +296,9 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
 /// [`prepare`] for commands that write no image.
 pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
     let mut loaded = load_scene(&args.scene)?;
+    let (w, h) = (loaded.desc.camera.width, loaded.desc.camera.height);
+    loaded.set_resolution(args.width.unwrap_or(w), args.height.unwrap_or(h));
     let desc = &mut loaded.desc;
-    if let Some(w) = args.width {
-        desc.camera.width = w;
-    }
-    if let Some(h) = args.height {
-        desc.camera.height = h;
-    }
     let (w, h) = (desc.camera.width, desc.camera.height);
     for (name, v) in [("--width", w), ("--height", h)] {
         if v == 0 || v > MAX_SIDE {

@@ -7,7 +7,7 @@ use raytracer::material::Material;
 use raytracer::scene::file::parse_with;
 use raytracer::scene::mesh::{parse_mesh, FileSource, Mesh, MeshFormat};
 use raytracer::scene::transform::Transform;
-use raytracer::scene::{builtin, LoadOptions, Scene};
+use raytracer::scene::{builtin, pbrt, LoadOptions, Scene};
 use std::path::{Path, PathBuf};
 
 /// No files at all: the loaders must not reach the machine's files.
@@ -40,6 +40,43 @@ fn obj(bytes: &[u8]) -> Result<(), String> {
 
 fn ply(bytes: &[u8]) -> Result<(), String> {
     place(&parse_mesh(Path::new("t.ply"), bytes, MeshFormat::Ply, &NoFiles).map_err(|e| e.to_string())?)
+}
+
+/// What the pbrt target does: the scene up to the first NUL, the rest served
+/// as every `.ply` (and `.ply.gz`) it names, `inc.pbrt` a fixed file; read,
+/// converted leniently and built.
+fn pbrt(bytes: &[u8]) -> Result<(), String> {
+    let (text, ply) = match bytes.iter().position(|&b| b == 0) {
+        Some(i) => (&bytes[..i], &bytes[i + 1..]),
+        None => (bytes, &[][..]),
+    };
+    let files = PbrtFiles { ply: ply.to_vec() };
+    let path = Path::new("virtual/scene.pbrt");
+    let parsed = pbrt::parse_bytes(path, text.to_vec(), &files).map_err(|e| e.to_string())?;
+    let converted = pbrt::convert::convert(&parsed, path, true).map_err(|e| e.to_string())?;
+    Scene::build(converted.desc).map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// The files the pbrt target serves (see fuzz/fuzz_targets/pbrt.rs).
+struct PbrtFiles {
+    ply: Vec<u8>,
+}
+
+impl FileSource for PbrtFiles {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        let name = path.to_string_lossy();
+        if path == Path::new("virtual/inc.pbrt") {
+            // The same text as the target's `INCLUDE`.
+            Ok(b"MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
+AttributeBegin\nNamedMaterial \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n"
+                .to_vec())
+        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") {
+            Ok(self.ply.clone())
+        } else {
+            NoFiles.read(path)
+        }
+    }
 }
 
 fn scene(text: &str) -> Result<(), String> {
@@ -141,7 +178,8 @@ fn committed_fuzz_inputs_load_or_fail_cleanly() {
             "obj" => obj,
             "ply" => ply,
             "scene" => |b: &[u8]| scene(std::str::from_utf8(b).unwrap_or("")),
-            other => panic!("tests/fuzz-crashers/{other}: not a fuzz target (obj, ply, scene)"),
+            "pbrt" => pbrt,
+            other => panic!("tests/fuzz-crashers/{other}: not a fuzz target (obj, ply, scene, pbrt)"),
         };
         for (path, bytes) in crashers(target) {
             // Ok or Err are both fine; a panic fails the test, naming the file.
@@ -211,7 +249,11 @@ fn fuzz_seeds_are_valid_inputs() {
             .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         Scene::build(loaded.desc).unwrap();
     }
-    assert!(ply_seeds.len() >= 3 && obj_seeds.len() >= 3);
+    let pbrt_seeds = files("pbrt");
+    for p in &pbrt_seeds {
+        pbrt(&std::fs::read(p).unwrap()).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+    assert!(ply_seeds.len() >= 3 && obj_seeds.len() >= 3 && pbrt_seeds.len() >= 3);
 }
 
 #[test]

@@ -281,3 +281,168 @@ fn veach_mis_light_bsdf_and_mis_sampling_converge_together_and_mis_wins() {
     let (light, bsdf, mis) = (results[0].1, results[1].1, results[2].1);
     assert!(mis < light && mis < bsdf, "{results:?}");
 }
+
+/// A pbrt-v4 file: 1280x720, `fov` 40 (on the shorter, vertical axis), the
+/// camera at z = -5 looking at the origin, and an emitting 0.2 x 0.2 quad
+/// facing it at (x, 0, 0), 0.5 wide and high.
+fn framing_scene(dir: &Path, x: f32) -> PathBuf {
+    let p = dir.join("framing.pbrt");
+    let (a, b) = (x - 0.25, x + 0.25);
+    std::fs::write(
+        &p,
+        format!(
+            "Integrator \"path\" \"integer maxdepth\" [ 1 ]\nLookAt 0 0 -5  0 0 0  0 1 0\n\
+             Camera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 1280 ] \"integer yresolution\" [ 720 ]\nWorldBegin\n\
+             AreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ {a} -0.25 0  {b} -0.25 0  {b} 0.25 0  {a} 0.25 0 ] \
+             \"integer indices\" [ 0 2 1 0 3 2 ]\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+/// Tangents of the angles between the view direction and the ray through
+/// the top-left corner of the image, horizontally and vertically.
+fn corner_tangents(desc: &raytracer::scene::SceneDesc) -> (f32, f32) {
+    let c = &desc.camera;
+    let cam = raytracer::camera::Camera::new(c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height).unwrap();
+    let d = cam.generate_ray(0.0, 0.0).d;
+    let forward = cam.forward();
+    let up = c.up.normalize();
+    let right = forward.cross(up);
+    let z = d.dot(forward);
+    (d.dot(right).abs() / z, d.dot(up).abs() / z)
+}
+
+#[test]
+fn resizing_a_pbrt_film_keeps_fov_on_the_shorter_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = framing_scene(dir.path(), 0.0);
+    let load = || raytracer::scene::load(path.to_str().unwrap(), &Default::default()).unwrap();
+    let t = 20f32.to_radians().tan();
+    let close = |a: (f32, f32), b: (f32, f32)| (a.0 - b.0).abs() < 1e-5 && (a.1 - b.1).abs() < 1e-5;
+    let original = load();
+    assert!(close(corner_tangents(&original.desc), (t * 1280.0 / 720.0, t)));
+    // The same shape smaller: the same picture.
+    let mut small = load();
+    small.set_resolution(320, 180);
+    assert!(close(corner_tangents(&small.desc), corner_tangents(&original.desc)));
+    // Portrait: pbrt puts fov on the horizontal axis now.
+    let mut tall = load();
+    tall.set_resolution(100, 300);
+    let got = corner_tangents(&tall.desc);
+    assert!(close(got, (t, 3.0 * t)), "{got:?} vs {:?}", (t, 3.0 * t));
+    // A file of this renderer's own keeps its vertical fov instead.
+    let mut toml = raytracer::scene::load("cornell", &Default::default()).unwrap();
+    let fov = toml.desc.camera.fov_y_deg;
+    toml.set_resolution(100, 300);
+    assert_eq!(toml.desc.camera.fov_y_deg, fov);
+}
+
+#[test]
+fn width_and_height_options_frame_a_pbrt_scene_as_pbrt_would() {
+    // The emitter sits at a horizontal angle with tangent 0.25 from the view
+    // direction. At 30x90 pbrt's fov of 40 spans the width (tangent 0.364
+    // at the edges): the emitter is seen about 10 pixels from the centre
+    // column. Keeping fov on the vertical axis would leave it out of view.
+    let dir = tempfile::tempdir().unwrap();
+    let path = framing_scene(dir.path(), 1.25);
+    let out = dir.path().join("out.pfm");
+    let o = raytracer(&[
+        "--scene",
+        path.to_str().unwrap(),
+        "--width",
+        "30",
+        "--height",
+        "90",
+        "--spp",
+        "4",
+        "--threads",
+        "1",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = read_image(&out).unwrap();
+    assert_eq!((img.width, img.height), (30, 90));
+    let mut lit = vec![];
+    for y in 0..90 {
+        for x in 0..30 {
+            if luminance(img.pixels[(y * 30 + x) as usize]) > 0.5 {
+                lit.push((x, y));
+            }
+        }
+    }
+    let t = 20f64.to_radians().tan();
+    let centre_offset = 15.0 * 0.25 / t; // about 10.3 pixels
+    assert!(lit.len() >= 4, "the emitter is out of view: {lit:?}");
+    for &(x, y) in &lit {
+        let dx = (x as f64 + 0.5 - 15.0).abs();
+        // Half the emitter spans about 2 pixels either way.
+        assert!((dx - centre_offset).abs() < 3.0, "lit pixel ({x}, {y})");
+        assert!((y as f64 + 0.5 - 45.0).abs() < 3.0, "lit pixel ({x}, {y})");
+    }
+}
+
+/// Renders, with direct light only, a few pixels around the origin of a
+/// diffuse floor (reflectance 0.5, the plane y = 0) under a disk light of
+/// radius 0.5 at height 1 whose pbrt normal points down; `light` holds the
+/// AreaLightSource's parameters, `pre` comes before the disk's Shape.
+/// Returns the mean radiance.
+fn floor_under_disk(light: &str, pre: &str) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("disk.pbrt");
+    std::fs::write(
+        &p,
+        format!(
+            "LookAt 1.5 0.6 0  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 1 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\nWorldBegin\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -10 0 -10  10 0 -10  10 0 10  -10 0 10 ] \
+             \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" {light}\n\
+             Translate 0 1 0\nRotate 90 1 0 0\n{pre}Shape \"disk\" \"float radius\" [ 0.5 ]\nAttributeEnd\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out.pfm");
+    let o = raytracer(&[
+        "--scene",
+        p.to_str().unwrap(),
+        "--integrator",
+        "path",
+        "--max-depth",
+        "1",
+        "--spp",
+        "256",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = read_image(&out).unwrap();
+    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+}
+
+#[test]
+fn a_disk_area_light_lights_a_floor_as_the_closed_form_says() {
+    // A disk of radius R and radiance L at height h over a point on its axis
+    // gives irradiance E = pi L R^2 / (h^2 + R^2); the diffuse floor's
+    // radiance is 0.5 E / pi = 0.5 L 0.25 / 1.25 = L / 10.
+    let down = floor_under_disk("\"rgb L\" [ 10 10 10 ]", "");
+    assert!((down - 1.0).abs() < 0.02, "{down} vs 1");
+    // ReverseOrientation turns the emitting side up: the floor is dark...
+    let up = floor_under_disk("\"rgb L\" [ 10 10 10 ]", "ReverseOrientation\n");
+    assert!(up < 1e-6, "{up}");
+    // ...unless the light emits on both sides.
+    let both = floor_under_disk("\"rgb L\" [ 10 10 10 ] \"bool twosided\" true", "ReverseOrientation\n");
+    assert!((both - 1.0).abs() < 0.02, "{both} vs 1");
+    // power: 10 W from one side of a disk of area pi / 4 is L = 40 / pi^2,
+    // so the floor shows 4 / pi^2.
+    let power = floor_under_disk("\"rgb L\" [ 1 1 1 ] \"float power\" [ 10 ]", "");
+    let expected = 4.0 / (std::f64::consts::PI * std::f64::consts::PI);
+    assert!((power / expected - 1.0).abs() < 0.02, "{power} vs {expected}");
+}

@@ -54,12 +54,7 @@ pub fn place_and_build(mesh: &Mesh) {
         lights: vec![],
         settings: SceneSettings::default(),
     };
-    let m = desc.material(
-        "grey",
-        Material::Diffuse {
-            albedo: Vec3::splat(0.5),
-        },
-    );
+    let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
     if mesh
         .add_to_scene(&mut desc, &Transform::default(), Some(m), true)
         .is_ok()

@@ -8,7 +8,7 @@
 //! and counts them.
 
 mod obj;
-mod ply;
+pub mod ply;
 
 use super::transform::Transform;
 use super::{SceneDesc, TriangleDesc};
@@ -101,8 +101,12 @@ pub enum MeshFormat {
 }
 
 impl MeshFormat {
-    /// The format a file's extension names (.obj or .ply, any case).
+    /// The format a file's extension names (.obj, .ply or .ply.gz, any case).
     pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        let name = path.file_name()?.to_str()?.to_ascii_lowercase();
+        if name.ends_with(".ply.gz") {
+            return Some(MeshFormat::Ply);
+        }
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "obj" => Some(MeshFormat::Obj),

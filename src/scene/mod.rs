@@ -37,6 +37,29 @@ pub struct LoadOptions {
 pub struct LoadedScene {
     pub desc: SceneDesc,
     pub meshes: Vec<MeshReport>,
+    /// Which image axis the scene file's field of view spans, kept when the
+    /// image is resized ([`LoadedScene::set_resolution`]).
+    pub fov_axis: FovAxis,
+}
+
+impl LoadedScene {
+    /// Renders the scene at `width` x `height` (`--width`, `--height`),
+    /// keeping its field of view as its format defines it.
+    pub fn set_resolution(&mut self, width: u32, height: u32) {
+        self.desc.camera.resize(width, height, self.fov_axis);
+    }
+}
+
+/// Which image axis a scene format's field of view spans.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FovAxis {
+    /// The vertical one, whatever the image's shape (this renderer's scene
+    /// files and built-in scenes).
+    #[default]
+    Vertical,
+    /// The shorter one (pbrt-v4's `fov`): resizing a landscape image to a
+    /// portrait one moves the field of view to the horizontal axis.
+    Shorter,
 }
 
 /// Loads a scene given as a built-in name, a TOML file or a pbrt-v4 file
@@ -74,6 +97,23 @@ pub struct CameraDesc {
     pub fov_y_deg: f32,
     pub width: u32,
     pub height: u32,
+}
+
+impl CameraDesc {
+    /// Sets the image size. With [`FovAxis::Vertical`] `fov_y_deg` stays;
+    /// with [`FovAxis::Shorter`] the field of view of the shorter axis
+    /// (which `fov_y_deg` implies at the old size) stays, on the shorter
+    /// axis of the new size.
+    pub fn resize(&mut self, width: u32, height: u32, axis: FovAxis) {
+        if axis == FovAxis::Shorter && self.width > 0 && self.height > 0 && width > 0 && height > 0 {
+            let tan_y = (self.fov_y_deg.to_radians() * 0.5).tan();
+            let tan_shorter = tan_y * (self.width as f32 / self.height as f32).min(1.0);
+            let tan_y = tan_shorter * (height as f32 / width as f32).max(1.0);
+            self.fov_y_deg = 2.0 * tan_y.atan().to_degrees();
+        }
+        self.width = width;
+        self.height = height;
+    }
 }
 
 /// A triangle with its material (an index into `SceneDesc::materials`) and

@@ -105,7 +105,11 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     for (name, m) in &materials {
         desc.material(name, m.clone());
     }
-    Ok(LoadedScene { desc, meshes })
+    Ok(LoadedScene {
+        desc,
+        meshes,
+        fov_axis: super::FovAxis::Vertical,
+    })
 }
 
 /// The `[camera]` table.

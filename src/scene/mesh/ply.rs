@@ -1,9 +1,18 @@
 //! Stanford PLY (Turk, "The PLY Polygon File Format", 1994): ASCII,
-//! binary_little_endian and binary_big_endian. We read the `vertex` element's
-//! x, y, z (and nx, ny, nz when all three are there, and texture coordinates
-//! u, v or s, t or texture_u, texture_v or texture_s, texture_t) and the `face` element's
-//! `vertex_indices` (or `vertex_index`) list, fan-triangulating polygons;
-//! every other property and element is skipped whatever its type.
+//! binary_little_endian and binary_big_endian, gzip-compressed when the
+//! name ends in `.gz`. We read the `vertex` element's x, y, z (and nx, ny,
+//! nz when all three are there, and texture coordinates u, v or s, t or
+//! texture_u, texture_v or texture_s, texture_t) and the `face` element's
+//! `vertex_indices` (or `vertex_index`) list; every other property and
+//! element is skipped whatever its type.
+//!
+//! The one PLY reader of the crate: [`read`] serves both the mesh loader
+//! (OBJ/PLY meshes, [`Polygons::Fan`]: polygons of any size are
+//! fan-triangulated) and pbrt-v4's `plymesh` ([`Polygons::TrianglesAndQuads`]:
+//! pbrt-v4's util/mesh.cpp `TriQuadMesh::ReadPLY` keeps triangles and quads
+//! and skips other faces with a warning; a quad, a bilinear patch there,
+//! becomes the two triangles of its fan here, exact when it is planar).
+//! Errors name the file and the line (ASCII) or byte offset (binary).
 //!
 //! A header's counts are never trusted for allocation: before reading, the
 //! smallest size the declared elements could take is checked against the
@@ -13,7 +22,47 @@
 use super::{Mesh, MeshPart};
 use crate::error::{Error, Result};
 use crate::math::{Vec2, Vec3};
+use std::io::Read;
 use std::path::Path;
+
+/// Decompressed `.gz` files larger than this are refused.
+pub const MAX_DECOMPRESSED: u64 = 4 << 30;
+
+/// Decompresses gzip data (a `.gz` file), refusing more than `MAX_DECOMPRESSED` bytes.
+pub fn gunzip(bytes: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(bytes)
+        .take(MAX_DECOMPRESSED + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| format!("cannot decompress: {e}"))?;
+    if out.len() as u64 > MAX_DECOMPRESSED {
+        return Err(format!("decompresses to more than {MAX_DECOMPRESSED} bytes"));
+    }
+    Ok(out)
+}
+
+/// What becomes of a face's polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Polygons {
+    /// Every polygon is fan-triangulated; fewer than three vertices add nothing.
+    Fan,
+    /// pbrt-v4's `plymesh`: triangles, and quads as their two fan
+    /// triangles; other faces are skipped and counted.
+    TrianglesAndQuads,
+}
+
+/// A PLY file's vertices and triangles.
+#[derive(Clone, Debug, Default)]
+pub struct PlyData {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Quads (each two triangles).
+    pub quads: usize,
+    /// Faces skipped under [`Polygons::TrianglesAndQuads`].
+    pub skipped_faces: usize,
+}
 
 /// The names PLY writers give a vertex's texture coordinates, in the order tried.
 const UV_NAMES: [[&str; 2]; 4] = [
@@ -347,7 +396,45 @@ impl Reader<'_> {
     }
 }
 
+/// A mesh of the mesh loader: polygons fan-triangulated, one part named
+/// after the file.
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let data = read(path, bytes, Polygons::Fan)?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let parts = vec![MeshPart {
+        name,
+        material: None,
+        albedo: None,
+        triangles: 0..data.triangles.len(),
+    }];
+    Ok(Mesh {
+        path: path.to_path_buf(),
+        positions: data.positions,
+        normals: data.normals,
+        uvs: data.uvs,
+        triangles: data.triangles,
+        parts,
+        warnings: vec![],
+    })
+}
+
+/// Reads a PLY file's bytes (gzip-compressed when `path` ends in `.gz`);
+/// `path` names it in errors.
+pub fn read(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
+        let bytes = gunzip(bytes).map_err(|message| Error::Parse {
+            path: path.to_path_buf(),
+            message,
+        })?;
+        return read_plain(path, &bytes, polygons);
+    }
+    read_plain(path, bytes, polygons)
+}
+
+fn read_plain(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> {
     let header = parse_header(path, bytes)?;
     let herr = |line: usize, message: String| Error::Syntax {
         path: path.to_path_buf(),
@@ -368,15 +455,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         line: header.body_line,
         token_line: header.body_line,
     };
-    let mut mesh = Mesh {
-        path: path.to_path_buf(),
-        positions: vec![],
-        normals: None,
-        uvs: None,
-        triangles: vec![],
-        parts: vec![],
-        warnings: vec![],
-    };
+    let mut mesh = PlyData::default();
     for el in &header.elements {
         // Where the properties we want sit in each item.
         let (mut xyz, mut nxyz, mut indices) = ([None; 3], [None; 3], None);
@@ -466,6 +545,11 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                             }
                             face.push(i as u32);
                         }
+                        if polygons == Polygons::TrianglesAndQuads && !(3..=4).contains(&face.len()) {
+                            mesh.skipped_faces += 1;
+                            continue;
+                        }
+                        mesh.quads += usize::from(face.len() == 4);
                         // Fan-triangulate; faces of fewer than three vertices add nothing.
                         for j in 2..face.len() {
                             mesh.triangles.push([face[0], face[j - 1], face[j]]);
@@ -513,15 +597,5 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             mesh.uvs = Some(uvs);
         }
     }
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    mesh.parts.push(MeshPart {
-        name,
-        material: None,
-        albedo: None,
-        triangles: 0..mesh.triangles.len(),
-    });
     Ok(mesh)
 }

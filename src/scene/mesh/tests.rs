@@ -164,6 +164,33 @@ fn ply_loads_the_same_in_all_three_encodings() {
 }
 
 #[test]
+fn ply_gz_loads_as_the_ply_and_pbrt_mode_skips_what_pbrt_skips() {
+    // The one PLY reader serves both paths: a .ply.gz mesh loads like its PLY.
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = ply_file("binary_little_endian");
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(&bytes).unwrap();
+    let p = write(dir.path(), "m.PLY.gz", &gz.finish().unwrap());
+    let plain = load_mesh(&write(dir.path(), "m.ply", &bytes)).unwrap();
+    let m = load_mesh(&p).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(corners(&m), corners(&plain));
+    assert_error(
+        &write(dir.path(), "bad.ply.gz", &bytes),
+        "bad.ply.gz",
+        "cannot decompress",
+    );
+    // A pentagon: fanned for meshes, skipped and counted for pbrt's plymesh.
+    let text = "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+element face 3\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 2 0\n5 0 1 2 3 4\n4 0 1 2 3\n3 0 1 2\n";
+    let fan = ply::read(Path::new("p.ply"), text.as_bytes(), ply::Polygons::Fan).unwrap();
+    assert_eq!((fan.triangles.len(), fan.quads, fan.skipped_faces), (3 + 2 + 1, 1, 0));
+    let pbrt = ply::read(Path::new("p.ply"), text.as_bytes(), ply::Polygons::TrianglesAndQuads).unwrap();
+    assert_eq!((pbrt.triangles.len(), pbrt.quads, pbrt.skipped_faces), (2 + 1, 1, 1));
+    assert_eq!(pbrt.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 1, 2]]);
+}
+
+#[test]
 fn ply_vertex_index_and_other_integer_types_are_read() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(

@@ -20,9 +20,9 @@ use super::error::{Loc, PbrtError, Result};
 use super::ir::*;
 use super::lexer::{Lexer, Token, TokenKind};
 use super::params::{Param, ParamType, Params, Values};
-use super::ply;
 use super::shapes::{self, Findings};
 use super::spectrum::is_named_spectrum;
+use crate::scene::mesh::ply;
 use crate::scene::mesh::FileSource;
 use glam::{Mat4, Vec3};
 use std::collections::{HashMap, HashSet};
@@ -1238,13 +1238,8 @@ impl<'a> Builder<'a> {
             }
         }
         let (path, bytes) = self.read_named(loc, "plymesh", name)?;
-        let fail = |m: String| PbrtError::at(loc, format!("plymesh \"{name}\": {}: {m}", path.display()));
-        let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
-            ply::gunzip(&bytes).map_err(fail)?
-        } else {
-            bytes
-        };
-        let read = ply::parse(&bytes, &path).map_err(fail)?;
+        let read = ply::read(&path, &bytes, ply::Polygons::TrianglesAndQuads)
+            .map_err(|e| PbrtError::at(loc, format!("plymesh \"{name}\": {e}")))?;
         if read.skipped_faces > 0 {
             self.warn(
                 loc,
@@ -1254,10 +1249,17 @@ impl<'a> Builder<'a> {
                 ),
             );
         }
-        if read.mesh.triangles.is_empty() {
+        if read.triangles.is_empty() {
             self.warn(loc, format!("plymesh \"{name}\": the mesh has no faces"));
         }
-        let mesh = Arc::new(read.mesh);
+        let mesh = Arc::new(TriMesh {
+            positions: read.positions,
+            normals: read.normals,
+            uvs: read.uvs,
+            triangles: read.triangles,
+            quads_split: read.quads,
+            file: Some(path.clone()),
+        });
         self.ply_cache.insert(path, mesh.clone());
         Ok(mesh)
     }

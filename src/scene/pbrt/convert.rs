@@ -1,7 +1,7 @@
 //! From a [`PbrtScene`] to this renderer's [`SceneDesc`], for the subset the
 //! renderer supports (see `docs/pbrt.md`): a perspective pinhole camera,
 //! diffuse and smooth dielectric materials, diffuse area lights on triangle
-//! meshes and full spheres, point lights, triangle meshes and full spheres,
+//! meshes, full spheres and disks, point lights, triangle meshes and full spheres,
 //! and the film, sampler, filter and integrator as recommended settings.
 //!
 //! What the scene uses and the renderer cannot render is collected, each at
@@ -25,6 +25,11 @@
 //!   `ReverseOrientation`, as pbrt-v4's `TriangleMesh` does); otherwise the
 //!   side of `cross(p1 - p0, p2 - p0)` in world space, turned when
 //!   [`Shape::flips_normals`]. Light triangles are ordered to emit there.
+//!   A disk emits on the side of the normal pbrt-v4's `Disk::Intersect`
+//!   reports: the transformed +z, turned when [`Shape::flips_normals`].
+//!   (pbrt-v4's `Disk::Sample` turns it for `ReverseOrientation` only, so
+//!   pbrt itself disagrees with its hits under a handedness-swapping
+//!   transformation; we follow what a ray that meets the disk sees.)
 //! * A diffuse area light's `power` is met per shape as pbrt-v4 does it: a
 //!   mesh is one light per triangle there, so each triangle emits `power`.
 
@@ -82,6 +87,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
     Ok(LoadedScene {
         desc: converted.desc,
         meshes: vec![report],
+        fov_axis: crate::scene::FovAxis::Shorter,
     })
 }
 
@@ -119,6 +125,18 @@ struct Emission {
     /// `power`, when given (> 0).
     power: Option<f32>,
     two_sided: bool,
+}
+
+impl Emission {
+    /// The radiance of one shape of `area`: `power`, when given, is met by
+    /// it (pbrt-v4's k_e: power / (sides area pi) times `scale`).
+    fn radiance_for(&self, area: f32) -> Vec3 {
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        match self.power {
+            Some(phi) => self.radiance * (phi / (sides * area * PI)),
+            None => self.radiance,
+        }
+    }
 }
 
 /// Converts a scene; `path` (the top-level file) names it. Unsupported
@@ -981,11 +999,7 @@ impl<'a> Conv<'a> {
                                 None => cross,
                             };
                             let vertices = if side.dot(cross) < 0.0 { [a, c, b] } else { [a, b, c] };
-                            let sides = if e.two_sided { 2.0 } else { 1.0 };
-                            let radiance = match e.power {
-                                Some(phi) => e.radiance * (phi / (sides * area * PI)),
-                                None => e.radiance,
-                            };
+                            let radiance = e.radiance_for(area);
                             desc.lights.push(Light::Triangle {
                                 vertices,
                                 radiance,
@@ -1029,11 +1043,7 @@ impl<'a> Conv<'a> {
                             continue;
                         }
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
-                        let sides = if e.two_sided { 2.0 } else { 1.0 };
-                        let radiance = match e.power {
-                            Some(phi) => e.radiance * (phi / (sides * area * PI)),
-                            None => e.radiance,
-                        };
+                        let radiance = e.radiance_for(area);
                         desc.lights.push(Light::Sphere {
                             sphere,
                             power: radiance * PI * area,
@@ -1053,15 +1063,6 @@ impl<'a> Conv<'a> {
                         self.skip_shape(shape);
                         continue;
                     };
-                    if emission.is_some() {
-                        self.problem(
-                            Kind::Light,
-                            &shape.loc,
-                            "an area light on a disk is not supported (there are no disk lights)",
-                        );
-                        self.skipped_lights += 1;
-                        continue;
-                    }
                     if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
                         return Err(located(
                             &shape.loc,
@@ -1071,7 +1072,6 @@ impl<'a> Conv<'a> {
                             ),
                         ));
                     }
-                    let material = self.material(desc, shape.material)?;
                     let centre = m.transform_point3(Vec3::new(0.0, 0.0, d.height));
                     let axes = [
                         m.transform_vector3(Vec3::X) / scale,
@@ -1079,9 +1079,25 @@ impl<'a> Conv<'a> {
                     ];
                     let normal = m.inverse().transpose().transform_vector3(Vec3::Z).normalize();
                     let normal = if shape.flips_normals() { -normal } else { normal };
-                    let mut disk = DiskDesc::new(centre, normal, d.radius * scale, d.inner_radius * scale, material);
-                    disk.axes = Some(axes);
-                    desc.disks.push(disk);
+                    let (radius, inner_radius) = (d.radius * scale, d.inner_radius * scale);
+                    if let Some(e) = emission {
+                        // pbrt-v4 emits on the side of the normal its ray
+                        // hits report (`flips_normals`, as for the disk
+                        // without a light above).
+                        let disk = crate::geometry::Disk::new(centre, normal, radius, inner_radius, Some(axes))
+                            .map_err(|msg| located(&shape.loc, format!("disk: {msg}")))?;
+                        let radiance = e.radiance_for(disk.area());
+                        desc.lights.push(Light::Disk {
+                            disk,
+                            radiance,
+                            two_sided: e.two_sided,
+                        });
+                    } else {
+                        let material = self.material(desc, shape.material)?;
+                        let mut disk = DiskDesc::new(centre, normal, radius, inner_radius, material);
+                        disk.axes = Some(axes);
+                        desc.disks.push(disk);
+                    }
                 }
                 _ => unreachable!("skipped above"),
             }
@@ -1884,15 +1900,66 @@ mod tests {
         let ray = crate::math::Ray::new(Vec3::ZERO, Vec3::new(-2.0, 0.0, 5.0).normalize());
         let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the ring");
         assert!((hit.t - Vec3::new(-2.0, 0.0, 5.0).length()).abs() < 1e-3, "{}", hit.t);
-        // The disk with an area light is refused.
-        let e = convert_text("WorldBegin\nAreaLightSource \"diffuse\"\nShape \"disk\"\n", false)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("dir/main.pbrt:3: an area light on a disk is not supported"),
-            "{e}"
-        );
         assert_eq!(c.desc.disks.len(), 1);
+    }
+
+    /// The one disk light of `text` (after WorldBegin and an area light with
+    /// `light`), with its normal and axes mirrored back to pbrt's world.
+    fn disk_light(light: &str, text: &str) -> (crate::geometry::Disk, Vec3, bool) {
+        let c = ok(&format!(
+            "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" {light}\n{text}AttributeEnd\n"
+        ));
+        assert!(c.desc.disks.is_empty(), "an emitter is the light only");
+        assert_eq!(c.desc.lights.len(), 1);
+        let Light::Disk {
+            mut disk,
+            radiance,
+            two_sided,
+        } = c.desc.lights[0]
+        else {
+            panic!("not a disk light: {:?}", c.desc.lights[0])
+        };
+        if c.mirrored {
+            let m = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+            disk.centre = m(disk.centre);
+            disk.normal = m(disk.normal);
+            disk.axes = disk.axes.map(m);
+        }
+        (disk, radiance, two_sided)
+    }
+
+    #[test]
+    fn disk_area_lights_follow_pbrt() {
+        let shape = "Shape \"disk\" \"float radius\" [ 2 ] \"float innerradius\" [ 1 ] \"float height\" [ 0.5 ]\n";
+        let (d, l, two) = disk_light("\"rgb L\" [ 1 2 3 ]", &format!("Translate 0 1 0\nScale 2 2 2\n{shape}"));
+        assert!(d.centre.abs_diff_eq(Vec3::new(0.0, 1.0, 1.0), 1e-6), "{}", d.centre);
+        assert!((d.radius - 4.0).abs() < 1e-6 && (d.inner_radius - 2.0).abs() < 1e-6);
+        assert!(d.normal.abs_diff_eq(Vec3::Z, 1e-6) && !two);
+        assert_eq!(l, Vec3::new(1.0, 2.0, 3.0));
+        // The emitting side: pbrt's intersection normal, turned by
+        // ReverseOrientation and by a transformation that swaps handedness.
+        let side = |pre: &str| disk_light("", &format!("{pre}{shape}")).0.normal;
+        assert!(side("ReverseOrientation\n").abs_diff_eq(-Vec3::Z, 1e-6));
+        assert!(side("Scale 1 1 -1\n").abs_diff_eq(Vec3::Z, 1e-6));
+        assert!(side("Scale 1 -1 1\n").abs_diff_eq(-Vec3::Z, 1e-6));
+        assert!(side("ReverseOrientation\nScale 1 -1 1\n").abs_diff_eq(Vec3::Z, 1e-6));
+        assert!(side("Rotate 90 1 0 0\n").abs_diff_eq(-Vec3::Y, 1e-6));
+        // power is met by the annulus (area pi (2^2 - 1^2) = 3 pi), per side;
+        // pbrt-v4 multiplies `scale` by power / (sides area pi), keeping it.
+        for (two_sided, sides) in [("false", 1.0), ("true", 2.0)] {
+            let (_, l, two) = disk_light(
+                &format!(
+                    "\"rgb L\" [ 1 1 1 ] \"float scale\" [ 3 ] \"float power\" [ 60 ] \"bool twosided\" {two_sided}"
+                ),
+                shape,
+            );
+            let expected = 3.0 * 60.0 / (sides * 3.0 * PI * PI);
+            assert!(l.abs_diff_eq(Vec3::splat(expected), 1e-4), "{l} vs {expected}");
+            assert_eq!(two, sides == 2.0);
+        }
+        // scale without power multiplies L.
+        let (_, l, _) = disk_light("\"rgb L\" [ 1 1 1 ] \"float scale\" [ 3 ]", shape);
+        assert!(l.abs_diff_eq(Vec3::splat(3.0), 1e-6), "{l}");
     }
 
     #[test]

@@ -14,7 +14,8 @@
 //! * [`spectrum`]: `blackbody` and sampled spectra to RGB (the conversion is
 //!   documented there).
 //! * `builder`: the directives and the graphics state.
-//! * [`ply`]: `plymesh` files (`.ply`, `.ply.gz`).
+//! * `plymesh` files (`.ply`, `.ply.gz`) are read by the crate's one PLY
+//!   reader, [`crate::scene::mesh::ply`].
 //!
 //! Errors ([`PbrtError`]) name `file:line:column`: syntax, unknown
 //! directives, parameters of the wrong type, unterminated strings and lists,
@@ -29,7 +30,6 @@ pub mod error;
 mod ir;
 pub mod lexer;
 pub mod params;
-pub mod ply;
 mod shapes;
 pub mod spectrum;
 
@@ -58,7 +58,7 @@ pub fn load_from(path: &Path, files: &dyn FileSource) -> Result<PbrtScene> {
         source,
     })?;
     let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
-        ply::gunzip(&bytes).map_err(|m| PbrtError::At {
+        crate::scene::mesh::ply::gunzip(&bytes).map_err(|m| PbrtError::At {
             loc: Loc::new(std::sync::Arc::new(path.to_path_buf()), 1, 1),
             message: m,
         })?

@@ -1,0 +1,56 @@
+//! pbrt-v4 scene files through the library's pbrt reader
+//! (`scene::pbrt::parse_bytes`), the converter (`pbrt::convert::convert`,
+//! lenient, so that unsupported features are skipped rather than ending the
+//! run early) and into a built scene (BVH included).
+//!
+//! The input is the scene file up to its first NUL; the bytes after it are
+//! served as any `.ply` file the scene names (and, decompressed by the
+//! reader, as any `.ply.gz`), so the fuzzer mutates the `plymesh` path too.
+//! `virtual/inc.pbrt` is a small fixed file for `Include` and `Import`.
+
+#![no_main]
+
+#[path = "common.rs"]
+mod common;
+
+use libfuzzer_sys::fuzz_target;
+use raytracer::scene::mesh::FileSource;
+use raytracer::scene::pbrt::{convert::convert, parse_bytes};
+use raytracer::scene::Scene;
+use std::io::{Error, ErrorKind};
+use std::path::Path;
+
+const INCLUDE: &[u8] = b"MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
+AttributeBegin\nNamedMaterial \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n";
+
+/// The fixed include file, and the input's tail as every PLY.
+struct Files<'a> {
+    ply: &'a [u8],
+}
+
+impl FileSource for Files<'_> {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        let name = path.to_string_lossy();
+        if path == Path::new("virtual/inc.pbrt") {
+            Ok(INCLUDE.to_vec())
+        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") {
+            Ok(self.ply.to_vec())
+        } else {
+            Err(Error::new(ErrorKind::NotFound, "not among the fuzz target's files"))
+        }
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let (scene, ply) = common::split_mtl(data);
+    let files = Files {
+        ply: ply.unwrap_or(&[]),
+    };
+    let path = Path::new("virtual/scene.pbrt");
+    let Ok(parsed) = parse_bytes(path, scene.to_vec(), &files) else {
+        return;
+    };
+    if let Ok(converted) = convert(&parsed, path, true) {
+        let _ = Scene::build(converted.desc);
+    }
+});
