@@ -589,41 +589,10 @@ impl Light {
                 let o = sphere.centre + n * (sphere.radius * (1.0 + 1e-4));
                 (Ray::new(o, d), n)
             }
-            Light::Disk { disk, two_sided, .. } => {
-                let mut n = disk.normal;
-                let mut u2 = u2;
-                if *two_sided {
-                    if u2.x < 0.5 {
-                        u2.x *= 2.0;
-                    } else {
-                        u2.x = u2.x * 2.0 - 1.0;
-                        n = -n;
-                    }
-                    u2.x = u2.x.min(1.0 - f32::EPSILON);
-                }
-                let q = disk_area_point(disk, u1);
-                let d = to_world(cosine_hemisphere(u2), n).normalize();
-                (Ray::new(crate::math::offset_origin(q, n, d), d), n)
-            }
+            Light::Disk { disk, two_sided, .. } => emit_cosine(disk_area_point(disk, u1), disk.normal, *two_sided, u2),
             Light::Triangle {
                 vertices: v, two_sided, ..
-            } => {
-                let mut n = triangle_normal(v);
-                let mut u2 = u2;
-                // Both sides emit alike: the first coordinate picks one and is reused.
-                if *two_sided {
-                    if u2.x < 0.5 {
-                        u2.x *= 2.0;
-                    } else {
-                        u2.x = u2.x * 2.0 - 1.0;
-                        n = -n;
-                    }
-                    u2.x = u2.x.min(1.0 - f32::EPSILON);
-                }
-                let q = uniform_triangle(v, u1);
-                let d = to_world(cosine_hemisphere(u2), n).normalize();
-                (Ray::new(crate::math::offset_origin(q, n, d), d), n)
-            }
+            } => emit_cosine(uniform_triangle(v, u1), triangle_normal(v), *two_sided, u2),
         }
     }
 
@@ -725,6 +694,24 @@ pub fn smoothstep(v: f32, a: f32, b: f32) -> f32 {
     }
     let t = ((v - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
+}
+
+/// A particle leaving a flat emitter at `q` with normal `n`, cosine-weighted
+/// about the side it leaves from, and that side's normal. Both sides of a
+/// two-sided emitter emit alike: `u2.x` picks one and is reused.
+fn emit_cosine(q: Vec3, n: Vec3, two_sided: bool, mut u2: Vec2) -> (Ray, Vec3) {
+    let mut n = n;
+    if two_sided {
+        if u2.x < 0.5 {
+            u2.x *= 2.0;
+        } else {
+            u2.x = u2.x * 2.0 - 1.0;
+            n = -n;
+        }
+        u2.x = u2.x.min(1.0 - f32::EPSILON);
+    }
+    let d = to_world(cosine_hemisphere(u2), n).normalize();
+    (Ray::new(crate::math::offset_origin(q, n, d), d), n)
 }
 
 /// A point uniformly distributed in area over a disk or annulus.
