@@ -52,19 +52,23 @@ impl Filter {
 
     /// The filter's value at offset `v` (pixels) from a pixel's centre; the
     /// Gaussian less its value at the radius, as pbrt-v4's, so that it falls
-    /// to zero there.
+    /// to zero there. Every filter is separable: the product of `profile`
+    /// along x and y.
     pub fn eval(self, v: Vec2) -> f32 {
-        let r = self.radius();
-        if v.x.abs() >= r || v.y.abs() >= r {
+        (self.profile(v.x) * self.profile(v.y)) as f32
+    }
+
+    /// The filter's 1D profile, zero from the radius on. In f64 so that the
+    /// product of two is exact for the tent (two f32 factors) and the
+    /// Gaussian keeps its precision until the one rounding in `eval`.
+    pub fn profile(self, x: f32) -> f64 {
+        if x.abs() >= self.radius() {
             return 0.0;
         }
         match self {
             Filter::Box => 1.0,
-            Filter::Tent => (1.0 - v.x.abs()) * (1.0 - v.y.abs()),
-            Filter::Gaussian => {
-                let g = |x: f32| ((-0.5 * (x as f64 / GAUSS_SIGMA).powi(2)).exp() - GAUSS_EDGE).max(0.0);
-                (g(v.x) * g(v.y)) as f32
-            }
+            Filter::Tent => (1.0 - x.abs()) as f64,
+            Filter::Gaussian => ((-0.5 * (x as f64 / GAUSS_SIGMA).powi(2)).exp() - GAUSS_EDGE).max(0.0),
         }
     }
 
@@ -83,6 +87,9 @@ impl Filter {
         }
     }
 }
+
+/// The most pixels any filter reaches beyond a sample's own (`Filter::reach`).
+const MAX_REACH: u32 = 2;
 
 const GAUSS_SIGMA: f64 = 0.5;
 const GAUSS_RADIUS: f64 = 1.5;
@@ -289,15 +296,27 @@ impl SplatBlock {
             add(px.0, px.1, 1.0);
             return;
         }
-        let reach = self.filter.reach() as i64;
-        for dy in -reach..=reach {
-            for dx in -reach..=reach {
-                let (x, y) = (px.0 as i64 + dx, px.1 as i64 + dy);
-                if x < 0 || y < 0 {
-                    continue;
+        // The profile at each row and column the filter reaches: 2(2r + 1)
+        // evaluations instead of (2r + 1)^2 (a Gaussian's are exponentials).
+        const MAX_SPAN: usize = 2 * MAX_REACH as usize + 1;
+        let reach = self.filter.reach().min(MAX_REACH) as i64;
+        let span = 2 * reach as usize + 1;
+        let (mut wx, mut wy) = ([0.0f64; MAX_SPAN], [0.0f64; MAX_SPAN]);
+        for i in 0..span {
+            let d = i as i64 - reach;
+            wx[i] = self.filter.profile(pos.x - ((px.0 as i64 + d) as f32 + 0.5));
+            wy[i] = self.filter.profile(pos.y - ((px.1 as i64 + d) as f32 + 0.5));
+        }
+        for (j, &py) in wy[..span].iter().enumerate() {
+            let y = px.1 as i64 + j as i64 - reach;
+            if py == 0.0 || y < 0 {
+                continue;
+            }
+            for (i, &pxw) in wx[..span].iter().enumerate() {
+                let x = px.0 as i64 + i as i64 - reach;
+                if x >= 0 {
+                    add(x as u32, y as u32, (pxw * py) as f32);
                 }
-                let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                add(x as u32, y as u32, self.filter.eval(pos - centre));
             }
         }
     }
@@ -468,6 +487,7 @@ mod tests {
     #[test]
     fn filters_vanish_beyond_the_reach_of_a_sample_in_its_pixel() {
         for f in Filter::ALL {
+            assert!(f.reach() <= MAX_REACH, "{f:?}: splat would drop pixels it reaches");
             let reach = f.reach() as f32;
             for i in 0..=16 {
                 for j in 0..=16 {
