@@ -165,10 +165,11 @@ pub fn sample_direct(
     sampler: &mut Sampler,
     stats: &mut RayStats,
 ) -> Vec3 {
-    let (uc, u) = (sampler.next_f32(), sampler.next_2d());
-    let Some((li, pmf)) = scene.pick_light(uc) else {
+    let u = sampler.next_2d();
+    let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
         return Vec3::ZERO;
     };
+    let u = Vec2::new(ux, u.y);
     let Some(ls) = unoccluded_light_sample(scene, hit, wo, bsdf, li, u, stats) else {
         return Vec3::ZERO;
     };

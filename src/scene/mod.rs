@@ -569,9 +569,16 @@ impl Scene {
         &self.infinite_lights
     }
 
-    /// Chooses a light in proportion to its power: its index and the
-    /// probability of that choice; `None` when no light emits.
-    pub fn pick_light(&self, u: f32) -> Option<(usize, f32)> {
+    /// Chooses a light in proportion to its power: its index, the
+    /// probability of that choice, and `u` rescaled to [0, 1) within the
+    /// light's share of the unit interval. The rescaled value is uniform and
+    /// independent of the choice, so it can serve as the first coordinate of
+    /// the point sampled on the light (as Mitsuba's `sample_emitter` reuses
+    /// it): one 2D sample then covers all the lights together, and a
+    /// stratified set of them stays stratified over the lights' union (the
+    /// two triangles of a quad light, say) instead of splitting into two
+    /// unrelated sets.
+    pub fn pick_light(&self, u: f32) -> Option<(usize, f32, f32)> {
         let total = *self.light_cdf.last()?;
         if total <= 0.0 || !total.is_finite() {
             return None;
@@ -583,7 +590,9 @@ impl Scene {
             .min(self.light_cdf.len() - 1);
         // Skip lights of no power that share the cumulative value.
         let i = (i..self.light_cdf.len()).find(|&j| self.light_pmf(j) > 0.0)?;
-        Some((i, self.light_pmf(i)))
+        let before = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
+        let rest = ((target - before) / (self.light_cdf[i] - before)).clamp(0.0, crate::sampling::ONE_MINUS_EPS);
+        Some((i, self.light_pmf(i), rest))
     }
 
     /// The probability that `pick_light` chooses light `i`.
