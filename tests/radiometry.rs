@@ -142,3 +142,39 @@ fn a_sphere_light_never_shadows_its_own_samples() {
         film.pixels.len()
     );
 }
+
+#[test]
+fn light_choice_follows_power_and_leaves_a_uniform_remainder() {
+    // Three point lights of power 1, 0 and 3: chosen with probability 1/4,
+    // 0 and 3/4, and the rescaled sample spans [0, 1) within each choice in
+    // order, so one uniform number picks the light and still places the point.
+    let mut d = plane_scene(Light::Point {
+        position: Vec3::new(0.0, HEIGHT, 0.0),
+        power: Vec3::splat(1.0),
+    });
+    for p in [0.0, 3.0] {
+        d.lights.push(Light::Point {
+            position: Vec3::new(1.0, HEIGHT, 0.0),
+            power: Vec3::splat(p),
+        });
+    }
+    let scene = Scene::build(d).unwrap();
+    let n = 4096;
+    let mut counts = [0usize; 3];
+    let mut last = [-1.0f32; 3];
+    for k in 0..n {
+        let u = (k as f32 + 0.5) / n as f32;
+        let (i, pmf, rest) = scene.pick_light(u).unwrap();
+        counts[i] += 1;
+        assert!((0.0..1.0).contains(&rest), "u {u}: remainder {rest}");
+        assert!(rest > last[i], "u {u}: the remainder must grow with u within a choice");
+        last[i] = rest;
+        let expected_pmf = [0.25, 0.0, 0.75][i];
+        assert!((pmf - expected_pmf).abs() < 1e-6, "light {i}: pmf {pmf}");
+        // Where u falls within the light's share of the unit interval.
+        let start = [0.0, 0.25, 0.25][i];
+        let expected_rest = (u - start) / expected_pmf;
+        assert!((rest - expected_rest).abs() < 1e-4, "u {u}: {rest} vs {expected_rest}");
+    }
+    assert_eq!(counts, [n / 4, 0, 3 * n / 4]);
+}
