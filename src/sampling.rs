@@ -146,19 +146,22 @@ fn seeds(key: u64) -> (u32, u32, u32) {
 }
 
 /// The point of a 1D request of a padded, shuffled and Owen-scrambled Sobol
-/// sampler: `key` hashes (seed, pixel, dimension).
-fn sobol_1d(index: u32, key: u64) -> u32 {
+/// sampler: `key` hashes (seed, pixel, dimension). The sample index comes bit
+/// reversed (`Sampler` reverses it once for all its requests), which is the
+/// order Burley's shuffle hashes it in.
+fn sobol_1d(rev_index: u32, key: u64) -> u32 {
     let (s0, s1, _) = seeds(key);
-    let shuffled = owen_scramble(index, s0);
+    // owen_scramble(index, s0), its first reversal done.
+    let shuffled = laine_karras(rev_index, s0).reverse_bits();
     // owen_scramble(sobol_u32(shuffled, 0), s1), one reversal fewer.
     laine_karras(shuffled, s1).reverse_bits()
 }
 
 /// The point of a 2D request: Sobol dimensions 0 and 1 at the same shuffled
 /// index, each scrambled with its own seed.
-fn sobol_2d(index: u32, key: u64) -> (u32, u32) {
+fn sobol_2d(rev_index: u32, key: u64) -> (u32, u32) {
     let (s0, s1, s2) = seeds(key);
-    let shuffled = owen_scramble(index, s0);
+    let shuffled = laine_karras(rev_index, s0).reverse_bits();
     (
         laine_karras(shuffled, s1).reverse_bits(),
         owen_scramble(sobol_u32(shuffled, 1), s2),
@@ -190,7 +193,8 @@ pub struct Sampler {
     sobol: bool,
     /// hash(seed, pixel)
     key: u64,
-    index: u32,
+    /// The sample index, bit reversed.
+    rev_index: u32,
     dim: u32,
     rng: Rng,
 }
@@ -205,7 +209,7 @@ impl Sampler {
         Sampler {
             sobol,
             key: mix64(seed ^ mix64(pixel ^ 0x2545_F491_4F6C_DD1D)),
-            index,
+            rev_index: index.reverse_bits(),
             dim: 0,
             rng: Rng::keyed(seed, pixel, index as u64),
         }
@@ -216,7 +220,7 @@ impl Sampler {
         Sampler {
             sobol: false,
             key: 0,
-            index: 0,
+            rev_index: 0,
             dim: 0,
             rng,
         }
@@ -242,7 +246,7 @@ impl Sampler {
     /// Uniform in [0, 1).
     pub fn next_f32(&mut self) -> f32 {
         match self.next_key() {
-            Some(key) => fraction(sobol_1d(self.index, key)),
+            Some(key) => fraction(sobol_1d(self.rev_index, key)),
             None => self.rng.next_f32(),
         }
     }
@@ -251,7 +255,7 @@ impl Sampler {
     pub fn next_2d(&mut self) -> Vec2 {
         match self.next_key() {
             Some(key) => {
-                let (x, y) = sobol_2d(self.index, key);
+                let (x, y) = sobol_2d(self.rev_index, key);
                 Vec2::new(fraction(x), fraction(y))
             }
             None => self.rng.next_2d(),
