@@ -140,7 +140,7 @@ const PATH: [&str; 10] = [
     "--height",
     "32",
     "--spp",
-    "24",
+    "96",
     "--checkpoint-every",
 ];
 
@@ -314,7 +314,7 @@ fn a_stopped_sppm_render_resumes_to_the_uninterrupted_image() {
 fn an_interruption_mid_pass_writes_a_checkpoint_that_resumes_where_it_stopped() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // 4 tiles a pass, 16 passes of one sample. On one thread the interruption
+    // 4 tiles a pass, 16 passes of four samples. On one thread the interruption
     // (the cancel token a signal trips, here tripped by the hidden option)
     // lands after exactly 14 tiles: 3 passes done, the 4th half done.
     let args = |out: &'static str, extra: &[&'static str]| {
@@ -327,7 +327,7 @@ fn an_interruption_mid_pass_writes_a_checkpoint_that_resumes_where_it_stopped() 
             "--height",
             "64",
             "--spp",
-            "16",
+            "64",
             "--threads",
             "1",
             "-o",

@@ -238,8 +238,9 @@ mod tests {
     #[test]
     fn passes_give_the_one_pass_image_bit_for_bit() {
         let scene = scene();
-        // 100 spp: passes of 2 samples; 5 spp (not a square): passes of 1.
-        for spp in [100, 5] {
+        // 100 spp: 25 passes of 4 samples; 5 spp (not a square): 4 and 1;
+        // 3 spp: one pass.
+        for (spp, passes) in [(100, 25), (5, 2), (3, 1)] {
             let settings = path(spp, StateFiles::default());
             let est = crate::integrator::path::PathTracer {
                 max_depth: None,
@@ -247,10 +248,7 @@ mod tests {
             };
             let (one_pass, ..) = render_tiles(&scene, &settings, &est, crate::integrator::Progress::silent());
             let out = render(&scene, &settings, &|| {}).unwrap();
-            assert_eq!(
-                out.passes,
-                Some((spp.div_ceil(spp.div_ceil(64)), spp.div_ceil(spp.div_ceil(64))))
-            );
+            assert_eq!(out.passes, Some((passes, passes)));
             assert_eq!(bits(&out.film), bits(&one_pass), "spp {spp}");
         }
     }
@@ -260,13 +258,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let ck = dir.path().join("render.ckpt");
         let scene = scene();
-        let whole = render(&scene, &path(12, StateFiles::default()), &|| {}).unwrap();
+        let whole = render(&scene, &path(48, StateFiles::default()), &|| {}).unwrap();
         let stop = |k| StateFiles {
             checkpoint: Some(ck.clone()),
             stop_after_passes: Some(k),
             ..StateFiles::default()
         };
-        let first = render(&scene, &path(12, stop(5)), &|| {}).unwrap();
+        let first = render(&scene, &path(48, stop(5)), &|| {}).unwrap();
         assert_eq!(first.passes, Some((5, 12)));
         assert!(!first.is_complete());
         // Resume into the same file, stop again, then finish.
@@ -275,10 +273,10 @@ mod tests {
             stop_after_passes: k,
             ..stop(0)
         };
-        let second = render(&scene, &path(12, resume(Some(3))), &|| {}).unwrap();
+        let second = render(&scene, &path(48, resume(Some(3))), &|| {}).unwrap();
         assert_eq!(second.passes, Some((8, 12)));
         let saved = std::fs::read(&ck).unwrap();
-        let last = render(&scene, &path(12, resume(None)), &|| {}).unwrap();
+        let last = render(&scene, &path(48, resume(None)), &|| {}).unwrap();
         assert!(last.is_complete());
         assert_eq!(bits(&last.film), bits(&whole.film));
         // Nothing but the checkpoint in the folder: no temporary files.
@@ -292,15 +290,15 @@ mod tests {
         for at in [10, saved.len() / 2, saved.len() - 2] {
             let mut bad = saved.clone();
             bad[at] ^= 1;
-            refuse(&bad, path(12, resume(None)), &scene, "corrupt");
+            refuse(&bad, path(48, resume(None)), &scene, "corrupt");
         }
-        refuse(&saved[..saved.len() - 9], path(12, resume(None)), &scene, "truncated");
-        refuse(&saved, path(16, resume(None)), &scene, "other settings");
+        refuse(&saved[..saved.len() - 9], path(48, resume(None)), &scene, "truncated");
+        refuse(&saved, path(64, resume(None)), &scene, "other settings");
         let mut other = scene.desc.clone();
         other.camera.fov_y_deg += 1.0;
         refuse(
             &saved,
-            path(12, resume(None)),
+            path(48, resume(None)),
             &Scene::build(other).unwrap(),
             "different scene",
         );
@@ -322,7 +320,7 @@ mod tests {
             };
             let out = render_observed(
                 &scene,
-                &path(12, files),
+                &path(48, files),
                 Progress::new(&tick, &CancelToken::new()),
                 &|_, _| Ok(()),
             )
@@ -340,7 +338,7 @@ mod tests {
             resume: Some(ck.clone()),
             ..StateFiles::default()
         });
-        let all = progress_ticks(&path(12, StateFiles::default()), w, h);
+        let all = progress_ticks(&path(48, StateFiles::default()), w, h);
         assert_eq!(all, 12 * tile_count(w, h));
         assert_eq!(resumed, (all, Some((12, 12))));
     }

@@ -26,7 +26,8 @@
 //! roulette ends paths).
 //!
 //! The render is progressive ([`Progressive`]): passes of consecutive sample
-//! indices, ceil(spp / 64) samples each, added onto per-pixel sums. Each
+//! indices, max(ceil(spp / 64), 4) samples each (fewer when spp is below 4),
+//! added onto per-pixel sums. Each
 //! pixel's samples are added in index order whatever the passes, so the image
 //! is the one-pass render bit for bit, and a render can be checkpointed
 //! between passes and resumed (`integrator::checkpoint`).
@@ -43,6 +44,11 @@ use std::sync::atomic::AtomicBool;
 
 /// A render is cut into at most this many passes.
 const MAX_PASSES: u32 = 64;
+/// Samples a pixel in a pass, at least: each pass has a fixed cost (its
+/// buffers, and both threads waiting for the last tile), which at one
+/// sample a pass took 14% of a 64-spp render's wall time on `cornell-box`
+/// (BENCHMARKS.md, "Against Mitsuba 3").
+const MIN_SAMPLES_PER_PASS: u32 = 4;
 
 /// Roulette starts after this many bounces: Mitsuba's `rr_depth` of 5 rather
 /// than pbrt-v4's 2, since the noise the longer paths save outweighs their
@@ -158,7 +164,7 @@ impl<'a> Progressive<'a> {
 
     /// Samples per pass for a render of `spp` samples per pixel.
     pub fn samples_per_pass(spp: u32) -> u32 {
-        spp.div_ceil(MAX_PASSES).max(1)
+        spp.div_ceil(MAX_PASSES).max(MIN_SAMPLES_PER_PASS.min(spp)).max(1)
     }
 
     pub fn passes_for(spp: u32) -> u32 {
