@@ -8,7 +8,12 @@
 //! largest surface area until it has four, as Embree's wide builders do (Wald
 //! et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing").
 //! Leaf cost counts blocks of four triangles, since a leaf is tested four
-//! triangles at a time. Big subtrees build in parallel (`rayon`) and big nodes
+//! triangles at a time. Whether a set of up to `MAX_LEAF` triangles becomes
+//! a leaf is decided bottom-up, against the SAH cost of the subtree built
+//! below it (the SAH leaf collapsing of Karras and Aila 2013, "Fast Parallel
+//! Construction of High-Quality Bounding Volume Hierarchies"), not from one
+//! cut's estimate.
+//! Big subtrees build in parallel (`rayon`) and big nodes
 //! bin in parallel; every decision depends only on the input, so the tree is
 //! the same for any number of threads.
 
@@ -82,7 +87,7 @@ pub(super) fn build_tree<const P: u32>(mut refs: Vec<PrimRef>) -> Tree {
         refs: &mut refs,
         ids: &mut ids,
     };
-    let root = match plan_split::<P>(prims.refs, &bounds, &cbounds, 0) {
+    let root = match plan_split::<P>(prims.refs, &cbounds, 0) {
         Some(split) => build_node::<P>(prims, 0, bounds, cbounds, split, 0),
         None => BuildNode::Leaf { start: 0, count: n },
     };
@@ -208,6 +213,10 @@ enum Split {
     },
     /// The first half by count goes left (coincident centroids, or too deep).
     Half,
+    /// At most one packet's worth, not yet binned: most such sets become a
+    /// leaf or a node of single-triangle leaves without ever being cut
+    /// (`small_node`); the plane is found only if a node's filling cuts it.
+    Lazy,
 }
 
 impl Split {
@@ -225,7 +234,8 @@ impl Split {
                 1 => partition_plane::<1>(prims, bin, lo, scale, bins),
                 _ => partition_plane::<2>(prims, bin, lo, scale, bins),
             },
-            Split::Half => prims.len() / 2,
+            // `build_node` resolves a lazy split before cutting with it.
+            Split::Half | Split::Lazy => prims.len() / 2,
         }
     }
 }
@@ -353,13 +363,21 @@ fn binned_split<const N: usize, const P: u32>(refs: &[PrimRef], cbounds: &Bounds
     bins.best_split::<P>(cbounds, scale)
 }
 
-/// The split to make, or `None` when the triangles should stay one leaf.
-fn plan_split<const P: u32>(refs: &[PrimRef], bounds: &Bounds3, cbounds: &Bounds3, depth: usize) -> Option<Split> {
+/// The cut to make, or `None` when the triangles can only be one leaf. Every
+/// set of two or more that has a cut is cut: whether a small node stays a
+/// node is decided once its subtree is built (`build_node`), from the
+/// subtree's actual SAH cost. One cut's estimate sees only the next level,
+/// and a few big triangles whose boxes overlap (a room's walls) need two or
+/// three levels before their boxes come apart; nor does a packet of up to
+/// four triangles always beat a node, since a node's children are each
+/// tested only when the ray enters their box.
+fn plan_split<const P: u32>(refs: &[PrimRef], cbounds: &Bounds3, depth: usize) -> Option<Split> {
     let n = refs.len();
-    // Up to one packet, a leaf always wins: a split costs a traversal step
-    // more and still tests at least one packet on each side.
-    if n <= WIDTH {
+    if n <= 1 {
         return None;
+    }
+    if n <= WIDTH {
+        return Some(Split::Lazy);
     }
     if depth >= SAH_DEPTH {
         return (n > MAX_LEAF).then_some(Split::Half);
@@ -370,13 +388,8 @@ fn plan_split<const P: u32>(refs: &[PrimRef], bounds: &Bounds3, cbounds: &Bounds
         17..=64 => binned_split::<16, P>(refs, cbounds),
         _ => binned_split::<BINS, P>(refs, cbounds),
     };
-    let area = bounds.half_area().max(f32::MIN_POSITIVE);
     match best {
-        Some((cost, split)) => {
-            let split_cost = TRAVERSAL_COST + INTERSECT_COST * cost / area;
-            let leaf_cost = INTERSECT_COST * blocks::<P>(n as u32);
-            (split_cost < leaf_cost || n > MAX_LEAF).then_some(split)
-        }
+        Some((_, split)) => Some(split),
         // All centroids coincide: only a split by count bounds the leaf size.
         None => (n > MAX_LEAF).then_some(Split::Half),
     }
@@ -433,6 +446,17 @@ fn build_node<const P: u32>(
             break;
         };
         let (s, e) = (children[i].start, children[i].end);
+        let split = match split {
+            // Coincident centroids: no plane, and no point cutting by count.
+            Split::Lazy => match binned_split::<8, P>(&prims.refs[s..e], &children[i].cbounds) {
+                Some((_, split)) => split,
+                None => {
+                    children[i].split = None;
+                    continue;
+                }
+            },
+            split => split,
+        };
         let mid = s + split.partition(&mut prims.range(s, e));
         let side = |a: usize, b: usize| {
             let (bounds, cbounds) = bounds_of(&prims.refs[a..b]);
@@ -441,7 +465,7 @@ fn build_node<const P: u32>(
                 end: b,
                 bounds,
                 cbounds,
-                split: plan_split::<P>(&prims.refs[a..b], &bounds, &cbounds, depth),
+                split: plan_split::<P>(&prims.refs[a..b], &cbounds, depth),
             }
         };
         let (left, right) = (side(s, mid), side(mid, e));
@@ -462,6 +486,7 @@ fn build_node<const P: u32>(
     }
     let build = |(part, c): (Prims, &Pending)| {
         let node = match c.split {
+            Some(_) if part.len() <= WIDTH => small_node::<P>(part, start + c.start, &c.bounds),
             Some(split) => build_node::<P>(part, start + c.start, c.bounds, c.cbounds, split, depth + 1),
             None => BuildNode::Leaf {
                 start: start + c.start,
@@ -476,7 +501,62 @@ fn build_node<const P: u32>(
     } else {
         parts.into_iter().map(build).collect()
     };
-    BuildNode::Inner(built)
+    let node = BuildNode::Inner(built);
+    // Bottom-up collapse: one leaf if that costs no more than the subtree.
+    if n <= MAX_LEAF && INTERSECT_COST * blocks::<P>(n as u32) * bounds.half_area() <= node.sah::<P>(&bounds) {
+        return BuildNode::Leaf { start, count: n };
+    }
+    node
+}
+
+/// A set of at most one packet's worth: one leaf, or a node with a leaf for
+/// each group of primitives whose centroids coincide (the two halves of a
+/// quad; no plane separates them), whichever the SAH finds cheaper. Cutting
+/// the set by planes first would end in the same node.
+fn small_node<const P: u32>(prims: Prims, start: usize, bounds: &Bounds3) -> BuildNode {
+    let n = prims.len();
+    // Insertion sort by centroid, so that coincident ones are neighbours.
+    let key = |r: &PrimRef| r.centroid2().to_array();
+    for i in 1..n {
+        let mut j = i;
+        while j > 0 && key(&prims.refs[j - 1]) > key(&prims.refs[j]) {
+            prims.refs.swap(j - 1, j);
+            prims.ids.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let mut children: Vec<(Bounds3, BuildNode)> = Vec::with_capacity(n);
+    let mut first = 0;
+    for i in 1..=n {
+        if i == n || key(&prims.refs[i]) != key(&prims.refs[first]) {
+            let (b, _) = bounds_of(&prims.refs[first..i]);
+            let leaf = BuildNode::Leaf {
+                start: start + first,
+                count: i - first,
+            };
+            children.push((b, leaf));
+            first = i;
+        }
+    }
+    let node = BuildNode::Inner(children);
+    if INTERSECT_COST * blocks::<P>(n as u32) * bounds.half_area() <= node.sah::<P>(bounds) {
+        BuildNode::Leaf { start, count: n }
+    } else {
+        node
+    }
+}
+
+impl BuildNode {
+    /// SAH cost of the subtree in units of half area (not yet divided by the
+    /// root's): each node visit and leaf test weighted by its box's area.
+    fn sah<const P: u32>(&self, bounds: &Bounds3) -> f32 {
+        match self {
+            BuildNode::Leaf { count, .. } => INTERSECT_COST * blocks::<P>(*count as u32) * bounds.half_area(),
+            BuildNode::Inner(children) => {
+                TRAVERSAL_COST * bounds.half_area() + children.iter().map(|(b, c)| c.sah::<P>(b)).sum::<f32>()
+            }
+        }
+    }
 }
 
 /// Lays the tree out depth first; returns the reference to `node`. Leaves

@@ -27,8 +27,13 @@ pub use boxes::BoxBvh;
 const WIDTH: usize = 4;
 /// Most triangles in one leaf (four packets).
 const MAX_LEAF: usize = 16;
-/// SAH cost of visiting a node relative to testing one packet of triangles.
-const TRAVERSAL_COST: f32 = 1.0;
+/// SAH cost of visiting a node relative to testing one packet of triangles:
+/// pbrt-v4's ratio of a node to a primitive (1/2), a node's four boxes and a
+/// packet's four triangles each being one SIMD test. A node's box test here
+/// is about 20 vector operations and a packet's triangle test about 60, but a
+/// node also orders and stacks its children. It was 1 until the build
+/// collapsed leaves bottom-up (see BENCHMARKS.md for both).
+const TRAVERSAL_COST: f32 = 0.5;
 const INTERSECT_COST: f32 = 1.0;
 /// Below this node depth splits follow the SAH; deeper ones (only pathological
 /// inputs get there) halve by count, which bounds the depth and so the stack.

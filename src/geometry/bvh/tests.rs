@@ -73,3 +73,76 @@ fn empty_bvh_misses() {
     assert!(bvh.intersect(&ray, 0.0, f32::INFINITY).is_none());
     assert!(!bvh.occluded(&ray, 0.0, f32::INFINITY));
 }
+
+/// Triangle count and SAH cost (node visits and packet tests weighted by
+/// box half area, not normalised) of the subtree under node `i`.
+fn subtree_cost(bvh: &Bvh, i: usize, area: f32, check: &mut dyn FnMut(usize, f32, f32)) -> (usize, f32) {
+    let node = &bvh.nodes[i];
+    let mut tris = 0;
+    let mut cost = TRAVERSAL_COST * area;
+    for lane in 0..WIDTH {
+        let Some(b) = bvh.child_bounds(node, lane) else {
+            continue;
+        };
+        let e = b.max - b.min;
+        let a = e.x * e.y + e.y * e.z + e.z * e.x;
+        let c = node.child[lane];
+        if c & LEAF == 0 {
+            let (t, k) = subtree_cost(bvh, c as usize, a, check);
+            check(t, k, a);
+            tris += t;
+            cost += k;
+        } else {
+            let packets = bvh.leaf_packets(c);
+            tris += packets
+                .iter()
+                .map(|p| p.slot.iter().filter(|&&s| s != u32::MAX).count())
+                .sum::<usize>();
+            cost += INTERSECT_COST * packets.len() as f32 * a;
+        }
+    }
+    (tris, cost)
+}
+
+#[test]
+fn no_small_subtree_costs_more_than_one_leaf_would() {
+    let tris = random_tris(2000, 4);
+    let bvh = Bvh::build(&tris);
+    let mut small = 0;
+    let mut check = |t: usize, cost: f32, area: f32| {
+        if t <= MAX_LEAF {
+            small += 1;
+            let leaf = INTERSECT_COST * t.div_ceil(WIDTH) as f32 * area;
+            assert!(
+                cost < leaf * 1.0001,
+                "a node over {t} triangles costs {cost}, one leaf {leaf}"
+            );
+        }
+    };
+    subtree_cost(&bvh, 0, 1.0, &mut check);
+    assert!(small > 50, "only {small} small subtrees");
+}
+
+#[test]
+fn four_triangles_far_apart_get_a_leaf_each() {
+    // Tiny triangles at four corners of a cube: one leaf would be tested by
+    // every ray through the cube, four leaves only by rays near a corner.
+    let corner = |x: f32, y: f32, z: f32| {
+        let c = Vec3::new(x, y, z);
+        Triangle::new(c, c + Vec3::X * 0.01, c + Vec3::Y * 0.01)
+    };
+    let tris = vec![
+        corner(0.0, 0.0, 0.0),
+        corner(1.0, 0.0, 1.0),
+        corner(0.0, 1.0, 1.0),
+        corner(1.0, 1.0, 0.0),
+    ];
+    let bvh = Bvh::build(&tris);
+    assert_eq!(bvh.stats().leaf_sizes.get(1), Some(&4));
+    let ray = Ray::new(Vec3::new(1.005, 1.002, -1.0), Vec3::Z);
+    assert_eq!(
+        bvh.intersect(&ray, 0.0, f32::INFINITY)
+            .map(|(s, _)| bvh.order[s as usize]),
+        Some(3)
+    );
+}
