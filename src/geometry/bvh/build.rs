@@ -22,6 +22,7 @@ use super::{
 };
 use crate::geometry::triangle::Triangle;
 use crate::math::Vec3;
+use arrayvec::ArrayVec;
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
@@ -424,13 +425,16 @@ fn build_node<const P: u32>(
     split: Split,
     depth: usize,
 ) -> BuildNode {
-    let mut children = vec![Pending {
+    // On the stack: most nodes are small, and a heap vector each cost more
+    // than their binning.
+    let mut children: ArrayVec<Pending, WIDTH> = ArrayVec::new();
+    children.push(Pending {
         start: 0,
         end: prims.len(),
         bounds,
         cbounds,
         split: Some(split),
-    }];
+    });
     // Split the largest child that wants splitting until there are four.
     while children.len() < WIDTH {
         let mut pick: Option<(usize, Split, f32)> = None;
@@ -446,18 +450,17 @@ fn build_node<const P: u32>(
             break;
         };
         let (s, e) = (children[i].start, children[i].end);
-        let split = match split {
-            // Coincident centroids: no plane, and no point cutting by count.
-            Split::Lazy => match binned_split::<8, P>(&prims.refs[s..e], &children[i].cbounds) {
-                Some((_, split)) => split,
+        let mid = match split {
+            Split::Lazy => match small_split::<P>(&mut prims.range(s, e)) {
+                Some(k) => s + k,
+                // Coincident centroids: no plane, and no point cutting by count.
                 None => {
                     children[i].split = None;
                     continue;
                 }
             },
-            split => split,
+            split => s + split.partition(&mut prims.range(s, e)),
         };
-        let mid = s + split.partition(&mut prims.range(s, e));
         let side = |a: usize, b: usize| {
             let (bounds, cbounds) = bounds_of(&prims.refs[a..b]);
             Pending {
@@ -475,7 +478,7 @@ fn build_node<const P: u32>(
 
     // Cut the triangles into the children's disjoint ranges and recurse.
     let n = prims.len();
-    let mut parts = Vec::with_capacity(children.len());
+    let mut parts: ArrayVec<(Prims, &Pending), WIDTH> = ArrayVec::new();
     let mut rest = prims;
     let mut offset = 0;
     for c in &children {
@@ -497,7 +500,12 @@ fn build_node<const P: u32>(
     };
     // `collect` keeps the children's order whatever thread builds each.
     let built = if n > PARALLEL_SUBTREE {
-        parts.into_par_iter().map(build).collect()
+        parts
+            .into_iter()
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(build)
+            .collect()
     } else {
         parts.into_iter().map(build).collect()
     };
@@ -507,6 +515,53 @@ fn build_node<const P: u32>(
         return BuildNode::Leaf { start, count: n };
     }
     node
+}
+
+/// The SAH's best cut of a set of at most one packet's worth, over every
+/// position between distinct centroids on each axis (for so few, cheaper
+/// than binning): reorders the set along that axis and returns the size of
+/// the first side, or `None` if all centroids coincide.
+fn small_split<const P: u32>(prims: &mut Prims) -> Option<usize> {
+    let n = prims.len();
+    let mut best: Option<(f32, usize, usize)> = None;
+    for axis in 0..3 {
+        let mut order = [0usize; WIDTH];
+        for (i, o) in order.iter_mut().enumerate().take(n) {
+            *o = i;
+        }
+        let c = |i: usize| prims.refs[i].centroid2()[axis];
+        order[..n].sort_unstable_by(|&a, &b| c(a).total_cmp(&c(b)).then(a.cmp(&b)));
+        let mut suffix = [Bounds3::EMPTY; WIDTH];
+        let mut acc = Bounds3::EMPTY;
+        for k in (1..n).rev() {
+            let r = &prims.refs[order[k]];
+            acc.grow(r.min, r.max);
+            suffix[k] = acc;
+        }
+        let mut acc = Bounds3::EMPTY;
+        for k in 1..n {
+            let r = &prims.refs[order[k - 1]];
+            acc.grow(r.min, r.max);
+            if c(order[k - 1]) == c(order[k]) {
+                continue;
+            }
+            let cost = acc.half_area() * blocks::<P>(k as u32) + suffix[k].half_area() * blocks::<P>((n - k) as u32);
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (_, axis, k) = best?;
+    // Insertion sort along the chosen axis, moving ids with their boxes.
+    for i in 1..n {
+        let mut j = i;
+        while j > 0 && prims.refs[j - 1].centroid2()[axis] > prims.refs[j].centroid2()[axis] {
+            prims.refs.swap(j - 1, j);
+            prims.ids.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    Some(k)
 }
 
 /// A set of at most one packet's worth: one leaf, or a node with a leaf for
