@@ -192,6 +192,14 @@ fn view_under_xvfb_saves_and_follows_the_light() {
     let Some((_xvfb, display)) = start_xvfb() else {
         return skip_unless_ci("Xvfb did not start");
     };
+    // Once in a CI run the viewer found no server behind the display Xvfb had
+    // just announced; a client that gets an answer first tells a server that
+    // is slow to accept (waited for) from one that died (a clear failure).
+    if !wait_for(Duration::from_secs(20), || {
+        xdotool(&display, &["getdisplaygeometry"]).is_some()
+    }) {
+        panic!("Xvfb announced display {display} but accepts no client");
+    }
     let dir = tempfile::tempdir().unwrap();
     let logs = tempfile::tempdir().unwrap();
     let log = logs.path().join("view.log");
