@@ -106,7 +106,18 @@ fn subtree_cost(bvh: &Bvh, i: usize, area: f32, check: &mut dyn FnMut(usize, f32
 
 #[test]
 fn no_small_subtree_costs_more_than_one_leaf_would() {
-    let tris = random_tris(2000, 4);
+    // Scattered triangles, and clusters of ten almost coincident ones: cut
+    // apart, a cluster's children keep its whole box, so only collapsing
+    // it back into one leaf is cheap.
+    let mut tris = random_tris(1000, 4);
+    let mut r = Rng::new(8, 1);
+    for c in random_tris(100, 6) {
+        for _ in 0..10 {
+            let mut jitter = || Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 0.01;
+            let [a, b, d] = c.vertices();
+            tris.push(Triangle::new(a + jitter(), b + jitter(), d + jitter()));
+        }
+    }
     let bvh = Bvh::build(&tris);
     let mut small = 0;
     let mut check = |t: usize, cost: f32, area: f32| {
