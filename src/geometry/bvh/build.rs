@@ -140,6 +140,19 @@ impl<'a> Prims<'a> {
         (Prims { refs: rl, ids: il }, Prims { refs: rr, ids: ir })
     }
 
+    /// Stable insertion sort by `key` (sets of a few only), ids moving with
+    /// their boxes.
+    fn sort_small_by<K: PartialOrd>(&mut self, key: impl Fn(&PrimRef) -> K) {
+        for i in 1..self.len() {
+            let mut j = i;
+            while j > 0 && key(&self.refs[j - 1]) > key(&self.refs[j]) {
+                self.refs.swap(j - 1, j);
+                self.ids.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+    }
+
     fn range(&mut self, start: usize, end: usize) -> Prims<'_> {
         Prims {
             refs: &mut self.refs[start..end],
@@ -552,15 +565,7 @@ fn small_split<const P: u32>(prims: &mut Prims) -> Option<usize> {
         }
     }
     let (_, axis, k) = best?;
-    // Insertion sort along the chosen axis, moving ids with their boxes.
-    for i in 1..n {
-        let mut j = i;
-        while j > 0 && prims.refs[j - 1].centroid2()[axis] > prims.refs[j].centroid2()[axis] {
-            prims.refs.swap(j - 1, j);
-            prims.ids.swap(j - 1, j);
-            j -= 1;
-        }
-    }
+    prims.sort_small_by(|r| r.centroid2()[axis]);
     Some(k)
 }
 
@@ -568,18 +573,11 @@ fn small_split<const P: u32>(prims: &mut Prims) -> Option<usize> {
 /// each group of primitives whose centroids coincide (the two halves of a
 /// quad; no plane separates them), whichever the SAH finds cheaper. Cutting
 /// the set by planes first would end in the same node.
-fn small_node<const P: u32>(prims: Prims, start: usize, bounds: &Bounds3) -> BuildNode {
+fn small_node<const P: u32>(mut prims: Prims, start: usize, bounds: &Bounds3) -> BuildNode {
     let n = prims.len();
-    // Insertion sort by centroid, so that coincident ones are neighbours.
+    // Sorted by centroid, so that coincident ones are neighbours.
     let key = |r: &PrimRef| r.centroid2().to_array();
-    for i in 1..n {
-        let mut j = i;
-        while j > 0 && key(&prims.refs[j - 1]) > key(&prims.refs[j]) {
-            prims.refs.swap(j - 1, j);
-            prims.ids.swap(j - 1, j);
-            j -= 1;
-        }
-    }
+    prims.sort_small_by(key);
     let mut children: Vec<(Bounds3, BuildNode)> = Vec::with_capacity(n);
     let mut first = 0;
     for i in 1..=n {
