@@ -225,6 +225,24 @@ fn bad_input_exits_2_with_one_line_and_no_file() {
 }
 
 #[test]
+fn a_missing_scene_file_is_named_once_with_its_cause_once() {
+    for name in ["absent.toml", "absent.pbrt"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = raytracer(&["--scene", name, "-o", "out.png"], dir.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(name), "{stderr}");
+        // The OS's reason follows the name, and only once.
+        let cause = stderr.split(&format!("{name}: ")).nth(1).unwrap_or("");
+        let parts: Vec<&str> = cause.trim().split(": ").collect();
+        assert!(!parts[0].is_empty(), "{stderr}");
+        assert!(parts[1..].iter().all(|p| p != &parts[0]), "cause repeated: {stderr}");
+        assert!(files_in(dir.path()).is_empty());
+    }
+}
+
+#[test]
 fn unknown_scene_lists_the_known_ones() {
     let dir = tempfile::tempdir().unwrap();
     let out = raytracer(&["--scene", "nope"], dir.path());
