@@ -106,6 +106,22 @@ const SOBOL_1_BYTES: [[u32; 256]; 4] = {
     t
 };
 
+/// `SOBOL_1_BYTES` with every entry bit reversed: the scramble hashes a
+/// point in reversed order, so the 2D request looks it up reversed.
+const SOBOL_1_REVERSED_BYTES: [[u32; 256]; 4] = {
+    let mut t = SOBOL_1_BYTES;
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            t[k][b] = t[k][b].reverse_bits();
+            b += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
 /// Sobol point `index` in dimension 0 or 1, as a 0.32 fixed-point fraction.
 pub fn sobol_u32(index: u32, dim: u32) -> u32 {
     if dim == 0 {
@@ -162,10 +178,15 @@ fn sobol_1d(rev_index: u32, key: u64) -> u32 {
 fn sobol_2d(rev_index: u32, key: u64) -> (u32, u32) {
     let (s0, s1, s2) = seeds(key);
     let shuffled = laine_karras(rev_index, s0).reverse_bits();
-    (
-        laine_karras(shuffled, s1).reverse_bits(),
-        owen_scramble(sobol_u32(shuffled, 1), s2),
-    )
+    // owen_scramble(sobol_u32(shuffled, d), s) for d = 0, 1, the hashes'
+    // inputs already reversed and their outputs reversed together in one
+    // 64-bit reversal: bit reversal is most of a request's work.
+    let t = &SOBOL_1_REVERSED_BYTES;
+    let i = shuffled as usize;
+    let y = t[0][i & 255] ^ t[1][(i >> 8) & 255] ^ t[2][(i >> 16) & 255] ^ t[3][i >> 24];
+    let (a, b) = (laine_karras(shuffled, s1), laine_karras(y, s2));
+    let both = (((b as u64) << 32) | a as u64).reverse_bits();
+    ((both >> 32) as u32, both as u32)
 }
 
 /// A 0.32 fixed-point fraction as an f32 in [0, 1) (24 bits kept).
@@ -632,6 +653,20 @@ mod tests {
             let i = r.next_u32();
             let by_bits = (0..32).filter(|b| i >> b & 1 == 1).fold(0, |v, b| v ^ SOBOL_1[b]);
             assert_eq!(sobol_u32(i, 1), by_bits, "{i:#x}");
+        }
+    }
+
+    #[test]
+    fn requests_are_the_scrambled_shuffled_sobol_points() {
+        let mut rng = Rng::new(11, 3);
+        for _ in 0..2000 {
+            let (i, key) = (rng.next_u32(), ((rng.next_u32() as u64) << 32) | rng.next_u32() as u64);
+            let (s0, s1, s2) = seeds(key);
+            let shuffled = owen_scramble(i, s0);
+            let x = owen_scramble(sobol_u32(shuffled, 0), s1);
+            let y = owen_scramble(sobol_u32(shuffled, 1), s2);
+            assert_eq!(sobol_2d(i.reverse_bits(), key), (x, y), "{i:#x} {key:#x}");
+            assert_eq!(sobol_1d(i.reverse_bits(), key), x, "{i:#x} {key:#x}");
         }
     }
 
