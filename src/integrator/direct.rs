@@ -176,12 +176,7 @@ pub fn sample_direct(
     let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.z).abs();
     let light = &scene.lights[li];
     let w = if mis && !light.is_delta() {
-        let pdf_light = if ls.dist.is_finite() {
-            light.pdf_li_hit(hit.p, ls.wi, hit.p + ls.wi * ls.dist)
-        } else {
-            light.pdf_li_escaped(hit.p, ls.wi)
-        };
-        power_heuristic(pmf * pdf_light, bsdf.pdf(wo, ls.wi, TransportMode::Radiance))
+        power_heuristic(pmf * ls.pdf, bsdf.pdf(wo, ls.wi, TransportMode::Radiance))
     } else {
         1.0
     };

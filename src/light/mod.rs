@@ -98,6 +98,10 @@ pub struct LightSample {
     /// Incident radiance divided by the solid-angle pdf (for a point light,
     /// the irradiance at normal incidence).
     pub weight: Vec3,
+    /// The solid-angle density of `wi` (0 for a delta light): what
+    /// `pdf_li_hit` would say at the sampled point, without computing it
+    /// again for multiple importance sampling.
+    pub pdf: f32,
 }
 
 /// One particle leaving a light (`Light::sample_le_flux`).
@@ -322,7 +326,12 @@ impl Light {
                 let dist = d2.sqrt();
                 let wi = v / dist;
                 let weight = self.intensity(-wi) / d2;
-                (weight != Vec3::ZERO).then_some(LightSample { wi, dist, weight })
+                (weight != Vec3::ZERO).then_some(LightSample {
+                    wi,
+                    dist,
+                    weight,
+                    pdf: 0.0,
+                })
             }
             Light::Distant {
                 direction, radiance, ..
@@ -330,6 +339,7 @@ impl Light {
                 wi: -*direction,
                 dist: f32::INFINITY,
                 weight: *radiance,
+                pdf: 0.0,
             }),
             Light::Infinite {
                 radiance, map: None, ..
@@ -337,6 +347,7 @@ impl Light {
                 wi: uniform_sphere(u),
                 dist: f32::INFINITY,
                 weight: *radiance * (4.0 * PI),
+                pdf: 1.0 / (4.0 * PI),
             }),
             Light::Infinite {
                 radiance,
@@ -346,10 +357,14 @@ impl Light {
             } => {
                 let (wl, le, pdf) = m.sample(u)?;
                 let weight = *radiance * le / pdf;
-                (weight != Vec3::ZERO && weight.is_finite()).then(|| LightSample {
-                    wi: (*to_world * wl).normalize(),
-                    dist: f32::INFINITY,
-                    weight,
+                (weight != Vec3::ZERO && weight.is_finite()).then(|| {
+                    let wi = (*to_world * wl).normalize();
+                    LightSample {
+                        wi,
+                        dist: f32::INFINITY,
+                        weight,
+                        pdf: self.pdf_li_escaped(p, wi),
+                    }
                 })
             }
             Light::Point { position, power } => {
@@ -363,6 +378,7 @@ impl Light {
                     wi: v / dist,
                     dist,
                     weight: *power / (4.0 * PI * d2),
+                    pdf: 0.0,
                 })
             }
             Light::Sphere { sphere, .. } => {
@@ -392,6 +408,7 @@ impl Light {
                     wi,
                     dist,
                     weight: self.radiance() * solid_angle,
+                    pdf: 1.0 / solid_angle,
                 })
             }
             Light::Disk {
@@ -416,6 +433,7 @@ impl Light {
                     wi,
                     dist,
                     weight: *radiance * (cos_l * disk.area() / d2),
+                    pdf: d2 / (cos_l * disk.area()),
                 })
             }
             Light::Triangle {
@@ -442,6 +460,7 @@ impl Light {
                     wi,
                     dist,
                     weight: *radiance * (cos_l * area / d2),
+                    pdf: d2 / (cos_l * area),
                 })
             }
         }

@@ -708,3 +708,32 @@ fn disk_light_irradiance_on_its_axis_is_the_closed_form() {
         assert!(light.sample_li(Vec3::new(0.0, 0.0, 2.0), Vec2::new(0.3, 0.4)).is_none());
     }
 }
+
+#[test]
+fn a_light_sample_carries_the_density_pdf_li_gives_its_direction() {
+    let mut rng = Rng::new(17, 2);
+    for (name, light) in every_light() {
+        let mut checked = 0;
+        // One-sided lights face one of the two points.
+        for k in 0..400 {
+            let p = Vec3::new(0.05, -0.4, if k % 2 == 0 { 0.3 } else { -0.3 });
+            let Some(s) = light.sample_li(p, rng.next_2d()) else {
+                continue;
+            };
+            let expected = if light.is_delta() {
+                0.0
+            } else if s.dist.is_finite() {
+                light.pdf_li_hit(p, s.wi, p + s.wi * s.dist)
+            } else {
+                light.pdf_li_escaped(p, s.wi)
+            };
+            assert!(
+                (s.pdf - expected).abs() <= 1e-3 * expected.max(1e-6),
+                "{name}: sampled pdf {} where pdf_li says {expected}",
+                s.pdf
+            );
+            checked += 1;
+        }
+        assert!(light.is_delta() || checked > 50, "{name}: only {checked} samples");
+    }
+}
