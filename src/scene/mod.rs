@@ -349,6 +349,8 @@ pub struct Scene {
     /// Cumulative light powers (largest channel) for choosing one light in
     /// proportion to its power; the last entry is the total.
     light_cdf: Vec<f32>,
+    /// Each light's probability of being chosen (from `light_cdf`, once).
+    light_pmfs: Vec<f32>,
     /// Indices of the infinite lights.
     infinite_lights: Vec<u32>,
     pub bvh: Bvh,
@@ -524,6 +526,7 @@ impl Scene {
             material_names: names,
             lights,
             light_cdf: vec![],
+            light_pmfs: vec![],
             infinite_lights,
             bvh,
             triangles,
@@ -560,6 +563,7 @@ impl Scene {
                 Some(*acc)
             })
             .collect();
+        scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
         Ok(scene)
     }
 
@@ -589,14 +593,18 @@ impl Scene {
             .partition_point(|&c| c <= target)
             .min(self.light_cdf.len() - 1);
         // Skip lights of no power that share the cumulative value.
-        let i = (i..self.light_cdf.len()).find(|&j| self.light_pmf(j) > 0.0)?;
+        let i = (i..self.light_cdf.len()).find(|&j| self.light_pmfs[j] > 0.0)?;
         let before = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
         let rest = ((target - before) / (self.light_cdf[i] - before)).clamp(0.0, crate::sampling::ONE_MINUS_EPS);
-        Some((i, self.light_pmf(i), rest))
+        Some((i, self.light_pmfs[i], rest))
     }
 
     /// The probability that `pick_light` chooses light `i`.
     pub fn light_pmf(&self, i: usize) -> f32 {
+        self.light_pmfs[i]
+    }
+
+    fn pmf_from_cdf(&self, i: usize) -> f32 {
         let Some(&total) = self.light_cdf.last() else {
             return 0.0;
         };
