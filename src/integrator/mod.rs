@@ -294,9 +294,12 @@ pub fn render_tiles(
 /// outside a crop whose filter reaches into it are taken too (by the tiles on
 /// the crop's edge), so that crops stitch into the full frame's image.
 /// `sums` holds one entry per pixel of the rectangle, rows from the top.
-/// `cancel` is checked before every row of a tile; when it is set, `sums` is
-/// left untouched and `None` returned. Tiles not started when `on_tile`'s
-/// cancel token is set are skipped; the count of tiles done says so.
+/// `cancel` is checked before every row of a tile; when it is set, `None` is
+/// returned, with the tiles finished before it already added. Tiles not
+/// started when `on_tile`'s cancel token is set are skipped; the count of
+/// tiles done says so. A caller that must be able to go back to the sums as
+/// they were accumulates into zeroed sums and merges them when all is done
+/// (`merge_sums`): a buffer it keeps, rather than a copy of the sums each time.
 pub fn accumulate_tiles(
     scene: &Scene,
     settings: &RenderSettings,
@@ -313,7 +316,7 @@ pub fn accumulate_tiles(
     let reach = settings.filter.reach();
     let tiles_x = rw.div_ceil(TILE);
     let ntiles = tile_count(rw, rh) as u32;
-    let pass = std::sync::Mutex::new(vec![PixelSum::default(); sums.len()]);
+    let pass = std::sync::Mutex::new(sums);
     let tiles: Option<Vec<RayStats>> = (0..ntiles)
         .into_par_iter()
         .filter(|_| !on_tile.stopped())
@@ -363,15 +366,19 @@ pub fn accumulate_tiles(
         })
         .collect();
     let tiles = tiles?;
-    let pass = pass.into_inner().unwrap_or_else(|e| e.into_inner());
-    for (s, p) in sums.iter_mut().zip(&pass) {
-        s.merge(p);
-    }
     let mut stats = RayStats::default();
     for s in &tiles {
         stats.add(s);
     }
     Some((stats, tiles.len() as u64))
+}
+
+/// Adds `pass` to `sums`, entry by entry, and zeroes `pass` for the next use.
+pub fn merge_sums(sums: &mut [PixelSum], pass: &mut [PixelSum]) {
+    for (s, p) in sums.iter_mut().zip(pass) {
+        s.merge(p);
+        *p = PixelSum::default();
+    }
 }
 
 /// Splats samples `samples` of pixel (x, y) into `block`, each with its

@@ -34,7 +34,7 @@
 
 use super::checkpoint::{self, Buffer};
 use super::direct::{emitted_radiance, escaped_radiance, sample_direct};
-use super::{accumulate_tiles, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use super::{accumulate_tiles, merge_sums, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::bsdf::TransportMode;
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
@@ -143,6 +143,9 @@ pub struct Progressive<'a> {
     est: PathTracer,
     rect: PixelRect,
     sums: Vec<PixelSum>,
+    /// The pass in flight, zero between passes: merged into `sums` only
+    /// when every tile is done.
+    pass: Vec<PixelSum>,
     stats: RayStats,
 }
 
@@ -158,6 +161,7 @@ impl<'a> Progressive<'a> {
             },
             rect,
             sums: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
+            pass: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
             stats: RayStats::default(),
         }
     }
@@ -214,8 +218,8 @@ impl checkpoint::Progressive for Progressive<'_> {
 
     fn run_pass(&mut self, scene: &Scene, pass: u32, on_tile: super::Progress) -> bool {
         let samples = self.samples_after(pass)..self.samples_after(pass + 1);
-        // Tiles finished before an interruption must not count: keep the sums to go back to.
-        let before = self.sums.clone();
+        // Tiles finished before an interruption must not count: they go to
+        // the pass's own sums, merged when it is complete.
         let never = AtomicBool::new(false);
         let ntiles = super::tile_count(self.rect.width(), self.rect.height());
         match accumulate_tiles(
@@ -223,16 +227,17 @@ impl checkpoint::Progressive for Progressive<'_> {
             self.settings,
             &self.est,
             samples,
-            &mut self.sums,
+            &mut self.pass,
             &never,
             on_tile,
         ) {
             Some((stats, done)) if done == ntiles => {
+                merge_sums(&mut self.sums, &mut self.pass);
                 self.stats.add(&stats);
                 true
             }
             _ => {
-                self.sums = before;
+                self.pass.fill(PixelSum::default());
                 false
             }
         }

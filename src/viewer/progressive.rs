@@ -203,6 +203,8 @@ pub struct Progressive {
     width: u32,
     height: u32,
     sums: Vec<PixelSum>,
+    /// The pass in flight, zero between passes (a cancelled pass leaves no trace).
+    pass: Vec<PixelSum>,
     done: u32,
     target: u32,
     /// Rays of the completed passes since the last reset.
@@ -217,6 +219,7 @@ impl Progressive {
             width,
             height,
             sums: vec![PixelSum::default(); width as usize * height as usize],
+            pass: vec![PixelSum::default(); width as usize * height as usize],
             done: 0,
             target: settings.ssaa * settings.ssaa,
             stats: RayStats::default(),
@@ -272,18 +275,22 @@ impl Progressive {
             settings,
             est,
             range,
-            &mut self.sums,
+            &mut self.pass,
             cancel,
             crate::integrator::Progress::silent(),
         ) {
             Some((s, _)) => {
+                crate::integrator::merge_sums(&mut self.sums, &mut self.pass);
                 self.done = end;
                 self.stats.camera_rays += s.camera_rays;
                 self.stats.shadow_rays += s.shadow_rays;
                 self.stats.other_rays += s.other_rays;
                 true
             }
-            None => false,
+            None => {
+                self.pass.fill(PixelSum::default());
+                false
+            }
         }
     }
 
