@@ -445,13 +445,13 @@ impl Light {
                 let q = uniform_triangle(v, u);
                 let d = q - p;
                 let d2 = d.length_squared();
-                let area = triangle_area(v);
+                let (normal, area) = triangle_normal_area(v);
                 if d2 == 0.0 || area == 0.0 {
                     return None;
                 }
                 let dist = d2.sqrt();
                 let wi = d / dist;
-                let cos_l = -triangle_normal(v).dot(wi);
+                let cos_l = -normal.dot(wi);
                 let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
                 if cos_l <= 0.0 {
                     return None;
@@ -494,9 +494,9 @@ impl Light {
             Light::Triangle {
                 vertices: v, two_sided, ..
             } => {
-                let cos_l = -triangle_normal(v).dot(wi);
+                let (normal, area) = triangle_normal_area(v);
+                let cos_l = -normal.dot(wi);
                 let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
-                let area = triangle_area(v);
                 if cos_l <= 0.0 || area == 0.0 {
                     return 0.0;
                 }
@@ -739,6 +739,20 @@ fn disk_area_point(disk: &Disk, u: Vec2) -> Vec3 {
     let r = (r0 * r0 + u.x * (r1 * r1 - r0 * r0)).sqrt();
     let phi = std::f32::consts::TAU * u.y;
     disk.centre + (disk.axes[0] * phi.cos() + disk.axes[1] * phi.sin()) * r
+}
+
+/// `triangle_normal` and `triangle_area` from one cross product and one
+/// square root (light sampling needs both per sample), bit for bit the same.
+fn triangle_normal_area(v: &[Vec3; 3]) -> (Vec3, f32) {
+    let c = (v[1] - v[0]).cross(v[2] - v[0]);
+    let len = c.length();
+    let rcp = 1.0 / len;
+    let n = if rcp.is_finite() && rcp > 0.0 {
+        c * rcp
+    } else {
+        Vec3::ZERO
+    };
+    (n, 0.5 * len)
 }
 
 /// Unit normal (v1 - v0) x (v2 - v0) of a triangle (zero if degenerate).

@@ -737,3 +737,23 @@ fn a_light_sample_carries_the_density_pdf_li_gives_its_direction() {
         assert!(light.is_delta() || checked > 50, "{name}: only {checked} samples");
     }
 }
+
+#[test]
+fn the_shared_normal_and_area_are_those_computed_apart() {
+    use crate::light::{triangle_area, triangle_normal};
+    let mut rng = Rng::new(5, 1);
+    let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0;
+    let (a, b) = (p(), p());
+    let mut tris: Vec<[Vec3; 3]> = (0..500).map(|_| [p(), p(), p()]).collect();
+    // Degenerate ones: a point, a segment.
+    tris.push([a, a, a]);
+    tris.push([a, b, a * 2.0 - b]);
+    for v in &tris {
+        let (n, area) = super::triangle_normal_area(v);
+        assert_eq!(
+            n.to_array().map(f32::to_bits),
+            triangle_normal(v).to_array().map(f32::to_bits)
+        );
+        assert_eq!(area.to_bits(), triangle_area(v).to_bits());
+    }
+}

@@ -306,6 +306,9 @@ pub struct Hit {
     pub light: Option<u32>,
 }
 
+/// Texture coordinates of a triangle without its own: pbrt-v4's.
+const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
+
 #[derive(Clone, Copy, Debug)]
 struct TriInfo {
     material: u32,
@@ -359,6 +362,9 @@ pub struct Scene {
     info: Vec<TriInfo>,
     vertex_normals: Vec<Option<[Vec3; 3]>>,
     vertex_uvs: Vec<Option<[Vec2; 3]>>,
+    /// dp/du of each triangle (constant over it), computed once: per hit it
+    /// was a division and most of the hit's cost on small scenes.
+    dpdus: Vec<Vec3>,
     /// Spheres: the description's, then the lights'.
     spheres: Vec<SphereObject>,
     disks: Vec<DiskObject>,
@@ -533,6 +539,7 @@ impl Scene {
             info,
             vertex_normals,
             vertex_uvs,
+            dpdus: vec![],
             spheres,
             disks,
             shapes,
@@ -564,6 +571,7 @@ impl Scene {
             })
             .collect();
         scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
+        scene.dpdus = (0..scene.triangles.len()).map(|i| scene.triangle_dpdu(i)).collect();
         Ok(scene)
     }
 
@@ -736,7 +744,8 @@ impl Scene {
             }
             None => inf.normal,
         };
-        let (uv, dpdu) = self.triangle_uv(idx, u, v);
+        let uv = self.triangle_uv(idx, u, v);
+        let dpdu = self.dpdus[idx];
         Hit {
             t,
             p,
@@ -755,25 +764,28 @@ impl Scene {
         }
     }
 
-    /// Texture coordinates and dp/du at barycentrics (u, v) of triangle
-    /// `slot` (BVH order), as pbrt-v4's `Triangle` computes them.
-    fn triangle_uv(&self, slot: usize, b1: f32, b2: f32) -> (Vec2, Vec3) {
-        const DEFAULT: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
-        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT);
+    /// Texture coordinates at barycentrics (u, v) of triangle `slot` (BVH
+    /// order), as pbrt-v4's `Triangle` computes them.
+    fn triangle_uv(&self, slot: usize, b1: f32, b2: f32) -> Vec2 {
+        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT_UV);
         let b0 = 1.0 - b1 - b2;
-        let at = uv[0] * b0 + uv[1] * b1 + uv[2] * b2;
+        uv[0] * b0 + uv[1] * b1 + uv[2] * b2
+    }
+
+    /// dp/du of triangle `slot`, as pbrt-v4's `Triangle` computes it.
+    fn triangle_dpdu(&self, slot: usize) -> Vec3 {
+        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT_UV);
         let [p0, p1, p2] = self.triangles[slot].vertices();
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
         let (dp02, dp12) = (p0 - p2, p1 - p2);
         let det = duv02.x * duv12.y - duv02.y * duv12.x;
         let dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
         // Degenerate texture coordinates: any tangent will do.
-        let dpdu = if det.abs() < 1e-9 || !dpdu.is_finite() {
+        if det.abs() < 1e-9 || !dpdu.is_finite() {
             p1 - p0
         } else {
             dpdu
-        };
-        (at, dpdu)
+        }
     }
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.
