@@ -264,6 +264,27 @@ impl Sampler {
         ))
     }
 
+    /// Passes over the next 1D request: what follows is what it would be
+    /// after `next_f32`, without computing a value nobody reads.
+    pub fn skip_1d(&mut self) {
+        if self.sobol && self.dim < SOBOL_DIMENSIONS {
+            self.dim += 1;
+        } else {
+            self.rng.next_u32();
+        }
+    }
+
+    /// The lobe-choice value of a BSDF sample: read only when the BSDF has
+    /// lobes to choose between (else skipped, and 0.5).
+    pub fn lobe_choice(&mut self, needed: bool) -> f32 {
+        if needed {
+            self.next_f32()
+        } else {
+            self.skip_1d();
+            0.5
+        }
+    }
+
     /// Uniform in [0, 1).
     pub fn next_f32(&mut self) -> f32 {
         match self.next_key() {
@@ -667,6 +688,26 @@ mod tests {
             let y = owen_scramble(sobol_u32(shuffled, 1), s2);
             assert_eq!(sobol_2d(i.reverse_bits(), key), (x, y), "{i:#x} {key:#x}");
             assert_eq!(sobol_1d(i.reverse_bits(), key), x, "{i:#x} {key:#x}");
+        }
+    }
+
+    #[test]
+    fn a_skipped_request_leaves_the_next_ones_as_they_were() {
+        for sobol in [true, false] {
+            // Past the Sobol dimensions too, where the PCG32 stream takes over.
+            for before in [0, 5, SOBOL_DIMENSIONS as usize - 1, SOBOL_DIMENSIONS as usize + 3] {
+                let (mut a, mut b) = (Sampler::new(sobol, 4, 77, 9), Sampler::new(sobol, 4, 77, 9));
+                for _ in 0..before {
+                    a.next_2d();
+                    b.next_2d();
+                }
+                a.next_f32();
+                b.skip_1d();
+                for _ in 0..4 {
+                    assert_eq!(a.next_2d(), b.next_2d(), "sobol {sobol}, after {before}");
+                    assert_eq!(a.next_f32(), b.next_f32(), "sobol {sobol}, after {before}");
+                }
+            }
         }
     }
 

@@ -356,6 +356,11 @@ impl Bsdf {
     }
 
     /// Like [`Bxdf::sample_f`], with `wo` and the returned `wi` in world space.
+    /// Whether `sample_f` reads its `uc` (to choose between lobes).
+    pub fn uses_lobe_choice(&self) -> bool {
+        !matches!(self.bxdf, Bxdf::Diffuse(_) | Bxdf::Conductor(_))
+    }
+
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let wo = self.frame.to_local(wo);
         if wo.z == 0.0 || self.flags().is_empty() {

@@ -1185,3 +1185,33 @@ fn coated_diffuse_against_layered_random_walk() {
         }
     }
 }
+
+#[test]
+fn a_bsdf_that_says_it_reads_no_lobe_choice_reads_none() {
+    let mut cases = sampled_bxdfs();
+    cases.push((
+        "smooth conductor".into(),
+        Bxdf::conductor(TrowbridgeReitz::smooth(), Vec3::splat(0.2), Vec3::splat(3.0)),
+    ));
+    cases.push(("thin dielectric".into(), Bxdf::thin_dielectric(1.5)));
+    cases.push((
+        "smooth dielectric".into(),
+        Bxdf::dielectric(TrowbridgeReitz::smooth(), 1.5),
+    ));
+    let mut rng = Rng::new(3, 8);
+    for (name, bxdf) in cases {
+        let bsdf = Bsdf::new(bxdf, Vec3::Z, Vec3::X);
+        let mut differs = false;
+        for wo in test_directions() {
+            for _ in 0..64 {
+                let u = rng.next_2d();
+                let a = bsdf.sample_f(wo, 0.05, u, TransportMode::Radiance);
+                let b = bsdf.sample_f(wo, 0.95, u, TransportMode::Radiance);
+                let key = |s: Option<BsdfSample>| s.map(|s| (s.wi, s.f, s.pdf));
+                differs |= key(a) != key(b);
+            }
+        }
+        // Whoever ignores it must; the others choose lobes with it.
+        assert_eq!(differs, bsdf.uses_lobe_choice(), "{name}");
+    }
+}

@@ -107,7 +107,12 @@ pub fn walk_camera_path(
         } else if flags.is_glossy() {
             l += beta * sample_direct(scene, &hit, wo, &bsdf, true, sampler, stats);
         }
-        let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
+        let Some(bs) = bsdf.sample_f(
+            wo,
+            sampler.lobe_choice(bsdf.uses_lobe_choice()),
+            sampler.next_2d(),
+            TransportMode::Radiance,
+        ) else {
             break;
         };
         if only_specular && !bs.is_specular() {

@@ -109,7 +109,12 @@ impl RadianceEstimator for PathTracer {
                 let mis = self.light_sampling == LightSampling::Mis;
                 l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, sampler, stats);
             }
-            let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
+            let Some(bs) = bsdf.sample_f(
+                wo,
+                sampler.lobe_choice(bsdf.uses_lobe_choice()),
+                sampler.next_2d(),
+                TransportMode::Radiance,
+            ) else {
                 break;
             };
             if !hit.keeps_side(wo, bs.wi, bs.flags) {

@@ -167,7 +167,12 @@ impl PhotonMapping<'_> {
                     sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));
                     break;
                 }
-                let Some(bs) = bsdf.sample_f(wo, sampler.next_f32(), sampler.next_2d(), TransportMode::Radiance) else {
+                let Some(bs) = bsdf.sample_f(
+                    wo,
+                    sampler.lobe_choice(bsdf.uses_lobe_choice()),
+                    sampler.next_2d(),
+                    TransportMode::Radiance,
+                ) else {
                     break;
                 };
                 if !y.keeps_side(wo, bs.wi, bs.flags) {
