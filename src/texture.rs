@@ -53,7 +53,18 @@ impl Texture {
         Texture::Constant(v)
     }
 
+    /// The texture's value at `tc`. Inlined for the constant case, which
+    /// most materials are: the call of the recursive evaluation cost more
+    /// than the constant.
+    #[inline]
     pub fn evaluate(&self, tc: &TexCoord) -> Vec3 {
+        match self {
+            Texture::Constant(v) => *v,
+            _ => self.evaluate_varying(tc),
+        }
+    }
+
+    fn evaluate_varying(&self, tc: &TexCoord) -> Vec3 {
         match self {
             Texture::Constant(v) => *v,
             Texture::Checkerboard {
