@@ -314,9 +314,9 @@ fn a_stopped_sppm_render_resumes_to_the_uninterrupted_image() {
 fn an_interruption_mid_pass_writes_a_checkpoint_that_resumes_where_it_stopped() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // 4 tiles a pass, 16 passes of four samples. On one thread the interruption
+    // 16 tiles a pass, 16 passes of four samples. On one thread the interruption
     // (the cancel token a signal trips, here tripped by the hidden option)
-    // lands after exactly 14 tiles: 3 passes done, the 4th half done.
+    // lands after exactly 56 tiles: 3 passes done, the 4th half done.
     let args = |out: &'static str, extra: &[&'static str]| {
         let mut a = vec![
             "--quiet",
@@ -337,7 +337,7 @@ fn an_interruption_mid_pass_writes_a_checkpoint_that_resumes_where_it_stopped() 
         a
     };
     let stopped = run(
-        &args("s.pfm", &["--checkpoint", "s.ckpt", "--stop-after-tiles", "14"]),
+        &args("s.pfm", &["--checkpoint", "s.ckpt", "--stop-after-tiles", "56"]),
         d,
     );
     let stderr = String::from_utf8_lossy(&stopped.stderr);

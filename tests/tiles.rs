@@ -164,8 +164,9 @@ fn crops_merge_to_the_full_render_and_bad_sets_are_refused() {
 #[test]
 fn an_interrupted_render_leaves_a_valid_partial_exr_and_no_temporary_files() {
     let dir = tempfile::tempdir().unwrap();
-    // 4 x 3 tiles; on one thread the interruption (the cancel token a
-    // signal trips, here tripped by the hidden option) lands after exactly 5.
+    // 8 x 6 tiles; on one thread the interruption (the cancel token a
+    // signal trips, here tripped by the hidden option) lands after exactly 6,
+    // the first six of the top row.
     let o = run(
         &[
             "--quiet",
@@ -183,14 +184,14 @@ fn an_interrupted_render_leaves_a_valid_partial_exr_and_no_temporary_files() {
             "--photons",
             "20000",
             "--stop-after-tiles",
-            "5",
+            "6",
         ],
         dir.path(),
     );
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{stderr}");
     assert!(
-        stderr.trim() == "interrupted: 5/12 tiles rendered, saved to big.partial.exr",
+        stderr.trim() == "interrupted: 6/48 tiles rendered, saved to big.partial.exr",
         "{stderr}"
     );
     let files: Vec<String> = std::fs::read_dir(dir.path())
@@ -200,15 +201,17 @@ fn an_interrupted_render_leaves_a_valid_partial_exr_and_no_temporary_files() {
     assert_eq!(files, vec!["big.partial.exr".to_string()]);
     let (film, window, attrs) = raytracer::image_io::read_exr_in_frame(&dir.path().join("big.partial.exr")).unwrap();
     assert_eq!((film.width, window.full_width, window.full_height), (128, 128, 96));
-    for (key, value) in [("raytracer.partial", "true"), ("raytracer.tiles", "5/12")] {
+    for (key, value) in [("raytracer.partial", "true"), ("raytracer.tiles", "6/48")] {
         assert!(attrs.iter().any(|(k, v)| k == key && v == value), "{attrs:?}");
     }
-    // Five tiles were finished (lit) and the other seven are black.
-    let lit = (0..12)
+    // Those six were finished and the other 42 are black; of the six, the
+    // first sees no room (the frame's outer columns of tiles lie beside the
+    // box) and the other five are lit.
+    let lit: Vec<u32> = (0..48)
         .filter(|t| {
-            let (x0, y0) = (t % 4 * 32, t / 4 * 32);
-            (y0..y0 + 32).any(|y| (x0..x0 + 32).any(|x| film.get(x, y).max_element() > 0.0))
+            let (x0, y0) = (t % 8 * 16, t / 8 * 16);
+            (y0..y0 + 16).any(|y| (x0..x0 + 16).any(|x| film.get(x, y).max_element() > 0.0))
         })
-        .count();
-    assert_eq!(lit, 5);
+        .collect();
+    assert_eq!(lit, [1, 2, 3, 4, 5]);
 }

@@ -26,7 +26,11 @@ use std::sync::Arc;
 
 pub use crate::settings::{IntegratorKind, LightSampling, RenderSettings, SamplerKind, StateFiles};
 
-pub const TILE: u32 = 32;
+/// Tile side in pixels. A pass ends when its last tile does, the other
+/// threads idle meanwhile: half a tile a thread on average, so small tiles;
+/// 16 x 16 is still far more work than a tile's own cost (its splat block,
+/// one merge).
+pub const TILE: u32 = 16;
 
 /// Asks a render to stop: tiles not yet started are skipped, progressive
 /// renders stop after the pass in flight (saving their checkpoint), and the
