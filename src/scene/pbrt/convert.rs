@@ -1206,7 +1206,10 @@ fn convert_material(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            Ok(Ok(Material::Dielectric { eta, roughness }))
+            Ok(Ok(Material::Dielectric {
+                eta,
+                roughness: roughness.into(),
+            }))
         }
         "thindielectric" => {
             let eta = p.get_float("eta", 1.5)?;
@@ -1250,7 +1253,10 @@ fn convert_material(
                     (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
                 }
             };
-            Ok(Ok(Material::Conductor { fresnel, roughness }))
+            Ok(Ok(Material::Conductor {
+                fresnel,
+                roughness: roughness.into(),
+            }))
         }
         "coateddiffuse" => {
             if p.get_spectrum("albedo")?
@@ -1278,7 +1284,7 @@ fn convert_material(
             }
             Ok(Ok(Material::CoatedDiffuse {
                 reflectance,
-                roughness,
+                roughness: roughness.into(),
                 eta,
                 thickness,
             }))
