@@ -1183,6 +1183,13 @@ fn convert_material(
             let eta = match p.get("eta") {
                 None => 1.5,
                 Some(e) if e.ty == super::ParamType::Float => p.get_float("eta", 1.5)?,
+                // pbrt-v4's dielectric takes a float or a spectrum for
+                // "eta", never a texture (only its hair material does).
+                Some(e) if e.ty == super::ParamType::Texture => {
+                    return Ok(Err(
+                        "a textured \"eta\" is not supported (pbrt-v4's dielectric takes a float or a spectrum)".into(),
+                    ))
+                }
                 Some(_) => match p.get_spectrum("eta")? {
                     Some(SpectrumValue::Sampled(s))
                         if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
@@ -2190,6 +2197,24 @@ mod tests {
             .to_string();
         assert!(
             e.starts_with("dir/main.pbrt:6: material (texture \"check\" of class \"fbm\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_textured_dielectric_eta_is_refused_as_pbrt_v4_does() {
+        let e = convert_text(
+            &format!(
+                "WorldBegin\nTexture \"e\" \"float\" \"constant\" \"float value\" [ 1.5 ]\n\
+                 Material \"dielectric\" \"texture eta\" \"e\"\n{}",
+                quad(0.0)
+            ),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:3: material (a textured \"eta\" is not supported"),
             "{e}"
         );
     }
