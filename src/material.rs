@@ -10,6 +10,7 @@
 use crate::bsdf::{Bsdf, Bxdf, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::texture::{TexCoord, Texture};
+use std::sync::Arc;
 
 /// Microfacet roughness as pbrt-v4's materials take it: `uroughness` and
 /// `vroughness` along the surface's u and v, remapped to the distribution's
@@ -41,6 +42,71 @@ impl Roughness {
     }
 }
 
+/// A material's roughness: a constant (decided once, as most scenes give
+/// it), or float textures looked up at each shading point and then remapped
+/// as a constant is (pbrt-v4's `FloatTexture` `uroughness` / `vroughness`).
+#[derive(Clone, PartialEq)]
+pub enum MaterialRoughness {
+    Constant(Roughness),
+    /// `u` and `v` are one `Arc` when both come from one texture (pbrt-v4's
+    /// `roughness`): it is then looked up once per point.
+    Textured {
+        u: Arc<Texture>,
+        v: Arc<Texture>,
+        remap: bool,
+    },
+}
+
+impl MaterialRoughness {
+    /// The microfacet distribution at a shading point. Where a texture is
+    /// (near) zero it is effectively smooth, and the BxDF built from it is
+    /// specular there, with specular flags, as pbrt-v4's is.
+    #[inline]
+    pub fn distribution(&self, tc: &TexCoord) -> TrowbridgeReitz {
+        match self {
+            MaterialRoughness::Constant(r) => r.distribution(),
+            MaterialRoughness::Textured { u, v, remap } => {
+                let ru = u.evaluate_scalar(tc);
+                let rv = if Arc::ptr_eq(u, v) { ru } else { v.evaluate_scalar(tc) };
+                TrowbridgeReitz::from_roughness(ru, rv, *remap)
+            }
+        }
+    }
+
+    /// True when the surface is smooth at every point. A texture may reach
+    /// zero somewhere without being zero everywhere, so only a constant can
+    /// say so.
+    pub fn is_smooth(&self) -> bool {
+        match self {
+            MaterialRoughness::Constant(r) => r.is_smooth(),
+            MaterialRoughness::Textured { .. } => false,
+        }
+    }
+}
+
+impl From<Roughness> for MaterialRoughness {
+    fn from(r: Roughness) -> Self {
+        MaterialRoughness::Constant(r)
+    }
+}
+
+impl std::fmt::Debug for MaterialRoughness {
+    // A constant prints as the bare `Roughness` it was before textures
+    // were possible: scene fingerprints hash a material's Debug form, so the
+    // checkpoints and photon maps of existing scenes stay valid.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MaterialRoughness::Constant(r) => r.fmt(f),
+            MaterialRoughness::Textured { u, v, remap } => f
+                .debug_struct("TexturedRoughness")
+                .field("u", u)
+                .field("v", v)
+                .field("remap", remap)
+                .finish(),
+        }
+    }
+}
+
 /// How a conductor's Fresnel reflectance is given.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ConductorFresnel {
@@ -62,18 +128,18 @@ pub enum Material {
     /// smooth conductor of reflectance 1.
     Conductor {
         fresnel: ConductorFresnel,
-        roughness: Roughness,
+        roughness: MaterialRoughness,
     },
     /// An interface to a medium of index `eta`, smooth or rough (pbrt-v4
     /// `dielectric`). Glass is a smooth dielectric.
-    Dielectric { eta: f32, roughness: Roughness },
+    Dielectric { eta: f32, roughness: MaterialRoughness },
     /// A thin slab of index `eta` (pbrt-v4 `thindielectric`).
     ThinDielectric { eta: f32 },
     /// A dielectric coat over a Lambertian base (pbrt-v4 `coateddiffuse`,
     /// the closed-form model of `bsdf::CoatedDiffuseBxdf`).
     CoatedDiffuse {
         reflectance: Texture,
-        roughness: Roughness,
+        roughness: MaterialRoughness,
         eta: f32,
         thickness: f32,
     },
@@ -109,7 +175,7 @@ impl Material {
     pub fn mirror(reflectance: Vec3) -> Self {
         Material::Conductor {
             fresnel: ConductorFresnel::Reflectance(Texture::from(reflectance)),
-            roughness: Roughness::SMOOTH,
+            roughness: Roughness::SMOOTH.into(),
         }
     }
 
@@ -117,7 +183,7 @@ impl Material {
     pub fn glass(eta: f32) -> Self {
         Material::Dielectric {
             eta,
-            roughness: Roughness::SMOOTH,
+            roughness: Roughness::SMOOTH.into(),
         }
     }
 
@@ -158,7 +224,7 @@ impl Material {
             Material::Diffuse { reflectance } => Bxdf::diffuse(reflectance.evaluate(&tc)),
             Material::Emissive { albedo, .. } => Bxdf::diffuse(*albedo),
             Material::Conductor { fresnel, roughness } => {
-                let d = roughness.distribution();
+                let d = roughness.distribution(&tc);
                 match fresnel {
                     ConductorFresnel::Ior { eta, k } => Bxdf::conductor(d, *eta, *k),
                     ConductorFresnel::Reflectance(r) => Bxdf::conductor_from_reflectance(d, r.evaluate(&tc)),
@@ -166,7 +232,7 @@ impl Material {
             }
             Material::Dielectric { eta, roughness } => {
                 // The outward normal stays: it says which side is inside.
-                return Bsdf::new(Bxdf::dielectric(roughness.distribution(), *eta), sp.ns, sp.dpdu);
+                return Bsdf::new(Bxdf::dielectric(roughness.distribution(&tc), *eta), sp.ns, sp.dpdu);
             }
             Material::ThinDielectric { eta } => Bxdf::thin_dielectric(*eta),
             Material::CoatedDiffuse {
@@ -174,7 +240,7 @@ impl Material {
                 roughness,
                 eta,
                 thickness,
-            } => Bxdf::coated_diffuse(roughness.distribution(), *eta, reflectance.evaluate(&tc), *thickness),
+            } => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, reflectance.evaluate(&tc), *thickness),
             Material::DiffuseTransmission {
                 reflectance,
                 transmittance,
@@ -188,7 +254,7 @@ impl Material {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bsdf::TransportMode;
+    use crate::bsdf::{BxdfFlags, TransportMode};
 
     fn point(n: Vec3) -> SurfacePoint {
         SurfacePoint {
@@ -224,6 +290,84 @@ mod tests {
         assert!((s.wi - Vec3::new(-1.0, 1.0, 0.0).normalize()).length() < 1e-5);
         let w = s.f * (s.wi.dot(Vec3::Y).abs() / s.pdf);
         assert!((w - Vec3::ONE).abs().max_element() < 1e-3, "{w:?}");
+    }
+
+    /// A conductor of reflectance 1 whose roughness is a checkerboard of
+    /// `even` and `odd` over (u, v), four squares per unit of u.
+    fn checkered_conductor(even: f32, odd: f32) -> Material {
+        let c = |r: f32| Arc::new(Texture::from(Vec3::splat(r)));
+        let check = Arc::new(Texture::Checkerboard {
+            even: c(even),
+            odd: c(odd),
+            u_scale: 4.0,
+            v_scale: 1.0,
+        });
+        Material::Conductor {
+            fresnel: ConductorFresnel::Reflectance(Texture::from(Vec3::ONE)),
+            roughness: MaterialRoughness::Textured {
+                u: check.clone(),
+                v: check,
+                remap: true,
+            },
+        }
+    }
+
+    #[test]
+    fn a_textured_roughness_is_looked_up_per_point_and_never_promised_smooth() {
+        let at = |u: f32| SurfacePoint {
+            uv: Vec2::new(u, 0.5),
+            ..point(Vec3::Z)
+        };
+        let (even, odd) = (at(0.1), at(0.3));
+        let wo = Vec3::Z;
+        let off = Vec3::new(70f32.to_radians().sin(), 0.0, 70f32.to_radians().cos());
+        let mode = TransportMode::Radiance;
+
+        let m = checkered_conductor(0.3, 0.01);
+        assert!(!m.is_specular());
+        let (rough, less) = (m.bsdf(&even, wo), m.bsdf(&odd, wo));
+        assert!(rough.flags().is_glossy() && less.flags().is_glossy());
+        // alpha 0.55 against 0.1: 70 degrees off the mirror direction (half
+        // vectors 35 degrees off the normal) the rougher square reflects
+        // about ten times as much.
+        let (fr, fl) = (rough.f(wo, off, mode).x, less.f(wo, off, mode).x);
+        assert!(fr > 5.0 * fl && fl > 0.0, "{fr} {fl}");
+        // pbrt-v4 remaps: roughness 0.3 is alpha sqrt(0.3), as a constant is.
+        let constant = Material::Conductor {
+            fresnel: ConductorFresnel::Reflectance(Texture::from(Vec3::ONE)),
+            roughness: Roughness::isotropic(0.3, true).into(),
+        };
+        assert_eq!(constant.bsdf(&even, wo), rough);
+
+        // Where the texture is zero the surface is a mirror, with the flags
+        // of one; elsewhere it stays rough.
+        let m = checkered_conductor(0.3, 0.0);
+        assert!(!m.is_specular());
+        let mirror = m.bsdf(&odd, wo);
+        assert_eq!(mirror.flags(), BxdfFlags::SPECULAR_REFLECTION);
+        assert_eq!(mirror.f(wo, off, mode), Vec3::ZERO);
+        let s = mirror.sample_f(wo, 0.5, Vec2::new(0.3, 0.7), mode).unwrap();
+        assert!(s.is_specular() && (s.wi - Vec3::Z).length() < 1e-6, "{s:?}");
+        assert_eq!(m.bsdf(&even, wo).flags(), BxdfFlags::GLOSSY_REFLECTION);
+
+        // Even a texture that is zero everywhere is not promised smooth.
+        let zero = MaterialRoughness::Textured {
+            u: Arc::new(Texture::from(Vec3::ZERO)),
+            v: Arc::new(Texture::from(Vec3::ZERO)),
+            remap: true,
+        };
+        assert!(!zero.is_smooth());
+        assert!(MaterialRoughness::from(Roughness::SMOOTH).is_smooth());
+    }
+
+    #[test]
+    fn a_constant_roughness_prints_as_before_and_a_texture_prints_its_values() {
+        // Scene fingerprints hash this form.
+        let r = Roughness::isotropic(0.2, true);
+        assert_eq!(format!("{:?}", MaterialRoughness::from(r)), format!("{r:?}"));
+        let a = format!("{:?}", checkered_conductor(0.3, 0.01));
+        let b = format!("{:?}", checkered_conductor(0.3, 0.02));
+        assert!(a.contains("TexturedRoughness") && a != b, "{a}");
     }
 
     #[test]

@@ -518,6 +518,33 @@ mod tests {
     }
 
     #[test]
+    fn scene_fingerprint_sees_a_roughness_texture() {
+        use crate::material::{ConductorFresnel, Material, MaterialRoughness};
+        use crate::math::Vec3;
+        use crate::texture::Texture;
+        use std::sync::Arc;
+        let with = |odd: f32| {
+            let mut d = crate::scene::builtin::cornell();
+            let check = Arc::new(Texture::Checkerboard {
+                even: Arc::new(Texture::from(Vec3::splat(0.3))),
+                odd: Arc::new(Texture::from(Vec3::splat(odd))),
+                u_scale: 4.0,
+                v_scale: 4.0,
+            });
+            d.materials[0].1 = Material::Conductor {
+                fresnel: ConductorFresnel::Reflectance(Texture::from(Vec3::ONE)),
+                roughness: MaterialRoughness::Textured {
+                    u: check.clone(),
+                    v: check,
+                    remap: true,
+                },
+            };
+            scene_fingerprint(&d, false)
+        };
+        assert_ne!(with(0.01), with(0.02));
+    }
+
+    #[test]
     fn scene_fingerprint_sees_disks() {
         use crate::math::Vec3;
         use crate::scene::DiskDesc;

@@ -52,14 +52,14 @@ fn glossy_room(size: u32) -> Scene {
         "copper",
         Material::Conductor {
             fresnel: ConductorFresnel::Ior { eta, k },
-            roughness: Roughness::isotropic(0.1, true),
+            roughness: Roughness::isotropic(0.1, true).into(),
         },
     );
     let coated = d.material(
         "coated",
         Material::CoatedDiffuse {
             reflectance: Vec3::new(0.2, 0.4, 0.7).into(),
-            roughness: Roughness::isotropic(0.05, true),
+            roughness: Roughness::isotropic(0.05, true).into(),
             eta: 1.5,
             thickness: 0.01,
         },

@@ -1,7 +1,8 @@
 //! pbrt-v4 scenes through the binary: Bitterli's cornell box against its
 //! reference image (framing, orientation, brightness), and a scene with
 //! a material the renderer lacks (pbrt-v4's hair), refused with
-//! one line naming the place, rendered with `--lenient`.
+//! one line naming the place, rendered with `--lenient`; a roughness
+//! texture that does not vary renders as its number does.
 //!
 //! The scenes are in `../shared/bitterli/` (beside the repository); without
 //! them the tests say so and pass, unless `CI` is set.
@@ -447,4 +448,63 @@ fn a_disk_area_light_lights_a_floor_as_the_closed_form_says() {
     let power = floor_under_disk("\"rgb L\" [ 1 1 1 ] \"float power\" [ 10 ]", "");
     let expected = 4.0 / (std::f64::consts::PI * std::f64::consts::PI);
     assert!((power / expected - 1.0).abs() < 0.02, "{power} vs {expected}");
+}
+
+/// Renders a rough copper sphere in front of a grey wall under a point
+/// light, the sphere's roughness given by `roughness` (a parameter and
+/// any textures it needs, before the material); returns the image file.
+fn rough_sphere(dir: &Path, name: &str, textures: &str, roughness: &str) -> Vec<u8> {
+    let scene = dir.join(format!("{name}.pbrt"));
+    std::fs::write(
+        &scene,
+        format!(
+            "LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 32 ] \"integer yresolution\" [ 24 ]\nWorldBegin\n\
+             LightSource \"point\" \"rgb I\" [ 20 20 20 ] \"point3 from\" [ 1 2 -3 ]\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -5 -5 2  5 -5 2  5 5 2  -5 5 2 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             {textures}Material \"conductor\" {roughness}\nShape \"sphere\" \"float radius\" [ 1 ]\n"
+        ),
+    )
+    .unwrap();
+    let image = dir.join(format!("{name}.pfm"));
+    let run = raytracer(&[
+        "--scene",
+        scene.to_str().unwrap(),
+        "--integrator",
+        "path",
+        "--spp",
+        "16",
+        "-q",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{name}: {}", String::from_utf8_lossy(&run.stderr));
+    std::fs::read(&image).unwrap()
+}
+
+#[test]
+fn a_roughness_texture_that_does_not_vary_renders_as_the_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let number = rough_sphere(dir.path(), "number", "", "\"float roughness\" [ 0.2 ]");
+    let img = read_image(&dir.path().join("number.pfm")).unwrap();
+    assert!(img.pixels.iter().any(|p| luminance(*p) > 0.0));
+    // A `scale` texture stays a texture, looked up per point: 0.4 x 0.5 is
+    // 0.2 exactly in f32, so the same samples give the same image.
+    for (name, textures) in [
+        (
+            "constant",
+            "Texture \"r\" \"float\" \"constant\" \"float value\" [ 0.2 ]\n",
+        ),
+        (
+            "scale",
+            "Texture \"r\" \"float\" \"scale\" \"float tex\" [ 0.4 ] \"float scale\" [ 0.5 ]\n",
+        ),
+    ] {
+        let textured = rough_sphere(dir.path(), name, textures, "\"texture roughness\" \"r\"");
+        assert!(textured == number, "{name}: the image differs");
+    }
+    // The comparison sees the roughness at all.
+    let other = rough_sphere(dir.path(), "other", "", "\"float roughness\" [ 0.1 ]");
+    assert!(other != number);
 }

@@ -176,14 +176,14 @@ fn every_material_type_is_read_with_pbrt_defaults() {
         get("cu"),
         Material::Conductor {
             fresnel: metal("Cu"),
-            roughness: Roughness::SMOOTH
+            roughness: Roughness::SMOOTH.into()
         }
     );
     assert_eq!(
         get("au"),
         Material::Conductor {
             fresnel: metal("Au"),
-            roughness: Roughness::isotropic(0.2, true)
+            roughness: Roughness::isotropic(0.2, true).into()
         }
     );
     assert_eq!(
@@ -198,6 +198,7 @@ fn every_material_type_is_read_with_pbrt_defaults() {
                 v: 0.3,
                 remap: false
             }
+            .into()
         }
     );
     assert_eq!(get("r"), Material::mirror(Vec3::new(0.9, 0.5, 0.2)));
@@ -206,7 +207,7 @@ fn every_material_type_is_read_with_pbrt_defaults() {
         get("rg"),
         Material::Dielectric {
             eta: 1.33,
-            roughness: Roughness::isotropic(0.1, true)
+            roughness: Roughness::isotropic(0.1, true).into()
         }
     );
     assert_eq!(get("t"), Material::ThinDielectric { eta: 1.5 });
@@ -214,7 +215,7 @@ fn every_material_type_is_read_with_pbrt_defaults() {
         get("c"),
         Material::CoatedDiffuse {
             reflectance: Texture::Constant(Vec3::new(0.2, 0.3, 0.4)),
-            roughness: Roughness::isotropic(0.05, true),
+            roughness: Roughness::isotropic(0.05, true).into(),
             eta: 1.5,
             thickness: 0.01
         }

@@ -371,7 +371,7 @@ mod tests {
         let (a, le) = (0.5, Vec3::new(1.0, 0.5, 0.25));
         let rough = |alpha: f32| Material::Conductor {
             fresnel: ConductorFresnel::Reflectance(Vec3::ONE.into()),
-            roughness: Roughness::isotropic(alpha, false),
+            roughness: Roughness::isotropic(alpha, false).into(),
         };
         let scene = furnace_with_balls(
             Material::Emissive {

@@ -406,7 +406,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             k.only(kind, &["reflectance"])?;
             Material::Conductor {
                 fresnel: ConductorFresnel::Reflectance(albedo("reflectance", 1.0)?),
-                roughness: Roughness::SMOOTH,
+                roughness: Roughness::SMOOTH.into(),
             }
         }
         "glass" => {
@@ -458,7 +458,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             };
             Material::Conductor {
                 fresnel,
-                roughness: roughness()?,
+                roughness: roughness()?.into(),
             }
         }
         "dielectric" => {
@@ -467,7 +467,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             k.only(kind, &keys)?;
             Material::Dielectric {
                 eta: eta(1.5)?,
-                roughness: roughness()?,
+                roughness: roughness()?.into(),
             }
         }
         "thindielectric" => {
@@ -484,7 +484,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             }
             Material::CoatedDiffuse {
                 reflectance: albedo("reflectance", 0.5)?,
-                roughness: roughness()?,
+                roughness: roughness()?.into(),
                 eta: eta(1.5)?,
                 thickness,
             }

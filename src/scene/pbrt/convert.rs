@@ -40,7 +40,7 @@ use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
-use crate::material::{ConductorFresnel, Material, Roughness};
+use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
 use crate::scene::DiskDesc;
@@ -1183,6 +1183,13 @@ fn convert_material(
             let eta = match p.get("eta") {
                 None => 1.5,
                 Some(e) if e.ty == super::ParamType::Float => p.get_float("eta", 1.5)?,
+                // pbrt-v4's dielectric takes a float or a spectrum for
+                // "eta", never a texture (only its hair material does).
+                Some(e) if e.ty == super::ParamType::Texture => {
+                    return Ok(Err(
+                        "a textured \"eta\" is not supported (pbrt-v4's dielectric takes a float or a spectrum)".into(),
+                    ))
+                }
                 Some(_) => match p.get_spectrum("eta")? {
                     Some(SpectrumValue::Sampled(s))
                         if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
@@ -1202,7 +1209,7 @@ fn convert_material(
                     format!("dielectric: \"eta\" {eta} must be a positive number"),
                 ));
             }
-            let roughness = match roughness(p, loc)? {
+            let roughness = match roughness(scene, p, loc)? {
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
@@ -1219,7 +1226,7 @@ fn convert_material(
             Ok(Ok(Material::ThinDielectric { eta }))
         }
         "conductor" => {
-            let roughness = match roughness(p, loc)? {
+            let roughness = match roughness(scene, p, loc)? {
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
@@ -1260,7 +1267,7 @@ fn convert_material(
                     "a coat medium that scatters (\"albedo\" > 0) is not supported".into()
                 ));
             }
-            let roughness = match roughness(p, loc)? {
+            let roughness = match roughness(scene, p, loc)? {
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
@@ -1512,26 +1519,90 @@ fn texture(
 }
 
 /// The microfacet roughness of a pbrt-v4 material: `uroughness` and
-/// `vroughness`, each defaulting to `roughness` (default 0), and `remaproughness`.
-fn roughness(p: &Params, loc: &Loc) -> Result<std::result::Result<Roughness, String>> {
+/// `vroughness`, each defaulting to `roughness` (default 0), each a float or
+/// a float texture, and `remaproughness`. A constant texture becomes a
+/// number: a roughness that does not vary keeps the constant path.
+fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<MaterialRoughness, String>> {
     let remap = p.get_bool("remaproughness", true)?;
     let r = p.get_float_or_texture("roughness")?;
-    let mut uv = [0.0f32; 2];
+    // `roughness` is converted once when both directions take it: its
+    // texture is then one `Arc`, looked up once per point.
+    let mut shared: Option<OneRoughness> = None;
+    let mut uv = [OneRoughness::Value(0.0), OneRoughness::Value(0.0)];
     for (i, n) in ["uroughness", "vroughness"].into_iter().enumerate() {
-        uv[i] = match p.get_float_or_texture(n)?.or(r.clone()) {
-            None => 0.0,
-            Some(FloatOrTexture::Value(v)) => v,
-            Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured roughness is not supported".into())),
+        let (from, given) = match p.get_float_or_texture(n)? {
+            Some(x) => (n, Some(x)),
+            None => ("roughness", r.clone()),
         };
-        if !(uv[i].is_finite() && uv[i] >= 0.0) {
-            return Err(located(loc, format!("\"{n}\" {} must be a number >= 0", uv[i])));
+        let x = match shared.as_ref().filter(|_| from == "roughness") {
+            Some(x) => x.clone(),
+            None => {
+                let x = match given {
+                    None => OneRoughness::Value(0.0),
+                    Some(FloatOrTexture::Value(v)) => OneRoughness::Value(v),
+                    Some(FloatOrTexture::Texture(name)) => match float_texture(scene, p, from, &name, loc)? {
+                        Err(why) => return Ok(Err(why)),
+                        Ok(Texture::Constant(c)) => OneRoughness::Value(c.x),
+                        Ok(t) => OneRoughness::Texture(Arc::new(t)),
+                    },
+                };
+                if from == "roughness" {
+                    shared = Some(x.clone());
+                }
+                x
+            }
+        };
+        if let OneRoughness::Value(v) = x {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(located(loc, format!("\"{n}\" {v} must be a number >= 0")));
+            }
+        }
+        uv[i] = x;
+    }
+    Ok(Ok(match uv {
+        [OneRoughness::Value(u), OneRoughness::Value(v)] => Roughness { u, v, remap }.into(),
+        [u, v] => MaterialRoughness::Textured {
+            u: u.into_texture(),
+            v: v.into_texture(),
+            remap,
+        },
+    }))
+}
+
+/// One direction's roughness as a material gives it.
+#[derive(Clone)]
+enum OneRoughness {
+    Value(f32),
+    Texture(Arc<Texture>),
+}
+
+impl OneRoughness {
+    fn into_texture(self) -> Arc<Texture> {
+        match self {
+            OneRoughness::Value(v) => Arc::new(Texture::from(Vec3::splat(v))),
+            OneRoughness::Texture(t) => t,
         }
     }
-    Ok(Ok(Roughness {
-        u: uv[0],
-        v: uv[1],
-        remap,
-    }))
+}
+
+/// The float texture `name` that parameter `param` of a material refers to.
+/// pbrt-v4 keeps float and spectrum textures apart, so a spectrum texture
+/// of that name is an error that says so.
+fn float_texture(
+    scene: &PbrtScene,
+    p: &Params,
+    param: &str,
+    name: &str,
+    loc: &Loc,
+) -> Result<std::result::Result<Texture, String>> {
+    let at = place(p, param, loc);
+    if scene.texture(name, TextureKind::Float).is_none() && scene.texture(name, TextureKind::Spectrum).is_some() {
+        return Err(located(
+            at,
+            format!("\"{param}\": texture \"{name}\" is a spectrum texture; a roughness needs a float texture"),
+        ));
+    }
+    texture(scene, name, TextureKind::Float, at, 0)
 }
 
 /// An RGB parameter given as a number, an `rgb`, a named spectrum (pbrt-v4's
@@ -2010,6 +2081,142 @@ mod tests {
             "{e}"
         );
         assert!(!e.contains('\n'));
+    }
+
+    #[test]
+    fn checkerboard_roughness_is_looked_up_per_point() {
+        use crate::bsdf::{Bsdf, BxdfFlags, TransportMode};
+        use crate::material::MaterialRoughness;
+        let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+             Texture \"check\" \"float\" \"checkerboard\" \"float tex1\" [ 0.3 ] \"float tex2\" [ 0.01 ] \
+             \"float uscale\" [ 2 ] \"float vscale\" [ 1 ]\n\
+             Material \"conductor\" \"texture roughness\" \"check\" \"rgb reflectance\" [ 1 1 1 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -1 -0.5 0  1 -0.5 0  1 0.5 0  -1 0.5 0 ] \
+             \"point2 uv\" [ 0 0  1 0  1 1  0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n";
+        let wo = -Vec3::Z;
+        // 70 degrees off the mirror direction: half vectors 35 degrees off
+        // the normal, where alpha 0.55 reflects ten times what alpha 0.1 does.
+        let off = Vec3::new(70f32.to_radians().sin(), 0.0, -70f32.to_radians().cos());
+        // The material and the BSDFs where rays along +z from x = 0.5 (u <
+        // 0.5 after the reflection: tex1, the even square) and x = -0.5
+        // (tex2) meet the quad.
+        let squares = |text: &str| -> (Material, Bsdf, Bsdf) {
+            let scene = Scene::build(ok(text).desc).unwrap();
+            let at = |x: f32| {
+                let ray = crate::math::Ray::new(Vec3::new(x, 0.0, -5.0), Vec3::Z);
+                let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the quad");
+                let m = &scene.materials[hit.material as usize];
+                (m.clone(), m.bsdf(&hit.surface(), wo))
+            };
+            let ((m, even), (_, odd)) = (at(0.5), at(-0.5));
+            (m, even, odd)
+        };
+        let (m, even, odd) = squares(text);
+        let Material::Conductor {
+            roughness: MaterialRoughness::Textured { u, v, remap: true },
+            ..
+        } = &m
+        else {
+            panic!("{m:?}")
+        };
+        assert!(Arc::ptr_eq(u, v), "one texture for both directions");
+        assert!(!m.is_specular());
+        let f = |b: &Bsdf| b.f(wo, off, TransportMode::Radiance).x;
+        assert!(f(&even) > 5.0 * f(&odd) && f(&odd) > 0.0, "{} {}", f(&even), f(&odd));
+
+        // Where the texture is 0 each of the three materials is specular,
+        // where it is 0.3 glossy.
+        let smooth_odd = text.replace("[ 0.01 ]", "[ 0 ]");
+        for ty in ["conductor", "dielectric", "coateddiffuse"] {
+            let t = smooth_odd.replace("\"conductor\"", &format!("\"{ty}\""));
+            let t = if ty == "conductor" {
+                t
+            } else {
+                t.replace(" \"rgb reflectance\" [ 1 1 1 ]", "")
+            };
+            let (m, even, odd) = squares(&t);
+            assert!(!m.is_specular(), "{ty}");
+            let (e, o) = (even.flags(), odd.flags());
+            assert!(e.is_glossy() && !e.is_specular(), "{ty}: {e:?}");
+            assert!(o.is_specular() && !o.is_glossy(), "{ty}: {o:?}");
+            if ty == "conductor" {
+                assert_eq!(o, BxdfFlags::SPECULAR_REFLECTION);
+            }
+        }
+
+        // A texture for u only; v the number it is given.
+        let (m, ..) = squares(&text.replace(
+            "\"texture roughness\"",
+            "\"float vroughness\" [ 0.2 ] \"texture uroughness\"",
+        ));
+        let Material::Conductor {
+            roughness: MaterialRoughness::Textured { u, v, .. },
+            ..
+        } = &m
+        else {
+            panic!("{m:?}")
+        };
+        assert!(matches!(**u, Texture::Checkerboard { .. }), "{u:?}");
+        assert_eq!(**v, Texture::from(Vec3::splat(0.2)));
+
+        // A constant texture is the number it holds.
+        let constant = text.replace(
+            "Material",
+            "Texture \"k\" \"float\" \"constant\" \"float value\" [ 0.2 ]\nMaterial",
+        );
+        let (m, ..) = squares(&constant.replace("\"check\" \"rgb", "\"k\" \"rgb"));
+        let (n, ..) = squares(&text.replace("\"texture roughness\" \"check\"", "\"float roughness\" [ 0.2 ]"));
+        assert_eq!(m, n);
+        assert!(matches!(
+            m,
+            Material::Conductor {
+                roughness: MaterialRoughness::Constant(_),
+                ..
+            }
+        ));
+
+        // An unknown name, a spectrum texture: one line naming the place.
+        for (t, want) in [
+            (
+                text.replace("\"check\" \"rgb", "\"nope\" \"rgb"),
+                "dir/main.pbrt:6: float texture \"nope\" is not defined",
+            ),
+            (
+                text.replace("\"float\" \"checkerboard\"", "\"spectrum\" \"checkerboard\""),
+                "dir/main.pbrt:6: \"roughness\": texture \"check\" is a spectrum texture; a roughness needs a float texture",
+            ),
+        ] {
+            let e = convert_text(&t, false).unwrap_err().to_string();
+            assert!(e.starts_with(want), "{e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+        // A texture class we lack is an unsupported material.
+        let e = convert_text(&text.replace("\"checkerboard\"", "\"fbm\""), false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:6: material (texture \"check\" of class \"fbm\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_textured_dielectric_eta_is_refused_as_pbrt_v4_does() {
+        let e = convert_text(
+            &format!(
+                "WorldBegin\nTexture \"e\" \"float\" \"constant\" \"float value\" [ 1.5 ]\n\
+                 Material \"dielectric\" \"texture eta\" \"e\"\n{}",
+                quad(0.0)
+            ),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:3: material (a textured \"eta\" is not supported"),
+            "{e}"
+        );
     }
 
     #[test]
