@@ -1,6 +1,7 @@
 //! Textures: values that vary over a surface, looked up at a shading point's
 //! texture coordinates (pbrt-v4 chapter 10). A texture here is RGB-valued; a
-//! scalar parameter (a roughness, a mix amount) reads the first channel.
+//! scalar parameter (a roughness, a mix amount) reads the mean of the
+//! channels, as pbrt-v4's float lookup of an RGB image does.
 //!
 //! Textures form a small tree (scale and mix hold other textures), cloned
 //! cheaply: the leaves that hold data share it (an image texture's pixels are
@@ -83,16 +84,22 @@ impl Texture {
             }
             Texture::Scale { tex, scale } => tex.evaluate(tc) * scale.evaluate(tc),
             Texture::Mix { a, b, amount } => {
-                let t = amount.evaluate(tc).x;
+                let t = amount.evaluate_scalar(tc);
                 a.evaluate(tc) * (1.0 - t) + b.evaluate(tc) * t
             }
             Texture::Image(img) => img.evaluate(tc.uv),
         }
     }
 
-    /// The first channel: the value of a scalar texture.
+    /// The value of a scalar texture: the mean of the channels (pbrt-v4's
+    /// `MIPMap::Bilerp<Float>` of an RGB image), exactly the value of a grey one.
     pub fn evaluate_scalar(&self, tc: &TexCoord) -> f32 {
-        self.evaluate(tc).x
+        let v = self.evaluate(tc);
+        if v.x == v.y && v.y == v.z {
+            v.x
+        } else {
+            (v.x + v.y + v.z) / 3.0
+        }
     }
 
     /// The value when the texture does not vary, else `None`.
@@ -139,6 +146,34 @@ mod tests {
             uv: Vec2::new(u, v),
             p: Vec3::ZERO,
         }
+    }
+
+    #[test]
+    fn a_scalar_lookup_of_a_colour_is_the_channels_mean_and_of_a_grey_its_value() {
+        let pixels = vec![
+            Vec3::new(0.9, 0.3, 0.0),
+            Vec3::splat(0.1),
+            Vec3::splat(0.7),
+            Vec3::splat(0.3),
+        ];
+        let image = Arc::new(TexImage::from_pixels("t", 2, 2, pixels));
+        let opts = ImageOptions {
+            encoding: Encoding::Linear,
+            ..ImageOptions::default()
+        };
+        let tex = Texture::Image(Arc::new(ImageTexture::new(image, &opts)));
+        // Texel centres: (0.25, 0.75) is the top-left texel (v up), (0.75, 0.75) the top-right.
+        let colour = tex.evaluate(&at(0.25, 0.75));
+        assert_eq!(colour, Vec3::new(0.9, 0.3, 0.0));
+        assert!((tex.evaluate_scalar(&at(0.25, 0.75)) - 0.4).abs() < 1e-6);
+        assert_eq!(tex.evaluate_scalar(&at(0.75, 0.75)), 0.1);
+        // A mix's amount is a scalar too.
+        let mix = Texture::Mix {
+            a: Arc::new(Texture::from(Vec3::ZERO)),
+            b: Arc::new(Texture::from(Vec3::ONE)),
+            amount: Arc::new(tex),
+        };
+        assert!((mix.evaluate(&at(0.25, 0.75)) - Vec3::splat(0.4)).abs().max_element() < 1e-6);
     }
 
     #[test]
