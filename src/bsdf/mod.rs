@@ -355,6 +355,17 @@ impl Bsdf {
         self.bxdf.f(wo, self.frame.to_local(wi), mode)
     }
 
+    /// `f` and `pdf` of one pair of directions, taken to the local frame
+    /// once (a light sample weighed by MIS needs both).
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, f32) {
+        let wo = self.frame.to_local(wo);
+        if wo.z == 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let wi = self.frame.to_local(wi);
+        (self.bxdf.f(wo, wi, mode), self.bxdf.pdf(wo, wi, mode))
+    }
+
     /// Like [`Bxdf::sample_f`], with `wo` and the returned `wi` in world space.
     /// Whether `sample_f` reads its `uc` (to choose between lobes).
     pub fn uses_lobe_choice(&self) -> bool {

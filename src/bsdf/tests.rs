@@ -1215,3 +1215,19 @@ fn a_bsdf_that_says_it_reads_no_lobe_choice_reads_none() {
         assert_eq!(differs, bsdf.uses_lobe_choice(), "{name}");
     }
 }
+
+#[test]
+fn f_pdf_is_f_and_pdf_together() {
+    let mut rng = Rng::new(12, 4);
+    for (name, bxdf) in sampled_bxdfs() {
+        let bsdf = Bsdf::new(bxdf, Vec3::new(0.3, -0.2, 0.9).normalize(), Vec3::X);
+        for _ in 0..200 {
+            let (wo, wi) = (uniform_sphere(rng.next_2d()), uniform_sphere(rng.next_2d()));
+            for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                let (f, pdf) = bsdf.f_pdf(wo, wi, mode);
+                assert_eq!(f, bsdf.f(wo, wi, mode), "{name}");
+                assert_eq!(pdf.to_bits(), bsdf.pdf(wo, wi, mode).to_bits(), "{name}");
+            }
+        }
+    }
+}

@@ -178,13 +178,13 @@ pub fn sample_direct(
     let Some(ls) = unoccluded_light_sample(scene, hit, wo, bsdf, li, u, stats) else {
         return Vec3::ZERO;
     };
-    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.z).abs();
-    let light = &scene.lights[li];
-    let w = if mis && !light.is_delta() {
-        power_heuristic(pmf * ls.pdf, bsdf.pdf(wo, ls.wi, TransportMode::Radiance))
+    let (f, w) = if mis && !scene.lights[li].is_delta() {
+        let (f, pdf_bsdf) = bsdf.f_pdf(wo, ls.wi, TransportMode::Radiance);
+        (f, power_heuristic(pmf * ls.pdf, pdf_bsdf))
     } else {
-        1.0
+        (bsdf.f(wo, ls.wi, TransportMode::Radiance), 1.0)
     };
+    let f = f * ls.wi.dot(bsdf.frame.z).abs();
     f * ls.weight * (w / pmf)
 }
 
