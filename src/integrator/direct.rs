@@ -9,7 +9,7 @@
 //! estimates only the direct light at its diffuse vertices.
 
 use super::{RadianceEstimator, RayStats};
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::light::LightSample;
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{hammersley_shifted, Sampler};
@@ -107,12 +107,7 @@ pub fn walk_camera_path(
         } else if flags.is_glossy() {
             l += beta * sample_direct(scene, &hit, wo, &bsdf, true, sampler, stats);
         }
-        let Some(bs) = bsdf.sample_f(
-            wo,
-            sampler.lobe_choice(bsdf.uses_lobe_choice()),
-            sampler.next_2d(),
-            TransportMode::Radiance,
-        ) else {
+        let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
             break;
         };
         if only_specular && !bs.is_specular() {
@@ -129,6 +124,13 @@ pub fn walk_camera_path(
         ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
     }
     l
+}
+
+/// A camera path's next direction from the BSDF at a vertex: the lobe
+/// choice (passed over when the BSDF has one lobe), then the 2D sample.
+pub fn sample_bsdf(bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler) -> Option<BsdfSample> {
+    let uc = sampler.lobe_choice(bsdf.uses_lobe_choice());
+    bsdf.sample_f(wo, uc, sampler.next_2d(), TransportMode::Radiance)
 }
 
 /// Radiance from the environment along a ray that left the scene, weighted

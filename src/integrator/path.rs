@@ -33,9 +33,8 @@
 //! between passes and resumed (`integrator::checkpoint`).
 
 use super::checkpoint::{self, Buffer};
-use super::direct::{emitted_radiance, escaped_radiance, sample_direct};
+use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, sample_direct};
 use super::{accumulate_tiles, merge_sums, LightSampling, RadianceEstimator, RayStats, RenderSettings};
-use crate::bsdf::TransportMode;
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::Sampler;
@@ -109,12 +108,7 @@ impl RadianceEstimator for PathTracer {
                 let mis = self.light_sampling == LightSampling::Mis;
                 l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, sampler, stats);
             }
-            let Some(bs) = bsdf.sample_f(
-                wo,
-                sampler.lobe_choice(bsdf.uses_lobe_choice()),
-                sampler.next_2d(),
-                TransportMode::Radiance,
-            ) else {
+            let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
                 break;
             };
             if !hit.keeps_side(wo, bs.wi, bs.flags) {

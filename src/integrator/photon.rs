@@ -29,7 +29,7 @@
 //! `--store-first-hit`, `--gather-radius`, `--gather-k`, `--cone-filter`,
 //! `--gather-filter`, `--final-gather`, `--caustic-photons`, `--caustic-radius`.
 
-use super::direct::{direct_radiance, walk_camera_path, DiffuseVertex, MAX_SPECULAR_DEPTH};
+use super::direct::{direct_radiance, sample_bsdf, walk_camera_path, DiffuseVertex, MAX_SPECULAR_DEPTH};
 use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, Bxdf, TransportMode};
 use crate::error::Result;
@@ -167,12 +167,7 @@ impl PhotonMapping<'_> {
                     sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));
                     break;
                 }
-                let Some(bs) = bsdf.sample_f(
-                    wo,
-                    sampler.lobe_choice(bsdf.uses_lobe_choice()),
-                    sampler.next_2d(),
-                    TransportMode::Radiance,
-                ) else {
+                let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
                     break;
                 };
                 if !y.keeps_side(wo, bs.wi, bs.flags) {
