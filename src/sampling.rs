@@ -127,7 +127,11 @@ pub fn sobol_u32(index: u32, dim: u32) -> u32 {
     if dim == 0 {
         return index.reverse_bits();
     }
-    let t = &SOBOL_1_BYTES;
+    by_bytes(&SOBOL_1_BYTES, index)
+}
+
+/// The xor of a byte table's entries for the four bytes of `index`.
+fn by_bytes(t: &[[u32; 256]; 4], index: u32) -> u32 {
     let i = index as usize;
     t[0][i & 255] ^ t[1][(i >> 8) & 255] ^ t[2][(i >> 16) & 255] ^ t[3][i >> 24]
 }
@@ -181,9 +185,7 @@ fn sobol_2d(rev_index: u32, key: u64) -> (u32, u32) {
     // owen_scramble(sobol_u32(shuffled, d), s) for d = 0, 1, the hashes'
     // inputs already reversed and their outputs reversed together in one
     // 64-bit reversal: bit reversal is most of a request's work.
-    let t = &SOBOL_1_REVERSED_BYTES;
-    let i = shuffled as usize;
-    let y = t[0][i & 255] ^ t[1][(i >> 8) & 255] ^ t[2][(i >> 16) & 255] ^ t[3][i >> 24];
+    let y = by_bytes(&SOBOL_1_REVERSED_BYTES, shuffled);
     let (a, b) = (laine_karras(shuffled, s1), laine_karras(y, s2));
     let both = (((b as u64) << 32) | a as u64).reverse_bits();
     ((both >> 32) as u32, both as u32)
