@@ -1,6 +1,39 @@
-//! Pinhole camera: continuous pixel position -> primary ray.
+//! Perspective camera: continuous pixel position (and a lens sample) ->
+//! primary ray. A pinhole by default; a thin lens (pbrt-v4's
+//! `PerspectiveCamera`) when it has one.
 
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec2, Vec3};
+use crate::sampling::concentric_disk;
+
+/// The image's window on the plane at unit distance before the camera, in
+/// units of the tangent of half the field of view: x from `left` to `right`
+/// along the image's width, y from `top` (the image's first row) down to
+/// `bottom`. The default is [-aspect, aspect] x [-1, 1]; pbrt-v4's
+/// `screenwindow` sets another (an off-centre or stretched projection).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenWindow {
+    pub left: f32,
+    pub right: f32,
+    pub bottom: f32,
+    pub top: f32,
+}
+
+/// A thin lens: rays leave a disk of `radius` about the camera position,
+/// perpendicular to the view direction, and every ray of one image point
+/// meets the plane at `focal_distance` along the view direction in one point
+/// (pbrt-v4 6.2.3). Lengths in world units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLens {
+    pub radius: f32,
+    pub focal_distance: f32,
+}
+
+impl ThinLens {
+    /// A lens that blurs anything: a positive, finite radius and focal distance.
+    pub fn is_valid(&self) -> bool {
+        self.radius > 0.0 && self.radius.is_finite() && self.focal_distance > 0.0 && self.focal_distance.is_finite()
+    }
+}
 
 #[derive(Clone, Debug)]
 pub struct Camera {
@@ -9,6 +42,11 @@ pub struct Camera {
     right: Vec3,
     up: Vec3,
     tan_half_fov: f32,
+    /// The window as half-size and centre per axis (in units of
+    /// `tan_half_fov`), so that the default window is the plain formula.
+    half: Vec2,
+    centre: Vec2,
+    lens: Option<ThinLens>,
     pub width: u32,
     pub height: u32,
 }
@@ -32,9 +70,52 @@ impl Camera {
             right,
             up,
             tan_half_fov: (fov_y_deg.to_radians() * 0.5).tan(),
+            half: Vec2::new(width as f32 / height as f32, 1.0),
+            centre: Vec2::ZERO,
+            lens: None,
             width,
             height,
         })
+    }
+
+    /// The camera with another image window (`fov_y_deg` now sets the unit
+    /// of the window, not the vertical field of view); `None` for an empty
+    /// or non-finite window.
+    pub fn with_window(mut self, w: ScreenWindow) -> Option<Camera> {
+        let ok =
+            [w.left, w.right, w.bottom, w.top].iter().all(|v| v.is_finite()) && w.left != w.right && w.bottom != w.top;
+        if !ok {
+            return None;
+        }
+        self.half = Vec2::new(0.5 * (w.right - w.left), 0.5 * (w.top - w.bottom));
+        self.centre = Vec2::new(0.5 * (w.right + w.left), 0.5 * (w.top + w.bottom));
+        Some(self)
+    }
+
+    /// The camera with a thin lens; `None` for a lens that is not valid.
+    pub fn with_lens(mut self, lens: ThinLens) -> Option<Camera> {
+        if !lens.is_valid() {
+            return None;
+        }
+        self.lens = Some(lens);
+        Some(self)
+    }
+
+    /// The camera with the window and lens a scene gives, if any.
+    pub fn with_optics(self, window: Option<ScreenWindow>, lens: Option<ThinLens>) -> Option<Camera> {
+        let cam = match window {
+            Some(w) => self.with_window(w)?,
+            None => self,
+        };
+        match lens {
+            Some(l) => cam.with_lens(l),
+            None => Some(cam),
+        }
+    }
+
+    /// Whether rays need a lens sample ([`Camera::generate_ray_through_lens`]).
+    pub fn has_lens(&self) -> bool {
+        self.lens.is_some()
     }
 
     pub fn forward(&self) -> Vec3 {
@@ -43,12 +124,39 @@ impl Camera {
 
     /// The ray through continuous pixel coordinates (x, y), with (0, 0) the
     /// top-left corner of the image and (width, height) the bottom-right one.
+    /// The ray leaves the lens' centre (the pinhole's ray).
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
-        let aspect = self.width as f32 / self.height as f32;
-        let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_half_fov * aspect;
-        let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half_fov;
-        let d = (self.forward + self.right * sx + self.up * sy).normalize();
-        Ray::new(self.position, d)
+        Ray::new(self.position, self.direction(x, y).normalize())
+    }
+
+    /// The ray through (x, y) leaving the lens at the point `u` in [0, 1)^2
+    /// picks (uniform over its disk); the pinhole's ray without a lens.
+    pub fn generate_ray_through_lens(&self, x: f32, y: f32, u: Vec2) -> Ray {
+        let d = self.direction(x, y);
+        let Some(lens) = self.lens else {
+            return Ray::new(self.position, d.normalize());
+        };
+        // `d` is one unit long along the view direction: the plane in focus
+        // is `focal_distance` of them away.
+        let focus = self.position + d * lens.focal_distance;
+        let p = concentric_disk(u) * lens.radius;
+        let o = self.position + self.right * p.x + self.up * p.y;
+        Ray::new(o, (focus - o).normalize())
+    }
+
+    /// The unnormalised direction through (x, y), one unit along `forward`.
+    #[inline]
+    fn direction(&self, x: f32, y: f32) -> Vec3 {
+        // With the default window (half height 1, centre 0) this is the plain
+        // pinhole formula, bit for bit, signed zeros included.
+        let t = self.tan_half_fov;
+        let mut sx = (2.0 * x / self.width as f32 - 1.0) * t * self.half.x;
+        let mut sy = (1.0 - 2.0 * y / self.height as f32) * t * self.half.y;
+        if self.centre != Vec2::ZERO {
+            sx += self.centre.x * t;
+            sy += self.centre.y * t;
+        }
+        self.forward + self.right * sx + self.up * sy
     }
 
     /// Where a world-space point lands in continuous pixel coordinates, if in front.
@@ -58,9 +166,8 @@ impl Camera {
         if z <= 0.0 {
             return None;
         }
-        let aspect = self.width as f32 / self.height as f32;
-        let sx = v.dot(self.right) / z / (self.tan_half_fov * aspect);
-        let sy = v.dot(self.up) / z / self.tan_half_fov;
+        let sx = (v.dot(self.right) / z / self.tan_half_fov - self.centre.x) / self.half.x;
+        let sy = (v.dot(self.up) / z / self.tan_half_fov - self.centre.y) / self.half.y;
         Some((
             (sx + 1.0) * 0.5 * self.width as f32,
             (1.0 - sy) * 0.5 * self.height as f32,
@@ -121,6 +228,112 @@ mod tests {
         let r = c.generate_ray(37.5, 150.25);
         let (x, y) = c.project(r.at(2.5)).unwrap();
         assert!((x - 37.5).abs() < 1e-3 && (y - 150.25).abs() < 1e-3);
+    }
+
+    #[test]
+    fn the_default_window_is_the_plain_pinhole_formula_bit_for_bit() {
+        let c = Camera::new(
+            Vec3::new(0.3, 1.0, -3.0),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+            37.0,
+            300,
+            200,
+        )
+        .unwrap();
+        // The camera's own tangent: a constant-folded tan may round otherwise.
+        let (t, aspect) = (c.tan_half_fov, 1.5f32);
+        for k in 0..500 {
+            let (x, y) = ((k * 37 % 301) as f32 * 0.997, (k * 53 % 201) as f32 * 1.003);
+            let sx = (2.0 * x / 300.0 - 1.0) * t * aspect;
+            let sy = (1.0 - 2.0 * y / 200.0) * t;
+            let d = (c.forward + c.right * sx + c.up * sy).normalize();
+            assert_eq!(c.generate_ray(x, y).d, d);
+        }
+        // At the centre sx is zero: its sign must not change either.
+        let centre = c.generate_ray(150.0, 100.0).d;
+        assert_eq!(
+            centre.to_array().map(f32::to_bits),
+            c.forward.normalize().to_array().map(f32::to_bits)
+        );
+    }
+
+    #[test]
+    fn a_window_selects_and_stretches_part_of_the_image_plane() {
+        // The right half of a 64 x 32 image's window, on a 32 x 32 image.
+        let full = cornell_camera(64, 32);
+        let half = cornell_camera(32, 32)
+            .with_window(ScreenWindow {
+                left: 0.0,
+                right: 2.0,
+                bottom: -1.0,
+                top: 1.0,
+            })
+            .unwrap();
+        for (x, y) in [(0.0, 0.0), (7.25, 3.5), (31.9, 31.9), (16.0, 16.0)] {
+            let (a, b) = (half.generate_ray(x, y).d, full.generate_ray(x + 32.0, y).d);
+            assert!((a - b).length() < 1e-6, "({x}, {y}): {a:?} vs {b:?}");
+        }
+        // An off-centre window moves the view without turning the camera.
+        let up = cornell_camera(32, 32)
+            .with_window(ScreenWindow {
+                left: -1.0,
+                right: 1.0,
+                bottom: 0.0,
+                top: 2.0,
+            })
+            .unwrap();
+        let d = up.generate_ray(16.0, 32.0).d;
+        assert!(
+            (d - Vec3::Z).length() < 1e-6,
+            "the bottom edge's middle looks ahead: {d:?}"
+        );
+        let r = up.generate_ray(3.5, 7.25);
+        let (x, y) = up.project(r.at(2.0)).unwrap();
+        assert!((x - 3.5).abs() < 1e-3 && (y - 7.25).abs() < 1e-3);
+        let empty = ScreenWindow {
+            left: 1.0,
+            right: 1.0,
+            bottom: 0.0,
+            top: 1.0,
+        };
+        assert!(cornell_camera(8, 8).with_window(empty).is_none());
+    }
+
+    #[test]
+    fn a_thin_lens_focuses_every_ray_of_a_point_on_the_focal_plane() {
+        let lens = ThinLens {
+            radius: 0.2,
+            focal_distance: 2.5,
+        };
+        let c = cornell_camera(64, 48).with_lens(lens).unwrap();
+        assert!(c.has_lens() && !cornell_camera(64, 48).has_lens());
+        for (x, y) in [(32.0, 24.0), (3.5, 40.25), (60.0, 1.0)] {
+            let pin = c.generate_ray(x, y);
+            // Where the pinhole ray crosses the plane 2.5 ahead.
+            let focus = pin.at(2.5 / pin.d.dot(Vec3::Z));
+            let mut spread: f32 = 0.0;
+            for k in 0..64 {
+                let u = Vec2::new((k % 8) as f32 / 8.0 + 0.06, (k / 8) as f32 / 8.0 + 0.03);
+                let r = c.generate_ray_through_lens(x, y, u);
+                let off = r.o - c.position;
+                // On the lens: in the plane through the camera, across the view.
+                assert!(off.dot(Vec3::Z).abs() < 1e-6 && off.length() <= 0.2 + 1e-6, "{off:?}");
+                spread = spread.max(off.length());
+                let hit = r.at((focus - r.o).dot(Vec3::Z) / r.d.dot(Vec3::Z));
+                assert!((hit - focus).length() < 1e-5, "({x}, {y}) {u:?}: {hit:?} vs {focus:?}");
+            }
+            assert!(spread > 0.15, "the samples cover the lens: {spread}");
+            // The lens' centre is the pinhole.
+            let mid = c.generate_ray_through_lens(x, y, Vec2::splat(0.5));
+            assert!((mid.o - pin.o).length() < 1e-7 && (mid.d - pin.d).length() < 1e-6);
+        }
+        let bad = |radius, focal_distance| {
+            cornell_camera(8, 8)
+                .with_lens(ThinLens { radius, focal_distance })
+                .is_none()
+        };
+        assert!(bad(0.0, 1.0) && bad(0.1, 0.0) && bad(f32::NAN, 1.0) && bad(0.1, f32::INFINITY));
     }
 
     #[test]

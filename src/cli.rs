@@ -298,6 +298,7 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
     let mut loaded = load_scene(&args.scene)?;
     let (w, h) = (loaded.desc.camera.width, loaded.desc.camera.height);
     loaded.set_resolution(args.width.unwrap_or(w), args.height.unwrap_or(h));
+    let file_crop = loaded.crop_rect();
     let desc = &mut loaded.desc;
     let (w, h) = (desc.camera.width, desc.camera.height);
     for (name, v) in [("--width", w), ("--height", h)] {
@@ -329,7 +330,11 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
     let crop = match (&args.crop, &args.tile) {
         (Some(c), _) => Some(parse_crop(c, w, h)?),
         (None, Some(t)) => Some(parse_tile(t, w, h, |k| std::env::var(k).ok())?),
-        (None, None) => None,
+        (None, None) => match file_crop {
+            Some(Some(r)) => Some(r),
+            Some(None) => bail!("the scene's crop window leaves no pixel of the {w}x{h} image"),
+            None => None,
+        },
     };
     let layers = Layers {
         command_line: &args.settings.layer()?,

@@ -299,7 +299,9 @@ fn view(args: &cli::RenderArgs) -> Result<()> {
     if f.save_photons.is_some() || f.load_photons.is_some() || f.checkpoint.is_some() || f.resume.is_some() {
         anyhow::bail!("view keeps nothing between runs: --save-photons, --load-photons, --checkpoint and --resume are for offline renders");
     }
-    let (loaded, settings) = cli::prepare(args)?;
+    let (loaded, mut settings) = cli::prepare(args)?;
+    // The preview shows the whole frame, whatever part the scene file asks for.
+    settings.crop = None;
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;
     let options = raytracer::viewer::ViewOptions {

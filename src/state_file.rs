@@ -206,6 +206,19 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.f32(c.fov_y_deg);
         h.u32(c.width);
         h.u32(c.height);
+        // Hashed only when present, so that the fingerprints of pinhole
+        // cameras with the default window are what they were.
+        if let Some(w) = c.window {
+            h.u32(1);
+            for v in [w.left, w.right, w.bottom, w.top] {
+                h.f32(v);
+            }
+        }
+        if let Some(l) = c.lens {
+            h.u32(2);
+            h.f32(l.radius);
+            h.f32(l.focal_distance);
+        }
     }
     h.finish()
 }

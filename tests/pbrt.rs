@@ -2,7 +2,8 @@
 //! reference image (framing, orientation, brightness), and a scene with
 //! a material the renderer lacks (pbrt-v4's hair), refused with
 //! one line naming the place, rendered with `--lenient`; a roughness
-//! texture that does not vary renders as its number does.
+//! texture that does not vary renders as its number does; a thin lens
+//! focuses; a film's crop window renders the pixels `--crop` does.
 //!
 //! The scenes are in `../shared/bitterli/` (beside the repository); without
 //! them the tests say so and pass, unless `CI` is set.
@@ -507,4 +508,133 @@ fn a_roughness_texture_that_does_not_vary_renders_as_the_number() {
     // The comparison sees the roughness at all.
     let other = rough_sphere(dir.path(), "other", "", "\"float roughness\" [ 0.1 ]");
     assert!(other != number);
+}
+
+/// Renders (direct light only, box filter, 16 spp) a checkerboard plane at
+/// z = 0, 5 in front of the camera, lit by a distant light; `lens` holds the
+/// camera's lens parameters. Returns the image.
+fn checker_plane(dir: &Path, name: &str, lens: &str, threads: &str) -> Film {
+    let scene = dir.join(format!("{name}.pbrt"));
+    std::fs::write(
+        &scene,
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 30 ] {lens}\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 32 ]\n\
+             PixelFilter \"box\"\nIntegrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+             LightSource \"distant\" \"point3 from\" [ 0 0 -1 ] \"point3 to\" [ 0 0 0 ] \"rgb L\" [ 2 2 2 ]\n\
+             Texture \"checks\" \"spectrum\" \"checkerboard\" \"float uscale\" [ 8 ] \"float vscale\" [ 8 ] \
+             \"rgb tex1\" [ 0.9 0.9 0.9 ] \"rgb tex2\" [ 0.1 0.1 0.1 ]\n\
+             Material \"diffuse\" \"texture reflectance\" \"checks\"\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -2 -2 0  2 -2 0  2 2 0  -2 2 0 ] \
+             \"point2 uv\" [ 0 0 1 0 1 1 0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+        ),
+    )
+    .unwrap();
+    let image = dir.join(format!("{name}.pfm"));
+    let run = raytracer(&[
+        "--scene",
+        scene.to_str().unwrap(),
+        "--spp",
+        "16",
+        "--threads",
+        threads,
+        "-q",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{name}: {}", String::from_utf8_lossy(&run.stderr));
+    read_image(&image).unwrap()
+}
+
+#[test]
+fn a_thin_lens_keeps_its_focal_plane_sharp_and_blurs_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let pinhole = checker_plane(dir.path(), "pinhole", "", "2");
+    let diff = |a: &Film| -> f64 {
+        let n = a.pixels.len() as f64;
+        a.pixels
+            .iter()
+            .zip(&pinhole.pixels)
+            .map(|(p, q)| (luminance(*p) - luminance(*q)).abs() as f64)
+            .sum::<f64>()
+            / n
+    };
+    let contrast = pinhole.pixels.iter().map(|p| luminance(*p)).fold(0.0f32, f32::max)
+        - pinhole.pixels.iter().map(|p| luminance(*p)).fold(f32::MAX, f32::min);
+    assert!(contrast > 0.3, "the checks show: {contrast}");
+    // In focus (the plane at the focal distance): every ray of a pixel
+    // sample meets the plane where the pinhole's does, so the picture is the
+    // pinhole's (a lambertian plane looks the same from every lens point).
+    let sharp = checker_plane(
+        dir.path(),
+        "sharp",
+        "\"float lensradius\" 0.3 \"float focaldistance\" 5",
+        "2",
+    );
+    assert!(diff(&sharp) < 1e-3, "in focus: {}", diff(&sharp));
+    // Out of focus the check edges blur: pixels move towards the mean.
+    let blurred = checker_plane(
+        dir.path(),
+        "blurred",
+        "\"float lensradius\" 0.3 \"float focaldistance\" 2",
+        "2",
+    );
+    assert!(diff(&blurred) > 0.02, "out of focus: {}", diff(&blurred));
+    // Lens samples are keyed like the others: any thread count, same image.
+    let one = checker_plane(
+        dir.path(),
+        "one",
+        "\"float lensradius\" 0.3 \"float focaldistance\" 2",
+        "1",
+    );
+    assert_eq!(one, blurred);
+}
+
+#[test]
+fn a_films_crop_window_renders_the_pixels_of_the_same_crop_of_the_frame() {
+    let Some(b) = bitterli() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(b.join("cornell-box/scene-v4.pbrt")).unwrap();
+    let film = "\"integer yresolution\" [ 1024 ] \"integer xresolution\" [ 1024 ]";
+    assert!(text.contains(film));
+    let cropped = dir.path().join("crop.pbrt");
+    std::fs::write(
+        &cropped,
+        text.replace(film, &format!("{film} \"float cropwindow\" [ 0.25 0.75 0 0.5 ]")),
+    )
+    .unwrap();
+    let render = |scene: &Path, extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "4",
+            "--integrator",
+            "path",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let run = raytracer(&args);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        read_image(&out).unwrap()
+    };
+    // The window's pixels at 32 x 32: x from 8 to 24, y from 0 to 16.
+    let by_file = render(&cropped, &[], "file.pfm");
+    assert_eq!((by_file.width, by_file.height), (16, 16));
+    let by_option = render(
+        &b.join("cornell-box/scene-v4.pbrt"),
+        &["--crop", "8,0,24,16"],
+        "option.pfm",
+    );
+    assert_eq!(by_file, by_option);
+    // --crop replaces the file's window.
+    let replaced = render(&cropped, &["--crop", "0,0,8,4"], "replaced.pfm");
+    assert_eq!((replaced.width, replaced.height), (8, 4));
 }

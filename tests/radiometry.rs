@@ -26,6 +26,8 @@ fn plane_scene(light: Light) -> SceneDesc {
             fov_y_deg: 0.5,
             width: 5,
             height: 5,
+            window: None,
+            lens: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -18,6 +18,8 @@ fn camera() -> CameraDesc {
         fov_y_deg: 40.0,
         width: 16,
         height: 16,
+        window: None,
+        lens: None,
     }
 }
 

@@ -46,6 +46,8 @@ pub fn place_and_build(mesh: &Mesh) {
             fov_y_deg: 40.0,
             width: 8,
             height: 8,
+            window: None,
+            lens: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -21,6 +21,8 @@ fn inside_camera(size: u32) -> CameraDesc {
         fov_y_deg: 60.0,
         width: size,
         height: size,
+        window: None,
+        lens: None,
     }
 }
 

@@ -424,13 +424,25 @@ pub fn add_pixel_samples(
             hammersley_shifted(s, spp, shift)
         };
         let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
-        let ray = cam.generate_ray(pos.x, pos.y);
+        let ray = camera_ray(cam, pos, &mut sampler);
         stats.camera_rays += 1;
         let l = est.li(scene, &ray, &mut sampler, stats);
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
             block.splat((x, y), pos, l);
         }
+    }
+}
+
+/// The camera ray through continuous pixel position `pos`. A camera with a
+/// lens takes the next 2D request of `sampler` for the point on the lens
+/// (after the pixel position, as pbrt-v4's camera sample); a pinhole takes
+/// none, so its images are what they were before lenses existed.
+pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> Ray {
+    if cam.has_lens() {
+        cam.generate_ray_through_lens(pos.x, pos.y, sampler.next_2d())
+    } else {
+        cam.generate_ray(pos.x, pos.y)
     }
 }
 

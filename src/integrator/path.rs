@@ -412,6 +412,8 @@ mod tests {
             fov_y_deg: 40.0,
             width: 8,
             height: 8,
+            window: None,
+            lens: None,
         };
         let mut d = SceneDesc::empty("floor", camera);
         let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));

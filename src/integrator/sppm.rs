@@ -242,7 +242,8 @@ impl checkpoint::Progressive for Progressive<'_> {
                         pass,
                     );
                     let off = settings.filter.sample(sampler.next_2d());
-                    let ray = cam.generate_ray(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+                    let pos = crate::math::Vec2::new(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
+                    let ray = super::camera_ray(cam, pos, &mut sampler);
                     st.camera_rays += 1;
                     if let Some(vp) = visible_point(scene, settings, ray, &mut sampler, &mut st, px) {
                         update(px, &vp, &map, admit, alpha);

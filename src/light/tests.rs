@@ -604,6 +604,8 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         fov_y_deg: 40.0,
         width: 16,
         height: 16,
+        window: None,
+        lens: None,
     };
     let quad = |desc: &mut SceneDesc, [a, b, c, d]: [Vec3; 4]| {
         for vertices in [[a, b, c], [a, c, d]] {

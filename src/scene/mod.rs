@@ -40,6 +40,9 @@ pub struct LoadedScene {
     /// Which image axis the scene file's field of view spans, kept when the
     /// image is resized ([`LoadedScene::set_resolution`]).
     pub fov_axis: FovAxis,
+    /// The part of the frame the scene file asks to render (pbrt-v4's
+    /// `cropwindow` and `pixelbounds`); `--crop` and `--tile` replace it.
+    pub crop: Option<FilmCrop>,
 }
 
 impl LoadedScene {
@@ -47,6 +50,55 @@ impl LoadedScene {
     /// keeping its field of view as its format defines it.
     pub fn set_resolution(&mut self, width: u32, height: u32) {
         self.desc.camera.resize(width, height, self.fov_axis);
+    }
+
+    /// The pixels of `crop` at the current image size.
+    pub fn crop_rect(&self) -> Option<Option<crate::film::PixelRect>> {
+        let c = &self.desc.camera;
+        self.crop.map(|crop| crop.rect(c.width, c.height))
+    }
+}
+
+/// A part of the frame, as a scene file gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilmCrop {
+    /// Fractions of the frame's width and height, `[x0, x1, y0, y1]` in
+    /// [0, 1]: pixels ceil(x0 w) to ceil(x1 w), as pbrt-v4 rounds them.
+    Window([f32; 4]),
+    /// Pixels `[x0, x1, y0, y1]` (ends excluded) of an image of `size`; at
+    /// another size they scale with it (rounded up, as the window is).
+    Pixels { bounds: [u32; 4], size: (u32, u32) },
+}
+
+impl FilmCrop {
+    /// The pixel rectangle at `width` x `height`; `None` when it is empty.
+    pub fn rect(&self, width: u32, height: u32) -> Option<crate::film::PixelRect> {
+        let [x0, x1, y0, y1] = match *self {
+            FilmCrop::Window(w) => {
+                // In f32, as pbrt-v4 computes it, for the same pixels.
+                let up = |f: f32, n: u32| ((n as f32 * f).ceil() as u32).min(n);
+                [up(w[0], width), up(w[1], width), up(w[2], height), up(w[3], height)]
+            }
+            FilmCrop::Pixels {
+                bounds: b,
+                size: (sw, sh),
+            } => {
+                let scale = |v: u32, from: u32, to: u32| {
+                    if from == to || from == 0 {
+                        v.min(to)
+                    } else {
+                        (v as u64 * to as u64).div_ceil(from as u64).min(to as u64) as u32
+                    }
+                };
+                [
+                    scale(b[0], sw, width),
+                    scale(b[1], sw, width),
+                    scale(b[2], sh, height),
+                    scale(b[3], sh, height),
+                ]
+            }
+        };
+        (x0 < x1 && y0 < y1).then_some(crate::film::PixelRect { x0, y0, x1, y1 })
     }
 }
 
@@ -97,15 +149,22 @@ pub struct CameraDesc {
     pub fov_y_deg: f32,
     pub width: u32,
     pub height: u32,
+    /// Another image window than [-aspect, aspect] x [-1, 1] (pbrt-v4's
+    /// `screenwindow`), in units of tan(fov_y_deg / 2); it does not change
+    /// with the image size.
+    pub window: Option<crate::camera::ScreenWindow>,
+    pub lens: Option<crate::camera::ThinLens>,
 }
 
 impl CameraDesc {
     /// Sets the image size. With [`FovAxis::Vertical`] `fov_y_deg` stays;
     /// with [`FovAxis::Shorter`] the field of view of the shorter axis
     /// (which `fov_y_deg` implies at the old size) stays, on the shorter
-    /// axis of the new size.
+    /// axis of the new size. A window of its own stays as it is, as pbrt-v4
+    /// keeps a `screenwindow` whatever the film's resolution.
     pub fn resize(&mut self, width: u32, height: u32, axis: FovAxis) {
-        if axis == FovAxis::Shorter && self.width > 0 && self.height > 0 && width > 0 && height > 0 {
+        let shorter = axis == FovAxis::Shorter && self.window.is_none();
+        if shorter && self.width > 0 && self.height > 0 && width > 0 && height > 0 {
             let tan_y = (self.fov_y_deg.to_radians() * 0.5).tan();
             let tan_shorter = tan_y * (self.width as f32 / self.height as f32).min(1.0);
             let tan_y = tan_shorter * (height as f32 / width as f32).max(1.0);
@@ -380,12 +439,14 @@ pub struct Scene {
 impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
-        let camera = Camera::new(c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height).ok_or_else(|| {
-            Error::Scene(format!(
-                "degenerate camera (position {:?}, look_at {:?}, up {:?}, fov {} degrees, {}x{})",
-                c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height
-            ))
-        })?;
+        let camera = Camera::new(c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height)
+            .and_then(|cam| cam.with_optics(c.window, c.lens))
+            .ok_or_else(|| {
+                Error::Scene(format!(
+                    "degenerate camera (position {:?}, look_at {:?}, up {:?}, fov {} degrees, {}x{}, window {:?}, lens {:?})",
+                    c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height, c.window, c.lens
+                ))
+            })?;
         let nmat = desc.materials.len() as u32;
         let mut tris = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::with_capacity(desc.triangles.len());

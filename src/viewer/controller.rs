@@ -119,7 +119,7 @@ impl Controller {
         p
     }
 
-    /// The camera of `pose`, with the field of view and size of `desc`.
+    /// The camera of `pose`, with the field of view, size, window and lens of `desc`.
     pub fn camera(&self, pose: &Pose, desc: &CameraDesc) -> Option<Camera> {
         Camera::new(
             pose.camera_position,
@@ -128,7 +128,8 @@ impl Controller {
             desc.fov_y_deg,
             desc.width,
             desc.height,
-        )
+        )?
+        .with_optics(desc.window, desc.lens)
     }
 
     /// Unit vectors towards the picture's right and straight ahead, both

@@ -21,7 +21,7 @@
 use crate::film::{Film, PixelSum};
 use crate::integrator::photon::{map_settings, with_caustics, PhotonPipeline};
 use crate::integrator::{accumulate_tiles, direct, IntegratorKind, RadianceEstimator, RayStats, RenderSettings};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::photon::trace::ResumableTrace;
 use crate::photon::{map_from_trace, PhotonMap, PhotonStats};
 use crate::sampling::{Rng, Sampler};
@@ -330,7 +330,8 @@ pub fn low_res_pass(
                     // Keyed apart from the accumulation passes' sample indices.
                     let rng = Rng::keyed(settings.seed, (by * bw + bx) as u64, u64::MAX);
                     let mut sampler = Sampler::independent(rng);
-                    let l = est.li(scene, &cam.generate_ray(cx, cy), &mut sampler, &mut stats);
+                    let ray = crate::integrator::camera_ray(cam, Vec2::new(cx, cy), &mut sampler);
+                    let l = est.li(scene, &ray, &mut sampler, &mut stats);
                     if l.is_finite() {
                         l
                     } else {

@@ -11,6 +11,7 @@
 use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::transform::{Fit, Transform};
 use super::{CameraDesc, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use crate::camera::ThinLens;
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
@@ -109,6 +110,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         desc,
         meshes,
         fov_axis: super::FovAxis::Vertical,
+        crop: None,
     })
 }
 
@@ -123,6 +125,8 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
         fov_y_deg: cam.fov_y.0,
         width: cam.width.unwrap_or(512),
         height: cam.height.unwrap_or(512),
+        window: None,
+        lens: None,
     };
     if !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0) {
         return Err(src.error(
@@ -130,6 +134,28 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
             format!("camera fov_y {} must be in (0, 180) degrees", camera.fov_y_deg),
         ));
     }
+    let lens = match (cam.lens_radius.map(|n| n.0), cam.focal_distance.map(|n| n.0)) {
+        (None, None) | (Some(0.0), _) => None,
+        (Some(radius), Some(focal_distance)) => Some(ThinLens { radius, focal_distance }),
+        _ => {
+            return Err(src.error(
+                cam_span,
+                "camera: a lens needs both lens_radius and focal_distance".to_string(),
+            ))
+        }
+    };
+    if let Some(l) = lens {
+        if !l.is_valid() {
+            return Err(src.error(
+                cam_span,
+                format!(
+                    "camera lens_radius {} and focal_distance {} must be positive (lens_radius 0: a pinhole)",
+                    l.radius, l.focal_distance
+                ),
+            ));
+        }
+    }
+    let camera = CameraDesc { lens, ..camera };
     // An absurd size is refused here, at its line, before anything is sized by it.
     crate::limits::check_resolution(camera.width, camera.height)
         .map_err(|m| src.error(cam_span.clone(), format!("camera {m}")))?;

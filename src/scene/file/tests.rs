@@ -209,6 +209,8 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n"), 5, "give `radiance` or `power`"),
         (format!("{CAMERA}[[lights]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0]]\nradiance = [1, -1, 1]\n"), 5, "radiance must be >= 0"),
         ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 180\n".into(), 1, "fov_y"),
+        (format!("{CAMERA}lens_radius = 0.1\n"), 1, "a lens needs both lens_radius and focal_distance"),
+        (format!("{CAMERA}lens_radius = 0.1\nfocal_distance = -1\n"), 1, "must be positive (lens_radius 0: a pinhole)"),
         (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 7, "ssaa = 0: must be between 1 and 64"),
         (format!("{CAMERA}\n[settings]\nssaa = 2\nthreads = 2\n"), 8, "unknown key `threads`"),
         (format!("{CAMERA}\n[settings]\npreset = \"nowhere\"\n"), 7, "no built-in scene 'nowhere'"),
@@ -616,4 +618,17 @@ fn disk_lights_are_read_and_bad_ones_refused() {
         let e = parse_str(&format!("{base}{bad}")).unwrap_err().to_string();
         assert!(e.contains(":5") && e.contains(what) && !e.contains('\n'), "{what}: {e}");
     }
+}
+
+#[test]
+fn a_camera_may_have_a_thin_lens() {
+    let text = format!("{CAMERA}lens_radius = 0.05\nfocal_distance = 3\n");
+    let scene = parse_str(&text).unwrap();
+    let lens = scene.desc.camera.lens.unwrap();
+    assert_eq!((lens.radius, lens.focal_distance), (0.05, 3.0));
+    let built = crate::Scene::build(scene.desc).unwrap();
+    assert!(built.camera.has_lens());
+    // A radius of 0 is the pinhole.
+    let text = format!("{CAMERA}lens_radius = 0\nfocal_distance = 3\n");
+    assert_eq!(parse_str(&text).unwrap().desc.camera.lens, None);
 }

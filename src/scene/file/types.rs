@@ -68,6 +68,8 @@ pub(super) struct CameraSpec {
     pub(super) fov_y: Num,
     pub(super) width: Option<u32>,
     pub(super) height: Option<u32>,
+    pub(super) lens_radius: Option<Num>,
+    pub(super) focal_distance: Option<Num>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]

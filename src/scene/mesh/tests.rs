@@ -438,6 +438,8 @@ fn hit_uv(mesh: &Mesh, x: f32, y: f32) -> crate::math::Vec2 {
         fov_y_deg: 40.0,
         width: 8,
         height: 8,
+        window: None,
+        lens: None,
     };
     let mut desc = SceneDesc::empty("uv", camera);
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));

@@ -1,5 +1,6 @@
 //! From a [`PbrtScene`] to this renderer's [`SceneDesc`], for the subset the
-//! renderer supports (see `docs/pbrt.md`): a perspective pinhole camera,
+//! renderer supports (see `docs/pbrt.md`): a perspective camera (a pinhole
+//! or a thin lens, any screen window) and the film's crop,
 //! diffuse and smooth dielectric materials, diffuse area lights on triangle
 //! meshes, full spheres and disks, point lights, triangle meshes and full spheres,
 //! and the film, sampler, filter and integrator as recommended settings.
@@ -44,6 +45,7 @@ use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
 use crate::scene::DiskDesc;
+use crate::scene::FilmCrop;
 use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::settings::{Layer, Origin, SceneSettings, Value};
 use crate::texture::Texture;
@@ -88,6 +90,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene> {
         desc: converted.desc,
         meshes: vec![report],
         fov_axis: crate::scene::FovAxis::Shorter,
+        crop: converted.crop,
     })
 }
 
@@ -99,6 +102,8 @@ pub struct Converted {
     pub warnings: Vec<String>,
     /// Whether the scene was reflected to show pbrt's (mirrored) picture.
     pub mirrored: bool,
+    /// The part of the frame the film asks for.
+    pub crop: Option<FilmCrop>,
 }
 
 /// What kind of thing an unsupported feature is, for `--lenient`'s summary.
@@ -165,7 +170,7 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         dropped_light_triangles: 0,
         black_emitters: 0,
     };
-    let (camera, mirror) = c.camera()?;
+    let (camera, mirror, crop) = c.camera()?;
     let mut desc = SceneDesc::empty(&name, camera);
     desc.settings = c.settings()?;
     c.lights(&mut desc)?;
@@ -211,6 +216,7 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         desc,
         warnings: c.warnings,
         mirrored: mirror,
+        crop,
     })
 }
 
@@ -343,8 +349,9 @@ impl<'a> Conv<'a> {
 
     // ---- camera and film ---------------------------------------------------
 
-    /// The camera and film, and whether pbrt's picture is our mirror image.
-    fn camera(&mut self) -> Result<(CameraDesc, bool)> {
+    /// The camera and film, whether pbrt's picture is our mirror image, and
+    /// the part of the frame the film asks for.
+    fn camera(&mut self) -> Result<(CameraDesc, bool, Option<FilmCrop>)> {
         let scene = self.scene;
         let film = &scene.film;
         let film_loc = film.loc.clone().unwrap_or_else(|| self.default_loc());
@@ -369,17 +376,7 @@ impl<'a> Conv<'a> {
         fp.mark_used("filename", super::ParamType::String);
         fp.mark_used("savefp16", super::ParamType::Bool);
         fp.mark_used("diagonal", super::ParamType::Float);
-        for p in ["cropwindow", "pixelbounds"] {
-            if fp.has(p) {
-                self.problem(
-                    Kind::Other,
-                    place(fp, p, &film_loc),
-                    format!("Film: \"{p}\" is not supported"),
-                );
-                fp.mark_used(p, super::ParamType::Float);
-                fp.mark_used(p, super::ParamType::Integer);
-            }
-        }
+        let crop = self.film_crop(fp, &film_loc, width, height)?;
         if fp.get_float("iso", 100.0)? != 100.0 || fp.get_float("exposuretime", 1.0)? != 1.0 {
             self.problem(
                 Kind::Other,
@@ -420,29 +417,33 @@ impl<'a> Conv<'a> {
         } else {
             [-1.0, 1.0, -1.0 / frame, 1.0 / frame]
         };
-        if window
+        // A window of the file's own (an off-centre or stretched projection),
+        // else the film's, which follows the image's shape when resized.
+        let own_window = window
             .iter()
             .zip(default)
-            .any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0))
-        {
+            .any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0));
+        if own_window && !(window.iter().all(|v| v.is_finite()) && window[0] != window[1] && window[2] != window[3]) {
             let p = if cp.has("screenwindow") {
                 "screenwindow"
             } else {
                 "frameaspectratio"
             };
-            self.problem(
-                Kind::Other,
+            return Err(located(
                 place(cp, p, &cam_loc),
-                format!("Camera: a \"{p}\" other than the film's is not supported"),
-            );
+                format!("Camera: the screen window {window:?} is empty or not finite"),
+            ));
         }
-        if cp.get_float("lensradius", 0.0)? > 0.0 {
-            self.warn(
-                place(cp, "lensradius", &cam_loc),
-                "Camera: \"lensradius\" > 0: rendered as a pinhole camera",
-            );
+        let lens_radius = cp.get_float("lensradius", 0.0)?;
+        let focal_distance = cp.get_float("focaldistance", 1e6)?;
+        if lens_radius > 0.0 && !(lens_radius.is_finite() && focal_distance > 0.0 && focal_distance.is_finite()) {
+            return Err(located(
+                place(cp, "focaldistance", &cam_loc),
+                format!(
+                    "Camera: lens radius {lens_radius} and focal distance {focal_distance} must be finite and positive"
+                ),
+            ));
         }
-        cp.mark_used("focaldistance", super::ParamType::Float);
         cp.mark_used("shutteropen", super::ParamType::Float);
         cp.mark_used("shutterclose", super::ParamType::Float);
         self.read.push(cp);
@@ -468,12 +469,38 @@ impl<'a> Conv<'a> {
         let (forward, up) = (z / lz, y / ly);
         // pbrt's ray through screen point (sx, sy) goes along sx t X + sy t Y + Z.
         let tan = (fov.to_radians() * 0.5).tan() * lx / lz;
-        let tan_y = if width >= height {
-            tan
+        let (fov_y_deg, window) = if own_window {
+            // The window in units of t itself.
+            let [left, right, bottom, top] = window;
+            (
+                2.0 * tan.atan().to_degrees(),
+                Some(crate::camera::ScreenWindow {
+                    left,
+                    right,
+                    bottom,
+                    top,
+                }),
+            )
         } else {
-            tan * height as f32 / width as f32
+            let tan_y = if width >= height {
+                tan
+            } else {
+                tan * height as f32 / width as f32
+            };
+            (2.0 * tan_y.atan().to_degrees(), None)
         };
-        let fov_y_deg = 2.0 * tan_y.atan().to_degrees();
+        // pbrt's lens lies in camera space's xy plane and focuses at camera z
+        // = focaldistance: world lengths lx and lz times those.
+        let lens = (lens_radius > 0.0).then_some(crate::camera::ThinLens {
+            radius: lens_radius * lx,
+            focal_distance: focal_distance * lz,
+        });
+        if lens.is_some_and(|l| !l.is_valid()) {
+            return Err(located(
+                place(cp, "lensradius", &cam_loc),
+                "Camera: the lens is degenerate under the camera transformation",
+            ));
+        }
         let mirror = forward.cross(up).dot(x) < 0.0;
         Ok((
             CameraDesc {
@@ -483,9 +510,76 @@ impl<'a> Conv<'a> {
                 fov_y_deg,
                 width,
                 height,
+                window,
+                lens,
             },
             mirror,
+            crop,
         ))
+    }
+
+    /// The part of the frame the film asks for: `cropwindow` (fractions of
+    /// the frame) or `pixelbounds` (pixels), as pbrt-v4's `FilmBaseParameters`
+    /// reads them: the crop window wins when both are given (a warning),
+    /// each is clamped to the frame (pixel bounds beyond it with a warning),
+    /// and an empty result is an error.
+    fn film_crop(&mut self, fp: &Params, film_loc: &Loc, width: u32, height: u32) -> Result<Option<FilmCrop>> {
+        let cr = fp.get_floats("cropwindow");
+        let pb = fp.get_ints("pixelbounds");
+        let crop = if !cr.is_empty() {
+            let loc = place(fp, "cropwindow", film_loc).clone();
+            if cr.len() != 4 || cr.iter().any(|v| !v.is_finite()) {
+                return Err(located(
+                    &loc,
+                    format!("Film: \"cropwindow\" needs four finite numbers, not {cr:?}"),
+                ));
+            }
+            if !pb.is_empty() {
+                self.warn(
+                    &loc,
+                    "Film: both \"pixelbounds\" and \"cropwindow\" given: the crop window is used",
+                );
+            }
+            let c = |v: f32| v.clamp(0.0, 1.0);
+            FilmCrop::Window([
+                c(cr[0].min(cr[1])),
+                c(cr[0].max(cr[1])),
+                c(cr[2].min(cr[3])),
+                c(cr[2].max(cr[3])),
+            ])
+        } else if !pb.is_empty() {
+            let loc = place(fp, "pixelbounds", film_loc).clone();
+            if pb.len() != 4 {
+                return Err(located(
+                    &loc,
+                    format!("Film: \"pixelbounds\" needs four integers, not {}", pb.len()),
+                ));
+            }
+            let clamp = |v: i32, hi: u32| v.clamp(0, hi as i32) as u32;
+            let b = [
+                clamp(pb[0], width),
+                clamp(pb[1], width),
+                clamp(pb[2], height),
+                clamp(pb[3], height),
+            ];
+            if b.iter().zip(pb).any(|(&c, &v)| c as i64 != v as i64) {
+                self.warn(&loc, "Film: \"pixelbounds\" reach beyond the image: clamped to it");
+            }
+            FilmCrop::Pixels {
+                bounds: b,
+                size: (width, height),
+            }
+        } else {
+            return Ok(None);
+        };
+        if crop.rect(width, height).is_none() {
+            let p = if cr.is_empty() { "pixelbounds" } else { "cropwindow" };
+            return Err(located(
+                place(fp, p, film_loc),
+                format!("Film: \"{p}\" leaves no pixel of the {width}x{height} image"),
+            ));
+        }
+        Ok(Some(crop))
     }
 
     /// Where defaults "are": line 1 of the top-level file.
@@ -1814,6 +1908,125 @@ mod tests {
         assert!((tall - expected).abs() < 1e-3, "{tall} vs {expected}");
         let c = cam(100, 200);
         assert_eq!((c.width, c.height), (100, 200));
+    }
+
+    #[test]
+    fn screen_window_and_thin_lens_give_pbrts_rays() {
+        // `Scale -1 1 1` first: pbrt's camera x is world -x, no reflection,
+        // so world coordinates are pbrt's.
+        let c = ok(
+            "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ] \
+             \"float screenwindow\" [ -0.5 1.5 -1 0.25 ] \"float lensradius\" 0.3 \"float focaldistance\" 4\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n",
+        );
+        assert!(!c.mirrored);
+        let lens = c.desc.camera.lens.unwrap();
+        assert_eq!((lens.radius, lens.focal_distance), (0.3, 4.0));
+        let cam = Scene::build(c.desc.clone()).unwrap().camera;
+        let t = 20f32.to_radians().tan();
+        let eye = Vec3::new(0.0, 0.0, -5.0);
+        for (x, y, u) in [
+            (0.0, 0.0, (0.5, 0.5)),
+            (13.5, 7.25, (0.1, 0.8)),
+            (39.0, 19.5, (0.9, 0.35)),
+        ] {
+            // pbrt-v4's PerspectiveCamera::GenerateRay, in its camera space,
+            // then to the world (camera x is world -x here).
+            let sx = -0.5 + x / 40.0 * 2.0;
+            let sy = 0.25 - y / 20.0 * 1.25;
+            let d = Vec3::new(sx * t, sy * t, 1.0);
+            let focus = d * 4.0;
+            let p = crate::sampling::concentric_disk(glam::Vec2::new(u.0, u.1)) * 0.3;
+            let o = Vec3::new(p.x, p.y, 0.0);
+            let to_world = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+            let (o, d) = (eye + to_world(o), to_world((focus - o).normalize()));
+            let r = cam.generate_ray_through_lens(x, y, glam::Vec2::new(u.0, u.1));
+            assert!(
+                (r.o - o).length() < 1e-5 && (r.d - d).length() < 1e-5,
+                "({x}, {y}): {r:?} vs {o} {d}"
+            );
+        }
+        // An explicit window keeps its shape when the image is resized, as in pbrt.
+        let mut desc = c.desc.camera.clone();
+        desc.resize(80, 20, crate::scene::FovAxis::Shorter);
+        assert_eq!(
+            (desc.fov_y_deg, desc.window),
+            (c.desc.camera.fov_y_deg, c.desc.camera.window)
+        );
+        // frameaspectratio: a square window on a 2:1 film stretches it.
+        let c = ok(
+            "Camera \"perspective\" \"float fov\" [ 40 ] \"float frameaspectratio\" 1\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n",
+        );
+        let w = c.desc.camera.window.unwrap();
+        assert_eq!([w.left, w.right, w.bottom, w.top], [-1.0, 1.0, -1.0, 1.0]);
+        // The film's own window is no window of ours (the images stay as they were).
+        let c = ok("Camera \"perspective\" \"float screenwindow\" [ -2 2 -1 1 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n");
+        assert_eq!((c.desc.camera.window, c.desc.camera.lens), (None, None));
+        for (params, message) in [
+            (
+                "\"float screenwindow\" [ 1 1 -1 1 ]",
+                "dir/main.pbrt:1: Camera: the screen window [1.0, 1.0, -1.0, 1.0] is empty or not finite",
+            ),
+            (
+                "\"float lensradius\" 0.1 \"float focaldistance\" -2",
+                "dir/main.pbrt:1: Camera: lens radius 0.1 and focal distance -2 must be finite and positive",
+            ),
+        ] {
+            let e = convert_text(&format!("Camera \"perspective\" {params}\nWorldBegin\n"), false).unwrap_err();
+            assert_eq!(e.to_string(), message);
+        }
+    }
+
+    #[test]
+    fn crop_window_and_pixel_bounds_pick_pbrts_pixels() {
+        let film = |params: &str| {
+            convert_text(
+                &format!(
+                    "Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ] {params}\nWorldBegin\n"
+                ),
+                false,
+            )
+        };
+        let rect = |c: &Converted, w, h| c.crop.unwrap().rect(w, h).map(|r| [r.x0, r.x1, r.y0, r.y1]);
+        // Fractions rounded up, ends sorted and clamped, as pbrt-v4's film.
+        let c = film("\"float cropwindow\" [ 0.75 0.21 0 0.5 ]").unwrap();
+        assert_eq!(rect(&c, 40, 20), Some([9, 30, 0, 10]));
+        assert_eq!(rect(&c, 80, 40), Some([17, 60, 0, 20]));
+        let c = film("\"float cropwindow\" [ -1 0.5 0.5 7 ]").unwrap();
+        assert_eq!(rect(&c, 40, 20), Some([0, 20, 10, 20]));
+        // Pixel bounds: clamped to the image with a warning; scaled with it.
+        let c = film("\"integer pixelbounds\" [ 5 15 2 30 ]").unwrap();
+        assert_eq!(rect(&c, 40, 20), Some([5, 15, 2, 20]));
+        assert_eq!(rect(&c, 80, 40), Some([10, 30, 4, 40]));
+        assert_eq!(rect(&c, 20, 10), Some([3, 8, 1, 10]));
+        assert!(c.warnings.iter().any(|w| w.contains("clamped")), "{:?}", c.warnings);
+        // Both: the crop window, with a warning.
+        let c = film("\"integer pixelbounds\" [ 5 15 2 30 ] \"float cropwindow\" [ 0 0.5 0 1 ]").unwrap();
+        assert_eq!(rect(&c, 40, 20), Some([0, 20, 0, 20]));
+        assert!(c.warnings.iter().any(|w| w.contains("the crop window is used")));
+        assert!(film("").unwrap().crop.is_none());
+        for (params, message) in [
+            (
+                "\"float cropwindow\" [ 0.5 0.5 0 1 ]",
+                "dir/main.pbrt:1: Film: \"cropwindow\" leaves no pixel of the 40x20 image",
+            ),
+            (
+                "\"float cropwindow\" [ 0 1 0 ]",
+                "dir/main.pbrt:1: Film: \"cropwindow\" needs four finite numbers, not [0.0, 1.0, 0.0]",
+            ),
+            (
+                "\"integer pixelbounds\" [ 50 60 0 10 ]",
+                "dir/main.pbrt:1: Film: \"pixelbounds\" leaves no pixel of the 40x20 image",
+            ),
+            (
+                "\"integer pixelbounds\" [ 1 2 ]",
+                "dir/main.pbrt:1: Film: \"pixelbounds\" needs four integers, not 2",
+            ),
+        ] {
+            assert_eq!(film(params).unwrap_err().to_string(), message);
+        }
     }
 
     fn light_normal(text: &str) -> Vec3 {
