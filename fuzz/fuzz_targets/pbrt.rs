@@ -1,7 +1,8 @@
 //! pbrt-v4 scene files through the library's pbrt reader
 //! (`scene::pbrt::parse_bytes`), the converter (`pbrt::convert::convert`,
 //! lenient, so that unsupported features are skipped rather than ending the
-//! run early) and into a built scene (BVH included).
+//! run early), the film's crop at a few sizes, and into a built scene (BVH
+//! included).
 //!
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
@@ -51,6 +52,13 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     if let Ok(converted) = convert(&parsed, path, true) {
+        // The film's crop at its own size and at two others (a resize).
+        if let Some(crop) = converted.crop {
+            let c = &converted.desc.camera;
+            for (w, h) in [(c.width, c.height), (c.width * 2 + 1, c.height / 3 + 1), (1, 1)] {
+                let _ = crop.rect(w, h);
+            }
+        }
         let _ = Scene::build(converted.desc);
     }
 });
