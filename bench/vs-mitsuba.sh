@@ -14,6 +14,9 @@
 # REF_SPP_CORNELL  references of cornell, rendered at 512 x 512 [512]
 # REF_SPP_BOX      references of cornell-box at the case's size [1024]
 # MITSUBA_K_SPP    the Mitsuba row whose K the ratios divide by [256]
+# OURS_PATH_VARIANTS  our path tracer's variants, each a row at every count:
+#                  options separated by spaces, variants by ";" ["": the
+#                  scene's settings], e.g. ";--sampler zsobol"
 # SKIP_PHOTON=1    leaves out our photon integrators
 # CHECK_ONLY=1     only the reference checks (agreement, framing)
 # MITSUBA_RR_DEPTH a diagnostic: Mitsuba's Russian roulette from this depth (its default 5)

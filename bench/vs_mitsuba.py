@@ -54,6 +54,9 @@ CHECK_ONLY = os.environ.get("CHECK_ONLY", "0") == "1"
 # A diagnostic: Mitsuba's path tracer with Russian roulette from this depth
 # (its default is 5; ours starts at 2). Empty: the scene file's integrator.
 MITSUBA_RR_DEPTH = os.environ.get("MITSUBA_RR_DEPTH", "")
+# Variants of our path tracer, each a row at every sample count: extra
+# options, variants separated by ";" (an empty variant: the scene's settings).
+OURS_PATH_VARIANTS = [v.split() for v in os.environ.get("OURS_PATH_VARIANTS", "").split(";")]
 CSV_OUT = os.environ.get("CSV_OUT", os.path.join("docs", "vs-mitsuba.csv"))
 PNG_OUT = os.environ.get("PNG_OUT", os.path.join("docs", "vs-mitsuba.png"))
 
@@ -277,9 +280,11 @@ def main():
                     warm, jit = mts.timed(spp, spp, img)
                     record("mitsuba", "path", f"{spp} spp", spp, warm, img, f"{cold:.3f}", f"{jit:.3f}")
                 else:
-                    img = os.path.join(IMGS, f"{name}-ours-path-{spp}.exr")
-                    secs = ours(common + ["--integrator", "path", "--spp", str(spp)], img)
-                    record("ours", "path", f"{spp} spp", spp, secs, img)
+                    for k, variant in enumerate(OURS_PATH_VARIANTS):
+                        img = os.path.join(IMGS, f"{name}-ours-path-{spp}-{k}.exr")
+                        secs = ours(common + ["--integrator", "path", "--spp", str(spp)] + variant, img)
+                        label = " ".join([f"{spp} spp"] + variant)
+                        record("ours", "path", label, spp, secs, img)
         if not SKIP_PHOTON:
             for j, (integ, label, extra_args) in enumerate(PHOTON.get(name, PHOTON.get(f"{scene}-256", []))):
                 img = os.path.join(IMGS, f"{name}-ours-{integ}-{j}.exr")

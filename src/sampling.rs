@@ -191,6 +191,48 @@ fn sobol_2d(rev_index: u32, key: u64) -> (u32, u32) {
     ((both >> 32) as u32, both as u32)
 }
 
+/// The point of a Z-order request: the global index (a pixel's Morton index
+/// followed by the sample index, bit reversed) nested-uniform scrambled with
+/// a seed of the request's own, then Sobol dimensions 0 and 1 at its low 32
+/// bits (all that a 32-bit point of those dimensions depends on), each
+/// Owen-scrambled as in [`sobol_2d`]. The scramble maps every aligned block
+/// of 2^k indices onto another, so the samples of a pixel, of two pixels
+/// side by side, of a 2 x 2 square of pixels and so on are each a (0, k, 2)-net.
+fn zsobol_2d(rev_global: u64, key: u64) -> (u32, u32) {
+    let (_, s1, s2) = seeds(key);
+    let scrambled = laine_karras64(rev_global, mix64(key ^ 0x6A09_E667_F3BC_C908));
+    // The scrambled index's low 32 bits are the reversed top half.
+    let index = ((scrambled >> 32) as u32).reverse_bits();
+    // As in `sobol_2d`: dimension 0's point reversed is the index itself.
+    let y = by_bytes(&SOBOL_1_REVERSED_BYTES, index);
+    let (a, b) = (laine_karras(index, s1), laine_karras(y, s2));
+    let both = (((b as u64) << 32) | a as u64).reverse_bits();
+    ((both >> 32) as u32, both as u32)
+}
+
+/// [`laine_karras`] over 64 bits (its even multipliers widened): each
+/// output bit depends only on the input bits at or below it, a bijection.
+fn laine_karras64(mut v: u64, seed: u64) -> u64 {
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50_b47c_e1d2_a5b6);
+    v ^= v.wrapping_mul(0xb82f_1e52_7a3c_9d14);
+    v ^= v.wrapping_mul(0xc7af_e638_4b91_f2e2);
+    v ^ v.wrapping_mul(0x8d22_f6e6_35c8_1a0e)
+}
+
+/// The Morton (Z-order) index of pixel (x, y): x in the even bits, y in the odd.
+pub fn morton2(x: u32, y: u32) -> u64 {
+    fn spread(v: u32) -> u64 {
+        let mut v = v as u64;
+        v = (v | (v << 16)) & 0x0000_FFFF_0000_FFFF;
+        v = (v | (v << 8)) & 0x00FF_00FF_00FF_00FF;
+        v = (v | (v << 4)) & 0x0F0F_0F0F_0F0F_0F0F;
+        v = (v | (v << 2)) & 0x3333_3333_3333_3333;
+        (v | (v << 1)) & 0x5555_5555_5555_5555
+    }
+    spread(x) | (spread(y) << 1)
+}
+
 /// A 0.32 fixed-point fraction as an f32 in [0, 1) (24 bits kept).
 fn fraction(v: u32) -> f32 {
     (v >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
@@ -211,13 +253,23 @@ fn fraction(v: u32) -> f32 {
 /// pure function of (seed, pixel, sample index, dimension), for any number
 /// of samples per pixel, and in any order. After `SOBOL_DIMENSIONS`
 /// requests (long paths) the rest come from the keyed PCG32 stream.
+///
+/// `zsobol`: pbrt-v4's `ZSobolSampler` idea (Ahmed and Wonka 2020): the
+/// samples of all pixels are one Sobol sequence, pixel after pixel in Z
+/// order, so that neighbouring pixels' samples, which a pixel filter mixes,
+/// are stratified together; each request scrambles the whole index and the
+/// point with seeds of its own (hash(seed, dimension)), so it needs the
+/// render's samples per pixel up front.
 #[derive(Clone, Debug)]
 pub struct Sampler {
     sobol: bool,
-    /// hash(seed, pixel)
+    /// hash(seed, pixel); hash(seed) for `zsobol`.
     key: u64,
     /// The sample index, bit reversed.
     rev_index: u32,
+    /// `zsobol`: the pixel's Morton index followed by the sample index, bit
+    /// reversed.
+    rev_global: Option<u64>,
     dim: u32,
     rng: Rng,
 }
@@ -233,6 +285,24 @@ impl Sampler {
             sobol,
             key: mix64(seed ^ mix64(pixel ^ 0x2545_F491_4F6C_DD1D)),
             rev_index: index.reverse_bits(),
+            rev_global: None,
+            dim: 0,
+            rng: Rng::keyed(seed, pixel, index as u64),
+        }
+    }
+
+    /// The Z-order sampler of sample `index` (below 2^`log2_spp`) of pixel
+    /// (x, y) (`pixel` is its index in the full frame, for the PCG32 stream
+    /// past the Sobol requests). Every value is a pure function of (seed, x,
+    /// y, log2_spp, index, dimension).
+    pub fn zsobol(seed: u64, x: u32, y: u32, log2_spp: u32, pixel: u64, index: u32) -> Self {
+        debug_assert!(log2_spp < 32 && (index as u64) < 1u64 << log2_spp);
+        let global = (morton2(x, y) << log2_spp) | index as u64;
+        Sampler {
+            sobol: true,
+            key: mix64(seed ^ 0x2545_F491_4F6C_DD1D),
+            rev_index: 0,
+            rev_global: Some(global.reverse_bits()),
             dim: 0,
             rng: Rng::keyed(seed, pixel, index as u64),
         }
@@ -244,6 +314,7 @@ impl Sampler {
             sobol: false,
             key: 0,
             rev_index: 0,
+            rev_global: None,
             dim: 0,
             rng,
         }
@@ -289,21 +360,21 @@ impl Sampler {
 
     /// Uniform in [0, 1).
     pub fn next_f32(&mut self) -> f32 {
-        match self.next_key() {
-            Some(key) => fraction(sobol_1d(self.rev_index, key)),
-            None => self.rng.next_f32(),
+        match (self.next_key(), self.rev_global) {
+            (Some(key), None) => fraction(sobol_1d(self.rev_index, key)),
+            (Some(key), Some(g)) => fraction(zsobol_2d(g, key).0),
+            (None, _) => self.rng.next_f32(),
         }
     }
 
     /// Uniform in [0, 1)^2.
     pub fn next_2d(&mut self) -> Vec2 {
-        match self.next_key() {
-            Some(key) => {
-                let (x, y) = sobol_2d(self.rev_index, key);
-                Vec2::new(fraction(x), fraction(y))
-            }
-            None => self.rng.next_2d(),
-        }
+        let (x, y) = match (self.next_key(), self.rev_global) {
+            (Some(key), None) => sobol_2d(self.rev_index, key),
+            (Some(key), Some(g)) => zsobol_2d(g, key),
+            (None, _) => return self.rng.next_2d(),
+        };
+        Vec2::new(fraction(x), fraction(y))
     }
 }
 
@@ -694,11 +765,57 @@ mod tests {
     }
 
     #[test]
+    fn zsobol_samples_of_a_pixel_and_of_neighbouring_pixels_form_nets() {
+        // 16 samples a pixel; the pixels' Morton blocks: (6, 2), (7, 2),
+        // (6, 3), (7, 3) are one 2 x 2 square; x from 4 to 8 and y from 0 to
+        // 4 one 4 x 4 square.
+        let log2 = 4;
+        let points = |pixels: &[(u32, u32)], key: u64| -> Vec<(u32, u32)> {
+            pixels
+                .iter()
+                .flat_map(|&(x, y)| (0..16u64).map(move |i| ((morton2(x, y) << log2) | i).reverse_bits()))
+                .map(|g| zsobol_2d(g, key))
+                .collect()
+        };
+        let square = |x0: u32, y0: u32, n: u32| -> Vec<(u32, u32)> {
+            (y0..y0 + n).flat_map(|y| (x0..x0 + n).map(move |x| (x, y))).collect()
+        };
+        let mut r = Rng::new(5, 1);
+        for _ in 0..20 {
+            let key = ((r.next_u32() as u64) << 32) | r.next_u32() as u64;
+            assert!(is_02_net(&points(&[(6, 3)], key), 4), "a pixel");
+            assert!(is_02_net(&points(&[(6, 3), (7, 3)], key), 5), "two pixels side by side");
+            assert!(is_02_net(&points(&square(6, 2, 2), key), 6), "a 2 x 2 square");
+            assert!(is_02_net(&points(&square(4, 0, 4), key), 8), "a 4 x 4 square");
+            // The per-pixel sampler's pixels are each a net, but not together.
+            let padded: Vec<(u32, u32)> = square(6, 2, 2)
+                .iter()
+                .flat_map(|&(x, y)| {
+                    let k = mix64(key ^ (y * 64 + x) as u64);
+                    (0..16u32).map(move |i| sobol_2d(i.reverse_bits(), k))
+                })
+                .collect();
+            assert!(!is_02_net(&padded, 6));
+        }
+        // Two requests of a sample are not the same point, and a 1D request
+        // reads the 2D point's first coordinate.
+        let (mut a, mut b) = (Sampler::zsobol(9, 6, 3, 4, 99, 5), Sampler::zsobol(9, 6, 3, 4, 99, 5));
+        let first = a.next_2d();
+        assert_eq!(b.next_f32(), first.x);
+        assert_ne!(a.next_2d(), first);
+    }
+
+    #[test]
     fn a_skipped_request_leaves_the_next_ones_as_they_were() {
         for sobol in [true, false] {
             // Past the Sobol dimensions too, where the PCG32 stream takes over.
             for before in [0, 5, SOBOL_DIMENSIONS as usize - 1, SOBOL_DIMENSIONS as usize + 3] {
-                let (mut a, mut b) = (Sampler::new(sobol, 4, 77, 9), Sampler::new(sobol, 4, 77, 9));
+                let make = |z| match z {
+                    true => Sampler::zsobol(4, 13, 5, 6, 77, 9),
+                    false => Sampler::new(sobol, 4, 77, 9),
+                };
+                let zsobol = sobol && before == 5;
+                let (mut a, mut b) = (make(zsobol), make(zsobol));
                 for _ in 0..before {
                     a.next_2d();
                     b.next_2d();

@@ -69,31 +69,41 @@ fn bands_rendered_by_separate_processes_merge_to_the_full_render() {
 #[test]
 fn splatting_filters_stitch_crops_exactly() {
     // A tent or Gaussian spreads each sample over neighbouring pixels, so a
-    // crop's edge needs the samples of the pixels beyond it.
+    // crop's edge needs the samples of the pixels beyond it. The Z-order
+    // sampler's points depend on the pixel's place in the frame, not in the crop.
     let dir = tempfile::tempdir().unwrap();
-    for filter in ["tent", "gaussian"] {
-        let common = ["--integrator", "path", "--spp", "3", "--filter", filter];
-        let full = format!("full-{filter}.pfm");
+    for (filter, sampler) in [("tent", "sobol"), ("gaussian", "sobol"), ("tent", "zsobol")] {
+        let common = [
+            "--integrator",
+            "path",
+            "--spp",
+            "3",
+            "--filter",
+            filter,
+            "--sampler",
+            sampler,
+        ];
+        let full = format!("full-{filter}-{sampler}.pfm");
         render(dir.path(), &full, &common);
         let mut names = vec![];
         for (i, crop) in ["0,0,33,30", "33,0,72,30", "0,30,33,56", "33,30,72,56"]
             .iter()
             .enumerate()
         {
-            let name = format!("{filter}{i}.exr");
+            let name = format!("{filter}-{sampler}{i}.exr");
             let mut a = common.to_vec();
             a.extend(["--crop", crop, "--threads", "1"]);
             render(dir.path(), &name, &a);
             names.push(name);
         }
-        let merged = format!("merged-{filter}.pfm");
+        let merged = format!("merged-{filter}-{sampler}.pfm");
         let mut a = vec!["merge", merged.as_str()];
         a.extend(names.iter().map(String::as_str));
         let o = run(&a, dir.path());
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         assert!(
             std::fs::read(dir.path().join(&full)).unwrap() == std::fs::read(dir.path().join(&merged)).unwrap(),
-            "{filter}: merged crops differ from the full render"
+            "{filter}, {sampler}: merged crops differ from the full render"
         );
     }
 }

@@ -405,7 +405,7 @@ pub fn add_pixel_samples(
 ) {
     let cam = &scene.camera;
     let spp = settings.samples_per_pixel();
-    let sobol = settings.sampler == SamplerKind::Sobol;
+    let sobol = settings.sampler != SamplerKind::Independent;
     let n = (spp as f64).sqrt().round() as u32;
     let grid = n * n == spp;
     let pixel = y as u64 * cam.width as u64 + x as u64;
@@ -415,7 +415,7 @@ pub fn add_pixel_samples(
         Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
     };
     for s in samples {
-        let mut sampler = Sampler::new(sobol, settings.seed, pixel, s);
+        let mut sampler = camera_sampler(settings.sampler, settings.seed, x, y, cam.width, spp, s);
         let u = if sobol {
             sampler.next_2d()
         } else if grid {
@@ -431,6 +431,26 @@ pub fn add_pixel_samples(
         if l.is_finite() {
             block.splat((x, y), pos, l);
         }
+    }
+}
+
+/// The sampler of sample `s` of pixel (x, y) of a frame `width` pixels wide,
+/// in a render of `spp` samples a pixel. The Z-order sampler's sequence is
+/// laid out for `spp` rounded up to a power of two; samples past that (the
+/// preview's endless passes) take the Sobol sampler's points.
+pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, spp: u32, s: u32) -> Sampler {
+    let pixel = y as u64 * width as u64 + x as u64;
+    match kind {
+        SamplerKind::ZSobol => {
+            let log2 = spp.max(1).checked_next_power_of_two().map_or(31, u32::trailing_zeros);
+            if (s as u64) < 1u64 << log2 {
+                Sampler::zsobol(seed, x, y, log2, pixel, s)
+            } else {
+                Sampler::new(true, seed, pixel, s)
+            }
+        }
+        SamplerKind::Sobol => Sampler::new(true, seed, pixel, s),
+        SamplerKind::Independent => Sampler::new(false, seed, pixel, s),
     }
 }
 

@@ -448,17 +448,17 @@ mod tests {
         use super::{LightSampling, PathTracer};
         use crate::integrator::{RadianceEstimator, RayStats, SamplerKind};
         use crate::math::Ray;
-        use crate::sampling::Sampler;
         let scene = floor_under_quad();
         // Reflected radiance albedo / pi * E, E = L pi F (the rectangle form factor, a = b = 1).
         let f = 2.0 * (1.0 / 2f64.sqrt()) * (1.0 / 2f64.sqrt()).atan() / (2.0 * std::f64::consts::PI);
         let expected = 0.5 * 2.0 * f;
         let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0));
         // Pixels of 16 samples: a pixel's Sobol samples are stratified
-        // together, different pixels' are independent, so the standard error
-        // comes from the spread of the pixel means.
+        // together, different pixels' are independent (or, Z-order, stratified
+        // together too, which only makes the spread an overestimate), so the
+        // standard error comes from the spread of the pixel means.
         let (pixels, spp) = (2500u64, 16u32);
-        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent, SamplerKind::ZSobol] {
             let mut errors = vec![];
             for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
                 let est = PathTracer {
@@ -470,7 +470,8 @@ mod tests {
                 for pixel in 0..pixels {
                     let mut pixel_sum = 0.0f64;
                     for i in 0..spp {
-                        let mut sampler = Sampler::new(kind == SamplerKind::Sobol, 3, pixel, i);
+                        let (x, y) = ((pixel % 50) as u32, (pixel / 50) as u32);
+                        let mut sampler = crate::integrator::camera_sampler(kind, 3, x, y, 50, spp, i);
                         pixel_sum += est.li(&scene, &ray, &mut sampler, &mut stats).x as f64;
                     }
                     let v = pixel_sum / spp as f64;

@@ -234,13 +234,8 @@ impl checkpoint::Progressive for Progressive<'_> {
                 let y = rect.y0 + row as u32;
                 for (i, px) in states.iter_mut().enumerate() {
                     let x = rect.x0 + i as u32;
-                    let pixel = y as u64 * cam.width as u64 + x as u64;
-                    let mut sampler = Sampler::new(
-                        settings.sampler == crate::settings::SamplerKind::Sobol,
-                        settings.seed,
-                        pixel,
-                        pass,
-                    );
+                    let mut sampler =
+                        super::camera_sampler(settings.sampler, settings.seed, x, y, cam.width, settings.passes, pass);
                     let off = settings.filter.sample(sampler.next_2d());
                     let pos = crate::math::Vec2::new(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
                     let ray = super::camera_ray(cam, pos, &mut sampler);

@@ -124,15 +124,19 @@ pub enum SamplerKind {
     Sobol,
     /// A PCG32 stream per sample; the pixel position stratified on a grid.
     Independent,
+    /// Owen-scrambled Sobol points of one sequence over all pixels in Z
+    /// order (pbrt-v4's `zsobol`): neighbouring pixels stratified together.
+    ZSobol,
 }
 
 impl SamplerKind {
-    pub const ALL: [SamplerKind; 2] = [Self::Sobol, Self::Independent];
+    pub const ALL: [SamplerKind; 3] = [Self::Sobol, Self::Independent, Self::ZSobol];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::Sobol => "sobol",
             Self::Independent => "independent",
+            Self::ZSobol => "zsobol",
         }
     }
 

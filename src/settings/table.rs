@@ -9,7 +9,7 @@ const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const GATHER_FILTERS: &[&str] = &["none", "normal", "report"];
 const LIGHT_SAMPLING: &[&str] = &["mis", "light", "bsdf"];
-const SAMPLERS: &[&str] = &["sobol", "independent"];
+const SAMPLERS: &[&str] = &["sobol", "independent", "zsobol"];
 
 /// Largest count of samples, passes and the like we accept (2^20).
 const MILLION: u64 = 1 << 20;
@@ -80,8 +80,9 @@ pub const SETTINGS: &[Spec] = &[
         kind: Kind::Choice(SAMPLERS),
         default: DefaultValue::Name("sobol"),
         doc: "Random numbers of each camera sample: sobol (Owen-scrambled Sobol points, one dimension per request, \
-              stratified over a pixel's samples), independent (a random stream per sample, the pixel position \
-              stratified on a grid)",
+              stratified over a pixel's samples), zsobol (the same, one sequence over all pixels in Z order: \
+              neighbouring pixels stratified together), independent (a random stream per sample, the pixel \
+              position stratified on a grid)",
         in_scene_file: true,
         only_for: &[],
     },

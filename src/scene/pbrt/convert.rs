@@ -621,6 +621,23 @@ impl<'a> Conv<'a> {
             .or(s.loc.as_ref())
             .cloned();
         set(self, spp_loc.as_ref(), "spp", Value::Int(spp.max(0) as u64));
+        // pbrt-v4's samplers onto ours: its default and Z-order `zsobol`;
+        // the other low-discrepancy ones onto the per-pixel Sobol points; the
+        // random and jittered ones onto independent samples (a grid when
+        // the count is a square).
+        let sampler = match s.ty.as_str() {
+            "zsobol" => "zsobol",
+            "independent" | "stratified" => "independent",
+            "sobol" | "paddedsobol" | "halton" | "pmj02bn" => "sobol",
+            other => {
+                self.warn(
+                    s.loc.as_ref().unwrap_or(&self.default_loc()),
+                    format!("Sampler \"{other}\" is not supported: sobol is used"),
+                );
+                "sobol"
+            }
+        };
+        set(self, s.loc.as_ref(), "sampler", Value::Name(sampler));
         let seed = sp.get_int("seed", 0)?;
         if let Some(l) = sp.loc_of("seed").cloned() {
             set(self, Some(&l), "seed", Value::Int(seed.max(0) as u64));
@@ -2487,6 +2504,16 @@ mod tests {
         assert_eq!(d.preset.get("spp").map(|v| v.0), Some(Value::Int(16)));
         assert_eq!(d.preset.get("max_depth").map(|v| v.0), Some(Value::Int(5)));
         assert_eq!(d.preset.get("filter").map(|v| v.0), Some(Value::Name("gaussian")));
+        assert_eq!(d.preset.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
+        assert_eq!(s.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
+        for (pbrt, ours) in [("sobol", "sobol"), ("pmj02bn", "sobol"), ("stratified", "independent")] {
+            let d = ok(&format!("Sampler \"{pbrt}\"\nWorldBegin\n")).desc.settings;
+            assert_eq!(
+                d.scene_file.get("sampler").map(|v| v.0),
+                Some(Value::Name(ours)),
+                "{pbrt}"
+            );
+        }
     }
 
     #[test]
