@@ -332,7 +332,10 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
         (None, Some(t)) => Some(parse_tile(t, w, h, |k| std::env::var(k).ok())?),
         (None, None) => match file_crop {
             Some(Some(r)) => Some(r),
-            Some(None) => bail!("the scene's crop window leaves no pixel of the {w}x{h} image"),
+            Some(None) => bail!(
+                "{}: the film's crop leaves no pixel of the {w}x{h} image (--width, --height)",
+                args.scene.scene
+            ),
             None => None,
         },
     };

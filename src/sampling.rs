@@ -210,7 +210,8 @@ fn zsobol_2d(rev_global: u64, key: u64) -> (u32, u32) {
     ((both >> 32) as u32, both as u32)
 }
 
-/// [`laine_karras`] over 64 bits (its even multipliers widened): each
+/// [`laine_karras`] over 64 bits (Burley's multipliers as the high halves,
+/// other even numbers as the low ones; even, so each step is a bijection): each
 /// output bit depends only on the input bits at or below it, a bijection.
 fn laine_karras64(mut v: u64, seed: u64) -> u64 {
     v = v.wrapping_add(seed);

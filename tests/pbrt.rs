@@ -637,4 +637,29 @@ fn a_films_crop_window_renders_the_pixels_of_the_same_crop_of_the_frame() {
     // --crop replaces the file's window.
     let replaced = render(&cropped, &["--crop", "0,0,8,4"], "replaced.pfm");
     assert_eq!((replaced.width, replaced.height), (8, 4));
+    // A window that a resize leaves without a pixel: one line, exit 2, no image.
+    let thin = dir.path().join("thin.pbrt");
+    std::fs::write(
+        &thin,
+        text.replace(film, &format!("{film} \"float cropwindow\" [ 0.51 0.52 0 1 ]")),
+    )
+    .unwrap();
+    let out = dir.path().join("thin.pfm");
+    let o = raytracer(&[
+        "--scene",
+        thin.to_str().unwrap(),
+        "--width",
+        "8",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("thin.pbrt: the film's crop leaves no pixel of the 8x8 image"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!out.exists());
 }
