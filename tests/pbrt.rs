@@ -650,6 +650,8 @@ fn a_films_crop_window_renders_the_pixels_of_the_same_crop_of_the_frame() {
         thin.to_str().unwrap(),
         "--width",
         "8",
+        "--height",
+        "8",
         "-q",
         "-o",
         out.to_str().unwrap(),
