@@ -1,6 +1,7 @@
-//! Perspective camera: continuous pixel position (and a lens sample) ->
-//! primary ray. A pinhole by default; a thin lens (pbrt-v4's
-//! `PerspectiveCamera`) when it has one.
+//! Camera: continuous pixel position (and a lens sample) -> primary ray.
+//! Perspective (a pinhole by default; a thin lens, pbrt-v4's
+//! `PerspectiveCamera`, when it has one) or orthographic (pbrt-v4's
+//! `OrthographicCamera`: parallel rays from the image plane).
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::concentric_disk;
@@ -47,6 +48,9 @@ pub struct Camera {
     half: Vec2,
     centre: Vec2,
     lens: Option<ThinLens>,
+    /// Rays parallel to `forward` from the plane through `position`;
+    /// `tan_half_fov` is then the world length of a unit of the window.
+    orthographic: bool,
     pub width: u32,
     pub height: u32,
 }
@@ -73,9 +77,30 @@ impl Camera {
             half: Vec2::new(width as f32 / height as f32, 1.0),
             centre: Vec2::ZERO,
             lens: None,
+            orthographic: false,
             width,
             height,
         })
+    }
+
+    /// An orthographic camera whose image spans `2 half_height` world units
+    /// vertically (and as many times the aspect ratio across); `None` as
+    /// [`Camera::new`] for a degenerate frame or a non-positive height.
+    pub fn orthographic(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        half_height: f32,
+        width: u32,
+        height: u32,
+    ) -> Option<Camera> {
+        if !(half_height > 0.0 && half_height.is_finite()) {
+            return None;
+        }
+        let mut c = Camera::new(position, look_at, up, 90.0, width, height)?;
+        c.tan_half_fov = half_height;
+        c.orthographic = true;
+        Some(c)
     }
 
     /// The camera with another image window (`fov_y_deg` now sets the unit
@@ -92,9 +117,11 @@ impl Camera {
         Some(self)
     }
 
-    /// The camera with a thin lens; `None` for a lens that is not valid.
+    /// The camera with a thin lens; `None` for a lens that is not valid or
+    /// an orthographic camera (pbrt-v4's orthographic lens starts every ray
+    /// about the camera's centre, a model we do not copy).
     pub fn with_lens(mut self, lens: ThinLens) -> Option<Camera> {
-        if !lens.is_valid() {
+        if !lens.is_valid() || self.orthographic {
             return None;
         }
         self.lens = Some(lens);
@@ -126,16 +153,20 @@ impl Camera {
     /// top-left corner of the image and (width, height) the bottom-right one.
     /// The ray leaves the lens' centre (the pinhole's ray).
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
+        if self.orthographic {
+            let (sx, sy) = self.screen(x, y);
+            return Ray::new(self.position + self.right * sx + self.up * sy, self.forward);
+        }
         Ray::new(self.position, self.direction(x, y).normalize())
     }
 
     /// The ray through (x, y) leaving the lens at the point `u` in [0, 1)^2
     /// picks (uniform over its disk); the pinhole's ray without a lens.
     pub fn generate_ray_through_lens(&self, x: f32, y: f32, u: Vec2) -> Ray {
-        let d = self.direction(x, y);
         let Some(lens) = self.lens else {
-            return Ray::new(self.position, d.normalize());
+            return self.generate_ray(x, y);
         };
+        let d = self.direction(x, y);
         // `d` is one unit long along the view direction: the plane in focus
         // is `focal_distance` of them away.
         let focus = self.position + d * lens.focal_distance;
@@ -147,6 +178,14 @@ impl Camera {
     /// The unnormalised direction through (x, y), one unit along `forward`.
     #[inline]
     fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let (sx, sy) = self.screen(x, y);
+        self.forward + self.right * sx + self.up * sy
+    }
+
+    /// Where (x, y) lies on the image plane at unit distance (perspective) or
+    /// through the camera (orthographic), along `right` and `up`.
+    #[inline]
+    fn screen(&self, x: f32, y: f32) -> (f32, f32) {
         // With the default window (half height 1, centre 0) this is the plain
         // pinhole formula, bit for bit, signed zeros included.
         let t = self.tan_half_fov;
@@ -156,7 +195,7 @@ impl Camera {
             sx += self.centre.x * t;
             sy += self.centre.y * t;
         }
-        self.forward + self.right * sx + self.up * sy
+        (sx, sy)
     }
 
     /// Where a world-space point lands in continuous pixel coordinates, if in front.
@@ -166,6 +205,8 @@ impl Camera {
         if z <= 0.0 {
             return None;
         }
+        // Orthographic: no division by depth.
+        let z = if self.orthographic { 1.0 } else { z };
         let sx = (v.dot(self.right) / z / self.tan_half_fov - self.centre.x) / self.half.x;
         let sy = (v.dot(self.up) / z / self.tan_half_fov - self.centre.y) / self.half.y;
         Some((
@@ -334,6 +375,41 @@ mod tests {
                 .is_none()
         };
         assert!(bad(0.0, 1.0) && bad(0.1, 0.0) && bad(f32::NAN, 1.0) && bad(0.1, f32::INFINITY));
+    }
+
+    #[test]
+    fn an_orthographic_camera_casts_parallel_rays_from_its_image_plane() {
+        // 2 units high, 3 across, looking along +z from z = -3.
+        let c = Camera::orthographic(
+            Vec3::new(0.0, 0.0, -3.0),
+            Vec3::ZERO,
+            Vec3::new(0.0, -1.0, 0.0),
+            1.0,
+            300,
+            200,
+        )
+        .unwrap();
+        for (x, y) in [(0.0, 0.0), (150.0, 100.0), (299.5, 12.25)] {
+            let r = c.generate_ray(x, y);
+            assert_eq!(r.d, Vec3::Z);
+            // Image right is world +x here, image up world -y (as cornell_camera).
+            let expected = Vec3::new(-1.5 + 3.0 * x / 300.0, -(1.0 - 2.0 * y / 200.0), -3.0);
+            assert!(
+                (r.o - expected).length() < 1e-5,
+                "({x}, {y}): {:?} vs {expected:?}",
+                r.o
+            );
+            let (px, py) = c.project(r.at(7.0)).unwrap();
+            assert!((px - x).abs() < 1e-3 && (py - y).abs() < 1e-3);
+            let through = c.generate_ray_through_lens(x, y, Vec2::new(0.3, 0.9));
+            assert_eq!((through.o, through.d), (r.o, r.d));
+        }
+        let lens = ThinLens {
+            radius: 0.1,
+            focal_distance: 2.0,
+        };
+        assert!(c.clone().with_lens(lens).is_none());
+        assert!(Camera::orthographic(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.0, 4, 4).is_none());
     }
 
     #[test]

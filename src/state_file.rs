@@ -219,6 +219,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
             h.f32(l.radius);
             h.f32(l.focal_distance);
         }
+        if let Some(o) = c.orthographic {
+            h.u32(3);
+            h.f32(o);
+        }
     }
     h.finish()
 }

@@ -28,6 +28,7 @@ fn plane_scene(light: Light) -> SceneDesc {
             height: 5,
             window: None,
             lens: None,
+            orthographic: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -20,6 +20,7 @@ fn camera() -> CameraDesc {
         height: 16,
         window: None,
         lens: None,
+        orthographic: None,
     }
 }
 

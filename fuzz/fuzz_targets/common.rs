@@ -48,6 +48,7 @@ pub fn place_and_build(mesh: &Mesh) {
             height: 8,
             window: None,
             lens: None,
+            orthographic: None,
         },
         materials: vec![],
         triangles: vec![],

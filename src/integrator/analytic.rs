@@ -23,6 +23,7 @@ fn inside_camera(size: u32) -> CameraDesc {
         height: size,
         window: None,
         lens: None,
+        orthographic: None,
     }
 }
 

@@ -414,6 +414,7 @@ mod tests {
             height: 8,
             window: None,
             lens: None,
+            orthographic: None,
         };
         let mut d = SceneDesc::empty("floor", camera);
         let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));

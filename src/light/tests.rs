@@ -606,6 +606,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         height: 16,
         window: None,
         lens: None,
+        orthographic: None,
     };
     let quad = |desc: &mut SceneDesc, [a, b, c, d]: [Vec3; 4]| {
         for vertices in [[a, b, c], [a, c, d]] {

@@ -154,9 +154,29 @@ pub struct CameraDesc {
     /// with the image size.
     pub window: Option<crate::camera::ScreenWindow>,
     pub lens: Option<crate::camera::ThinLens>,
+    /// An orthographic camera, whose image spans twice this many world units
+    /// vertically (`fov_y_deg` unused); with a `window`, the world length of
+    /// a unit of the window.
+    pub orthographic: Option<f32>,
 }
 
 impl CameraDesc {
+    /// The camera it describes; `None` for a degenerate one.
+    pub fn camera(&self) -> Option<Camera> {
+        self.camera_at(self.position, self.look_at, self.up)
+    }
+
+    /// The camera it describes, moved to `position`, looking at `look_at`
+    /// with `up` (the preview's moves).
+    pub fn camera_at(&self, position: Vec3, look_at: Vec3, up: Vec3) -> Option<Camera> {
+        let (w, h) = (self.width, self.height);
+        match self.orthographic {
+            Some(half) => Camera::orthographic(position, look_at, up, half, w, h),
+            None => Camera::new(position, look_at, up, self.fov_y_deg, w, h),
+        }?
+        .with_optics(self.window, self.lens)
+    }
+
     /// Sets the image size. With [`FovAxis::Vertical`] `fov_y_deg` stays;
     /// with [`FovAxis::Shorter`] the field of view of the shorter axis
     /// (which `fov_y_deg` implies at the old size) stays, on the shorter
@@ -165,10 +185,19 @@ impl CameraDesc {
     pub fn resize(&mut self, width: u32, height: u32, axis: FovAxis) {
         let shorter = axis == FovAxis::Shorter && self.window.is_none();
         if shorter && self.width > 0 && self.height > 0 && width > 0 && height > 0 {
-            let tan_y = (self.fov_y_deg.to_radians() * 0.5).tan();
-            let tan_shorter = tan_y * (self.width as f32 / self.height as f32).min(1.0);
-            let tan_y = tan_shorter * (height as f32 / width as f32).max(1.0);
-            self.fov_y_deg = 2.0 * tan_y.atan().to_degrees();
+            // The vertical extent (a tangent, or an orthographic half height)
+            // from the shorter axis' one, which stays.
+            let vertical = |v: f32| {
+                let shorter = v * (self.width as f32 / self.height as f32).min(1.0);
+                shorter * (height as f32 / width as f32).max(1.0)
+            };
+            match self.orthographic {
+                Some(h) => self.orthographic = Some(vertical(h)),
+                None => {
+                    let tan_y = vertical((self.fov_y_deg.to_radians() * 0.5).tan());
+                    self.fov_y_deg = 2.0 * tan_y.atan().to_degrees();
+                }
+            }
         }
         self.width = width;
         self.height = height;
@@ -439,8 +468,7 @@ pub struct Scene {
 impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
-        let camera = Camera::new(c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height)
-            .and_then(|cam| cam.with_optics(c.window, c.lens))
+        let camera = c.camera()
             .ok_or_else(|| {
                 Error::Scene(format!(
                     "degenerate camera (position {:?}, look_at {:?}, up {:?}, fov {} degrees, {}x{}, window {:?}, lens {:?})",

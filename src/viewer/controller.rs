@@ -121,15 +121,11 @@ impl Controller {
 
     /// The camera of `pose`, with the field of view, size, window and lens of `desc`.
     pub fn camera(&self, pose: &Pose, desc: &CameraDesc) -> Option<Camera> {
-        Camera::new(
+        desc.camera_at(
             pose.camera_position,
             pose.camera_position + pose.camera_forward,
             self.up,
-            desc.fov_y_deg,
-            desc.width,
-            desc.height,
-        )?
-        .with_optics(desc.window, desc.lens)
+        )
     }
 
     /// Unit vectors towards the picture's right and straight ahead, both

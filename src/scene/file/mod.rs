@@ -127,6 +127,7 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
         height: cam.height.unwrap_or(512),
         window: None,
         lens: None,
+        orthographic: None,
     };
     if !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0) {
         return Err(src.error(

@@ -395,15 +395,20 @@ impl<'a> Conv<'a> {
 
         let cam = &scene.camera;
         let cam_loc = cam.loc.clone().unwrap_or_else(|| self.default_loc());
-        if cam.ty != "perspective" {
+        let orthographic = cam.ty == "orthographic";
+        if cam.ty != "perspective" && !orthographic {
             self.problem(
                 Kind::Other,
                 &cam_loc,
-                format!("Camera \"{}\" is not supported (only \"perspective\")", cam.ty),
+                format!(
+                    "Camera \"{}\" is not supported (only \"perspective\" and \"orthographic\")",
+                    cam.ty
+                ),
             );
         }
         let cp = &cam.params;
-        let fov = cp.get_float("fov", 90.0)?;
+        // An orthographic camera has no field of view (pbrt-v4 reads none).
+        let fov = if orthographic { 90.0 } else { cp.get_float("fov", 90.0)? };
         if !(fov > 0.0 && fov < 180.0) {
             return Err(located(
                 &cam_loc,
@@ -436,6 +441,17 @@ impl<'a> Conv<'a> {
         }
         let lens_radius = cp.get_float("lensradius", 0.0)?;
         let focal_distance = cp.get_float("focaldistance", 1e6)?;
+        if orthographic && lens_radius > 0.0 {
+            // pbrt-v4's orthographic lens starts every ray about the camera's
+            // centre instead of its point of the image plane: refused rather
+            // than copied or silently changed.
+            self.problem(
+                Kind::Other,
+                place(cp, "lensradius", &cam_loc),
+                "Camera \"orthographic\": a lens (\"lensradius\" > 0) is not supported",
+            );
+        }
+        let lens_radius = if orthographic { 0.0 } else { lens_radius };
         if lens_radius > 0.0 && !(lens_radius.is_finite() && focal_distance > 0.0 && focal_distance.is_finite()) {
             return Err(located(
                 place(cp, "focaldistance", &cam_loc),
@@ -469,6 +485,17 @@ impl<'a> Conv<'a> {
         let (forward, up) = (z / lz, y / ly);
         // pbrt's ray through screen point (sx, sy) goes along sx t X + sy t Y + Z.
         let tan = (fov.to_radians() * 0.5).tan() * lx / lz;
+        // Orthographic: a unit of the screen window is one of camera space,
+        // lx world units (the default window spans [-1, 1] on the shorter axis).
+        let (ortho_unit, ortho_y) = (
+            lx,
+            if width >= height {
+                lx
+            } else {
+                lx * height as f32 / width as f32
+            },
+        );
+        let orthographic = orthographic.then_some(if own_window { ortho_unit } else { ortho_y });
         let (fov_y_deg, window) = if own_window {
             // The window in units of t itself.
             let [left, right, bottom, top] = window;
@@ -512,6 +539,7 @@ impl<'a> Conv<'a> {
                 height,
                 window,
                 lens,
+                orthographic,
             },
             mirror,
             crop,
@@ -1994,6 +2022,50 @@ mod tests {
             let e = convert_text(&format!("Camera \"perspective\" {params}\nWorldBegin\n"), false).unwrap_err();
             assert_eq!(e.to_string(), message);
         }
+    }
+
+    #[test]
+    fn an_orthographic_camera_gives_pbrts_rays() {
+        let text = |film: &str, extra: &str| {
+            format!(
+                "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" {extra}\n\
+                 Film \"rgb\" {film}\nWorldBegin\n"
+            )
+        };
+        let wide = "\"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]";
+        let c = ok(&text(wide, ""));
+        assert!(!c.mirrored);
+        let cam = Scene::build(c.desc.clone()).unwrap().camera;
+        // pbrt-v4: the default window [-2, 2] x [-1, 1] of camera space; the
+        // ray from the window's point along camera +z (camera x is world -x).
+        for (x, y) in [(0.0, 0.0), (13.5, 7.25), (40.0, 20.0)] {
+            let (sx, sy) = (-2.0 + x / 40.0 * 4.0, 1.0 - y / 20.0 * 2.0);
+            let r = cam.generate_ray(x, y);
+            assert!(
+                (r.o - Vec3::new(-sx, sy, -5.0)).length() < 1e-5,
+                "({x}, {y}): {:?}",
+                r.o
+            );
+            assert!((r.d - Vec3::Z).length() < 1e-6);
+        }
+        // Portrait: [-1, 1] across; a resize keeps the shorter axis' extent.
+        let tall = "\"integer xresolution\" [ 20 ] \"integer yresolution\" [ 40 ]";
+        let c = ok(&text(tall, ""));
+        assert_eq!(c.desc.camera.orthographic, Some(2.0));
+        let mut d = c.desc.camera.clone();
+        d.resize(60, 20, crate::scene::FovAxis::Shorter);
+        assert_eq!(d.orthographic, Some(1.0));
+        // A screen window of its own: in units of camera space.
+        let c = ok(&text(wide, "\"float screenwindow\" [ 0 4 -1 1 ]"));
+        let cam = Scene::build(c.desc.clone()).unwrap().camera;
+        assert!((cam.generate_ray(10.0, 10.0).o - Vec3::new(-1.0, 0.0, -5.0)).length() < 1e-5);
+        // pbrt-v4's orthographic lens is not copied: refused, as a feature.
+        let e = convert_text(&text(wide, "\"float lensradius\" 0.1"), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("Camera \"orthographic\": a lens"), "{e}");
+        let lenient = convert_text(&text(wide, "\"float lensradius\" 0.1"), true).unwrap();
+        assert_eq!(lenient.desc.camera.lens, None);
     }
 
     #[test]
