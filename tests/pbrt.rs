@@ -530,20 +530,25 @@ fn checker_plane(dir: &Path, name: &str, lens: &str, threads: &str) -> Film {
         ),
     )
     .unwrap();
-    let image = dir.join(format!("{name}.pfm"));
-    let run = raytracer(&[
-        "--scene",
-        scene.to_str().unwrap(),
-        "--spp",
-        "16",
-        "--threads",
-        threads,
-        "-q",
-        "-o",
-        image.to_str().unwrap(),
-    ]);
-    assert!(run.status.success(), "{name}: {}", String::from_utf8_lossy(&run.stderr));
-    read_image(&image).unwrap()
+    render_to(
+        &scene,
+        &["--spp", "16", "--threads", threads],
+        &dir.join(format!("{name}.pfm")),
+    )
+}
+
+/// Renders `scene` with `options` into `out` (quietly) and reads the image back.
+fn render_to(scene: &Path, options: &[&str], out: &Path) -> Film {
+    let mut args = vec!["--scene", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()];
+    args.extend_from_slice(options);
+    let run = raytracer(&args);
+    assert!(
+        run.status.success(),
+        "{}: {}",
+        scene.display(),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    read_image(out).unwrap()
 }
 
 #[test]
@@ -604,26 +609,9 @@ fn a_films_crop_window_renders_the_pixels_of_the_same_crop_of_the_frame() {
     )
     .unwrap();
     let render = |scene: &Path, extra: &[&str], out: &str| {
-        let out = dir.path().join(out);
-        let mut args = vec![
-            "--scene",
-            scene.to_str().unwrap(),
-            "--width",
-            "32",
-            "--height",
-            "32",
-            "--spp",
-            "4",
-            "--integrator",
-            "path",
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let run = raytracer(&args);
-        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-        read_image(&out).unwrap()
+        let mut options = vec!["--width", "32", "--height", "32", "--spp", "4", "--integrator", "path"];
+        options.extend_from_slice(extra);
+        render_to(scene, &options, &dir.path().join(out))
     };
     // The window's pixels at 32 x 32: x from 8 to 24, y from 0 to 16.
     let by_file = render(&cropped, &[], "file.pfm");
