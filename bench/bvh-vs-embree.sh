@@ -9,6 +9,12 @@
 # Usage: bench/bvh-vs-embree.sh [reps] [builds]
 #   reps    timed passes over each ray set; the best is kept (default 5)
 #   builds  BVH builds; the median time is kept (default 9)
+#
+# ROUNDS=N (default 0) then times ours and Embree (HIGH) N more times,
+# alternating which goes first, and prints per ray set the median, range and
+# count of the rounds' ratios ours / Embree. The two share each round's
+# minute, so the machine's drift (10 to 20% within minutes here) cancels in
+# the ratios, which a single run of each cannot promise.
 set -euo pipefail
 reps=${1:-5}
 builds=${2:-9}
@@ -85,3 +91,36 @@ END {
     printf "  obvhs            1 thread:  %s / %s (medium_build)\n", wall["obvhs"], cpu["obvhs"]
     exit bad
 }' "$work/out.txt"
+
+rounds=${ROUNDS:-0}
+[ "$rounds" -gt 0 ] || exit 0
+echo
+echo "== $rounds interleaved rounds (ours --ours-only, Embree HIGH; best of $reps passes each)"
+ours() { target/release/examples/bvh_rays --ours-only --reps "$reps" --builds 1 | grep '^result'; }
+embree() { "$work/embree_bench" "$work/rays.bin" "$reps" 1 | grep '^result impl=embree '; }
+for i in $(seq 1 "$rounds"); do
+    if [ $((i % 2)) -eq 1 ]; then
+        o=$(ours); e=$(embree)
+    else
+        e=$(embree); o=$(ours)
+    fi
+    printf '%s\n%s\n' "$o" "$e" | sed "s/^result /round=$i /"
+done | tee "$work/rounds.txt" | awk '{ print "  " $0 }' | grep 'set=shadow' || true
+awk '
+function field(name,   i, kv) {
+    for (i = 2; i <= NF; i++) { split($i, kv, "="); if (kv[1] == name) return kv[2] }
+    return ""
+}
+{ split($1, kv, "="); r[kv[2], field("impl"), field("set")] = field("mrays_per_s"); n = kv[2] > n ? kv[2] : n
+  s = field("set"); if (!(s in seen)) { seen[s] = 1; order[++ns] = s } }
+END {
+    printf "\nours / Embree HIGH per round (%d rounds): median [min, max], rounds >= 1\n", n
+    for (k = 1; k <= ns; k++) {
+        s = order[k]; m = 0; wins = 0
+        for (i = 1; i <= n; i++) { q[++m] = r[i, "ours", s] / r[i, "embree", s]; if (q[m] >= 1) wins++ }
+        # insertion sort: a few dozen rounds at most
+        for (i = 2; i <= m; i++) { x = q[i]; j = i - 1; while (j > 0 && q[j] > x) { q[j + 1] = q[j]; j-- } q[j + 1] = x }
+        med = (m % 2) ? q[(m + 1) / 2] : (q[m / 2] + q[m / 2 + 1]) / 2
+        printf "%-11s %.3f [%.3f, %.3f] %d of %d\n", s, med, q[1], q[m], wins, m
+    }
+}' "$work/rounds.txt"
