@@ -44,8 +44,19 @@ impl Bvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more children: push all but the nearest, farthest first.
                     let t = t_near.to_array();
+                    let a = mask.trailing_zeros() as usize;
+                    let rest = mask & (mask - 1);
+                    if rest & (rest - 1) == 0 {
+                        // Two children, the most common case: the nearer first;
+                        // on a tie the higher lane, as the sort below orders them.
+                        let b = rest.trailing_zeros() as usize;
+                        let (near, far) = if t[a] < t[b] { (a, b) } else { (b, a) };
+                        stack.push((node.child[far], t[far]));
+                        cur = node.child[near];
+                        continue;
+                    }
+                    // Three or four children: push all but the nearest, farthest first.
                     let mut hits = [(0u32, 0.0f32); WIDTH];
                     let mut n = 0;
                     let mut m = mask;
