@@ -6,7 +6,8 @@
 //! lanes: glam's `Vec4` is an SSE register on x86-64), with the near and far
 //! planes chosen by the sign of the direction. Closest-hit queries visit the
 //! nearest child first and skip stacked nodes farther than the closest hit so
-//! far; `occluded` stops at the first blocker. The far distance of every box
+//! far; `occluded` tests a node's leaf children before it descends and stops
+//! at the first blocker. The far distance of every box
 //! is widened by 1 + 2 gamma(3) (Ize 2013, "Robust BVH Ray Traversal"), so
 //! rounding never culls a box the ray touches; rays parallel to an axis, even
 //! lying in a box face, are handled exactly (see `TraversalRay::new`). Leaves
@@ -108,14 +109,16 @@ impl Bvh {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, _) = r.hit_boxes(node, t_max);
-                if mask != 0 {
-                    cur = node.child[mask.trailing_zeros() as usize];
+                // Leaf children first: their packets may end the query before
+                // another node is loaded. Inner children go on the stack.
+                while mask != 0 {
+                    let c = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
-                    while mask != 0 {
-                        stack.push(node.child[mask.trailing_zeros() as usize]);
-                        mask &= mask - 1;
+                    if c & LEAF == 0 {
+                        stack.push(c);
+                    } else if self.leaf_packets(c).iter().any(|p| r.hits_any_triangle(p, t_max)) {
+                        return true;
                     }
-                    continue;
                 }
             } else if self.leaf_packets(cur).iter().any(|p| r.hits_any_triangle(p, t_max)) {
                 return true;
