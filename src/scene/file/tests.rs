@@ -572,7 +572,7 @@ fn bad_lights_are_one_line_errors_at_their_line() {
             e.starts_with(&at) && (6..=7 + light.lines().count()).contains(&line),
             "{light}: '{e}'"
         );
-        // Exit status 2 is the binary's for every such error (tests/cli.rs).
+        // Exit status 2 is the binary's for every such error (tests/it/cli.rs).
     }
 }
 

@@ -2,7 +2,7 @@
 //! (distance and triangle) and occlusion, on random meshes (property tests)
 //! and on `cornell-bunny`; and the build's independence of the thread count.
 
-#[path = "../benches/common/mod.rs"]
+#[path = "../../benches/common/mod.rs"]
 mod common;
 
 use proptest::prelude::*;
