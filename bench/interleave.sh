@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Times two or more builds of the renderer against each other: a one-thread
+# path-traced render of Bitterli's `cornell-box` (192 x 192, 16 spp, tent),
+# each binary in turn, ROUNDS times, and prints each binary's best and mean
+# user seconds. Interleaving shares the machine's drift (10 to 20% within
+# minutes here) between the binaries. See BENCHMARKS.md.
+#
+# Usage: ROUNDS=6 bench/interleave.sh path/to/raytracer-a path/to/raytracer-b ...
+set -euo pipefail
+cd "$(dirname "$0")/.."
+rounds=${ROUNDS:-6}
+scene=${SCENE:-../shared/bitterli/cornell-box/scene-v4.pbrt}
+[ $# -ge 2 ] || { echo "usage: ROUNDS=N $0 BINARY BINARY..." >&2; exit 2; }
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+for _ in $(seq 1 "$rounds"); do
+    for i in $(seq 1 $#); do
+        bin=${!i}
+        /usr/bin/time -f "%U" -o "$out/t" "$bin" --quiet --scene "$scene" --width 192 --height 192 \
+            --spp 16 --filter tent --integrator path --threads 1 -o "$out/img.exr"
+        echo "$i $(cat "$out/t")" >>"$out/times"
+    done
+done
+for i in $(seq 1 $#); do
+    awk -v i="$i" -v name="${!i}" '$1 == i { n++; s += $2; if (n == 1 || $2 < m) m = $2 }
+        END { printf "%-40s best %.3f s, mean %.3f s (%d rounds)\n", name, m, s / n, n }' "$out/times"
+done
