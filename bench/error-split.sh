@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # How much of the path tracer's error on Bitterli's `cornell-box` is direct
 # light (what a better light sampler could lower) and how much is the rest.
+# With DEPTH=D, how much is in the first D bounces, which Russian roulette
+# (from bounce 5) never touches when D <= 5.
 #
 #   bench/error-split.sh            # ~3 min on 2 cores
-#   SPP="16 64" SEEDS="1 2 3" bench/error-split.sh
+#   SPP="16 64" SEEDS="1 2 3" DEPTH=1 bench/error-split.sh
 #
 # Renders at 256 x 256 with the tent filter, as bench/vs-mitsuba.sh does: a
 # converged image (1024 spp) with all bounces and one with direct light only
-# (--max-depth 1, the same estimator cut after the first vertex), then each
+# (--max-depth DEPTH, the same estimator cut after DEPTH vertices), then each
 # at SPP samples a pixel and seeds SEEDS. The error of each is compare's
 # relative MSE (per channel (x - r)^2 / (r^2 + 0.01), over the pixels that
 # `--max-luminance 4` keeps), always divided by the full converged image's
@@ -17,6 +19,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SPP=${SPP:-16 64}
 SEEDS=${SEEDS:-1 2 3}
+DEPTH=${DEPTH:-1}
 SCENE=${SCENE:-../shared/bitterli/cornell-box/scene-v4.pbrt}
 cargo build --release --quiet --bin raytracer
 rt=target/release/raytracer
@@ -24,14 +27,14 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 common=(--quiet --scene "$SCENE" --width 256 --height 256 --filter tent --integrator path)
 "$rt" "${common[@]}" --spp 1024 --seed 1000 -o "$out/ref-full.pfm"
-"$rt" "${common[@]}" --spp 1024 --seed 1000 --max-depth 1 -o "$out/ref-direct.pfm"
+"$rt" "${common[@]}" --spp 1024 --seed 1000 --max-depth "$DEPTH" -o "$out/ref-direct.pfm"
 for spp in $SPP; do
     for seed in $SEEDS; do
         "$rt" "${common[@]}" --spp "$spp" --seed "$seed" -o "$out/full-$spp-$seed.pfm"
-        "$rt" "${common[@]}" --spp "$spp" --seed "$seed" --max-depth 1 -o "$out/direct-$spp-$seed.pfm"
+        "$rt" "${common[@]}" --spp "$spp" --seed "$seed" --max-depth "$DEPTH" -o "$out/direct-$spp-$seed.pfm"
     done
 done
-python3 - "$out" "$SPP" "$SEEDS" <<'EOF'
+python3 - "$out" "$SPP" "$SEEDS" "$DEPTH" <<'EOF'
 import array, sys
 
 def pfm(path):
@@ -45,7 +48,7 @@ def pfm(path):
             a.byteswap()
         return w, h, a
 
-out, spps, seeds = sys.argv[1], sys.argv[2].split(), sys.argv[3].split()
+out, spps, seeds, depth = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
 w, h, ref = pfm(f"{out}/ref-full.pfm")
 _, _, ref_direct = pfm(f"{out}/ref-direct.pfm")
 # compare --max-luminance 4: pixels brighter than 4 and their neighbours out.
@@ -68,7 +71,7 @@ def rel_mse(img, target):
             s += d * d / (ref[j] * ref[j] + 0.01)
     return s / (3 * len(keep))
 
-print(f"{'spp':>5} {'direct light':>13} {'full':>10} {'direct / full':>14}")
+print(f"{'spp':>5} {'depth ' + depth:>13} {'full':>10} {'ratio':>14}")
 for spp in spps:
     d = [rel_mse(pfm(f"{out}/direct-{spp}-{s}.pfm")[2], ref_direct) for s in seeds]
     f = [rel_mse(pfm(f"{out}/full-{spp}-{s}.pfm")[2], ref) for s in seeds]
