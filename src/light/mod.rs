@@ -295,6 +295,18 @@ impl Light {
         }
     }
 
+    /// Multiplies what the light emits by `k` (a camera's exposure).
+    pub fn scale_emission(&mut self, k: f32) {
+        match self {
+            Light::Sphere { power, .. } | Light::Point { power, .. } => *power *= k,
+            Light::Triangle { radiance, .. }
+            | Light::Disk { radiance, .. }
+            | Light::Distant { radiance, .. }
+            | Light::Infinite { radiance, .. } => *radiance *= k,
+            Light::Spot { intensity, .. } => *intensity *= k,
+        }
+    }
+
     /// Moves the light's centre to `to`, keeping its size, shape and power
     /// (distant and infinite lights stay where they are, at infinity).
     pub fn move_to(&mut self, to: Vec3) {

@@ -158,18 +158,21 @@ fn normalize(path: &Path) -> PathBuf {
     out
 }
 
-/// Where a relative name given in `file` may be: beside `file`, then in
-/// `scene_dir` (pbrt-v4's search directory).
+/// Where a relative name given in `file` may be: in `scene_dir`, the top-level
+/// file's folder, where pbrt-v4 resolves every relative name whichever file
+/// names it; then beside `file`, for scenes written as if names were relative
+/// to the file that holds them, which pbrt-v4 finds only when run from that
+/// folder.
 pub fn candidates(file: &Path, scene_dir: &Path, name: &str) -> Vec<PathBuf> {
     let name = Path::new(name);
     if name.is_absolute() {
         return vec![name.to_path_buf()];
     }
     let dir = file.parent().unwrap_or(Path::new(""));
-    let mut out = vec![normalize(&dir.join(name))];
-    let other = normalize(&scene_dir.join(name));
-    if other != out[0] {
-        out.push(other);
+    let mut out = vec![normalize(&scene_dir.join(name))];
+    let beside = normalize(&dir.join(name));
+    if beside != out[0] {
+        out.push(beside);
     }
     out
 }
@@ -548,6 +551,15 @@ impl<'a> Builder<'a> {
                 Values::Strings(v)
             }
             ParamType::Spectrum if matches!(tokens[0].kind, TokenKind::Str(_)) => {
+                // One string that names no spectrum of pbrt-v4's is a file of
+                // wavelength / value pairs, read as if given inline.
+                if let [t] = &tokens[..] {
+                    if let TokenKind::Str(s) = &t.kind {
+                        if !is_named_spectrum(s) {
+                            return self.spectrum_file(t, &label, s);
+                        }
+                    }
+                }
                 let mut v = Vec::with_capacity(tokens.len());
                 for t in &tokens {
                     match &t.kind {
@@ -557,7 +569,7 @@ impl<'a> Builder<'a> {
                                 &t.loc,
                                 format!(
                                     "{label}: \"{s}\" is not a spectrum pbrt-v4 names (such as \"metal-Cu-eta\"); \
-                                     spectrum files are not supported"
+                                     spectrum files are read only as a parameter's one value"
                                 ),
                             ))
                         }
@@ -609,6 +621,47 @@ impl<'a> Builder<'a> {
         Ok(values)
     }
 
+    /// A spectrum file (pbrt-v4's `PiecewiseLinearSpectrum::Read`): numbers
+    /// separated by white space, `#` comments, wavelength / value pairs with
+    /// the wavelengths increasing.
+    fn spectrum_file(&mut self, t: &Token, label: &str, name: &str) -> Result<Values> {
+        let (path, bytes) = self.read_named(&t.loc, label, name)?;
+        let at = |line: usize, what: String| {
+            PbrtError::at(
+                &t.loc,
+                format!("{label}: spectrum file {}:{line}: {what}", path.display()),
+            )
+        };
+        let text = String::from_utf8_lossy(&bytes);
+        let mut pairs: Vec<f32> = vec![];
+        for (i, line) in text.lines().enumerate() {
+            let line_no = i + 1;
+            let data = line.split('#').next().unwrap_or("");
+            for word in data.split_whitespace() {
+                match word.parse::<f32>() {
+                    Ok(x) if x.is_finite() => pairs.push(x),
+                    _ => return Err(at(line_no, format!("\"{word}\" is not a number"))),
+                }
+                if pairs.len().is_multiple_of(2) && pairs.len() >= 4 {
+                    let n = pairs.len();
+                    if pairs[n - 2] <= pairs[n - 4] {
+                        return Err(at(
+                            line_no,
+                            format!("wavelengths must increase ({} then {})", pairs[n - 4], pairs[n - 2]),
+                        ));
+                    }
+                }
+            }
+        }
+        if pairs.is_empty() || !pairs.len().is_multiple_of(2) {
+            return Err(at(
+                text.lines().count().max(1),
+                format!("{} values; a spectrum file holds wavelength / value pairs", pairs.len()),
+            ));
+        }
+        Ok(Values::Floats(pairs))
+    }
+
     // ---- checks ------------------------------------------------------------
 
     fn world_only(&self, t: &Token) -> Result<()> {
@@ -652,7 +705,9 @@ impl<'a> Builder<'a> {
         if a != b {
             self.unsupported(
                 loc,
-                format!("{what}: an animated transformation (ActiveTransform); the start transformation is used"),
+                format!(
+                    "{what}: an animated transformation (ActiveTransform); --lenient uses the start transformation"
+                ),
             );
         }
         a
@@ -1232,12 +1287,18 @@ impl<'a> Builder<'a> {
     }
 
     fn ply(&mut self, loc: &Loc, name: &str) -> Result<Arc<TriMesh>> {
-        for path in candidates(&loc.file, &self.scene_dir, name) {
-            if let Some(m) = self.ply_cache.get(&path) {
-                return Ok(m.clone());
-            }
+        // Only the first candidate may be taken from the cache unread: a later
+        // one is the file only when the earlier ones do not exist.
+        if let Some(m) = candidates(&loc.file, &self.scene_dir, name)
+            .first()
+            .and_then(|p| self.ply_cache.get(p))
+        {
+            return Ok(m.clone());
         }
         let (path, bytes) = self.read_named(loc, "plymesh", name)?;
+        if let Some(m) = self.ply_cache.get(&path) {
+            return Ok(m.clone());
+        }
         let read = ply::read(&path, &bytes, ply::Polygons::TrianglesAndQuads)
             .map_err(|e| PbrtError::at(loc, format!("plymesh \"{name}\": {e}")))?;
         if read.skipped_faces > 0 {

@@ -169,12 +169,20 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         skipped_lights: 0,
         dropped_light_triangles: 0,
         black_emitters: 0,
+        imaging_ratio: 1.0,
     };
     let (camera, mirror, crop) = c.camera()?;
     let mut desc = SceneDesc::empty(&name, camera);
     desc.settings = c.settings()?;
     c.lights(&mut desc)?;
     c.shapes(&mut desc)?;
+    if c.imaging_ratio != 1.0 {
+        // The film scales what it records; the lights scaled instead give the
+        // same image, and photon maps with it.
+        for l in &mut desc.lights {
+            l.scale_emission(c.imaging_ratio);
+        }
+    }
     for n in &scene.warnings {
         c.warnings.push(format!("{}: {}", n.loc.file_line(), n.message));
     }
@@ -222,6 +230,8 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
 
 struct Conv<'a> {
     scene: &'a PbrtScene,
+    /// pbrt-v4's `exposureTime * ISO / 100`: what the film multiplies radiance by.
+    imaging_ratio: f32,
     problems: Vec<Problem>,
     warnings: Vec<String>,
     /// pbrt material index -> this scene's material index.
@@ -267,7 +277,10 @@ impl<'a> Conv<'a> {
     /// The error listing every unsupported place, on one line.
     fn error(&self) -> Error {
         let mut problems = self.problems.clone();
-        problems.sort_by(|a, b| (a.loc.file.as_ref(), a.loc.line).cmp(&(b.loc.file.as_ref(), b.loc.line)));
+        // A file included twice reports each of its places twice: listed once.
+        problems.sort_by(|a, b| {
+            (a.loc.file.as_ref(), a.loc.line, &a.message).cmp(&(b.loc.file.as_ref(), b.loc.line, &b.message))
+        });
         problems.dedup_by(|a, b| a.loc.file == b.loc.file && a.loc.line == b.loc.line && a.message == b.message);
         let first = &problems[0];
         let mut message = first.message.clone();
@@ -377,12 +390,14 @@ impl<'a> Conv<'a> {
         fp.mark_used("savefp16", super::ParamType::Bool);
         fp.mark_used("diagonal", super::ParamType::Float);
         let crop = self.film_crop(fp, &film_loc, width, height)?;
-        if fp.get_float("iso", 100.0)? != 100.0 || fp.get_float("exposuretime", 1.0)? != 1.0 {
-            self.problem(
-                Kind::Other,
-                &film_loc,
-                "Film: \"iso\" and \"exposuretime\" other than 100 and 1 are not supported",
-            );
+        // pbrt-v4's imaging ratio: the sensor's sensitivity times the
+        // shutter's open time (the camera's), 1 by default.
+        let iso = fp.get_float("iso", 100.0)?;
+        if !(iso > 0.0 && iso.is_finite()) {
+            return Err(located(
+                place(fp, "iso", &film_loc),
+                format!("Film: iso {iso} must be positive"),
+            ));
         }
         if fp.get_string_or("sensor", "cie1931")? != "cie1931" || fp.get_float("whitebalance", 0.0)? != 0.0 {
             self.problem(
@@ -460,8 +475,16 @@ impl<'a> Conv<'a> {
                 ),
             ));
         }
-        cp.mark_used("shutteropen", super::ParamType::Float);
-        cp.mark_used("shutterclose", super::ParamType::Float);
+        let open = cp.get_float("shutteropen", 0.0)?;
+        let close = cp.get_float("shutterclose", 1.0)?;
+        let exposure_time = close - open;
+        if !(exposure_time > 0.0 && exposure_time.is_finite()) {
+            return Err(located(
+                place(cp, "shutterclose", &cam_loc),
+                format!("Camera: the shutter closes at {close}, not after it opens at {open}"),
+            ));
+        }
+        self.imaging_ratio = exposure_time * iso / 100.0;
         self.read.push(cp);
 
         // pbrt's camera axes in world space.
@@ -1043,6 +1066,22 @@ impl<'a> Conv<'a> {
             (None, Some(l)) => format!("{} ({})", m.ty, l.file_line()),
             (None, None) => "default".into(),
         };
+        // Bump and normal maps only perturb the shading normal: a lenient
+        // render keeps the material and drops them (pbrt-v4's look, flatter).
+        for (n, what) in [
+            ("displacement", "bump mapping (\"displacement\")"),
+            ("normalmap", "a normal map"),
+        ] {
+            if let Some(param) = m.params.get(n) {
+                let label = match &m.name {
+                    Some(n) => format!("material \"{n}\" (type \"{}\")", m.ty),
+                    None => format!("material of type \"{}\"", m.ty),
+                };
+                let at = param.loc.clone();
+                m.params.mark_used(n, param.ty);
+                self.problem(Kind::Other, &at, format!("{label}: {what} is not supported"));
+            }
+        }
         let converted = match convert_material(scene, &m.ty, &m.params, &loc)? {
             Ok(mat) => {
                 self.read.push(&m.params);
@@ -1099,6 +1138,22 @@ impl<'a> Conv<'a> {
                         "\"alpha\" cut-outs are not supported",
                     );
                     self.skip_shape(shape);
+                    continue;
+                }
+            }
+            // pbrt-v4's "interface" and "none" materials make no surface: the
+            // shape only bounds a medium, and without media it is not there.
+            if let Some(m) = scene.materials.get(shape.material) {
+                if matches!(m.ty.as_str(), "interface" | "none" | "") {
+                    if shape.area_light.is_some() {
+                        self.warn(
+                            &shape.loc,
+                            format!(
+                                "area light ignored: the shape's material is \"{}\", which makes no surface (as pbrt-v4 does)",
+                                m.ty
+                            ),
+                        );
+                    }
                     continue;
                 }
             }
@@ -1285,11 +1340,6 @@ fn convert_material(
     p: &Params,
     loc: &Loc,
 ) -> Result<std::result::Result<Material, String>> {
-    for (n, what) in [("displacement", "displacement"), ("normalmap", "normal maps")] {
-        if p.has(n) {
-            return Ok(Err(format!("{what} are not supported")));
-        }
-    }
     match ty {
         "diffuse" => {
             let albedo = match p.get_spectrum_or_texture("reflectance")? {

@@ -602,14 +602,39 @@ fn object_instances_are_flattened_with_composed_transforms() {
 // ---- Include and Import -----------------------------------------------------
 
 #[test]
-fn includes_resolve_beside_the_including_file_then_the_scene_folder() {
+fn includes_resolve_in_the_scene_folder_then_beside_the_including_file() {
+    // pbrt-v4 resolves a relative name against the top-level file's folder,
+    // whichever file names it: "a/b.pbrt" inside a/one.pbrt is scene/a/b.pbrt,
+    // not scene/a/a/b.pbrt, when both exist.
     let files = Files::default()
-        .with("scene/a/one.pbrt", "Include \"two.pbrt\"\nInclude \"top.pbrt\"\n")
+        .with(
+            "scene/a/one.pbrt",
+            "Include \"two.pbrt\"\nInclude \"top.pbrt\"\nInclude \"a/b.pbrt\"\n",
+        )
         .with("scene/a/two.pbrt", "Shape \"sphere\" \"float radius\" 2\n")
-        .with("scene/top.pbrt", "Shape \"sphere\" \"float radius\" 3\n");
+        .with("scene/top.pbrt", "Shape \"sphere\" \"float radius\" 3\n")
+        .with("scene/a/b.pbrt", "Shape \"sphere\" \"float radius\" 4\n")
+        .with("scene/a/a/b.pbrt", "Shape \"sphere\" \"float radius\" 5\n");
     let s = parse_with("WorldBegin\nInclude \"a/one.pbrt\"\nShape \"disk\"\n", files).unwrap();
     let files: Vec<_> = s.shapes.iter().map(|x| x.loc.file.display().to_string()).collect();
-    assert_eq!(files, ["scene/a/two.pbrt", "scene/top.pbrt", "scene/main.pbrt"]);
+    assert_eq!(
+        files,
+        [
+            "scene/a/two.pbrt",
+            "scene/top.pbrt",
+            "scene/a/b.pbrt",
+            "scene/main.pbrt"
+        ]
+    );
+    // A name found nowhere is reported where pbrt-v4 looks for it.
+    let files = Files::default().with("scene/a/one.pbrt", "Include \"a/none.pbrt\"\n");
+    let e = parse_with("WorldBegin\nInclude \"a/one.pbrt\"\n", files)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("scene/a/one.pbrt:1:1: Include \"a/none.pbrt\": cannot read scene/a/none.pbrt"),
+        "{e}"
+    );
     // An Include may open a block that the including file closes.
     let files = Files::default().with("scene/open.pbrt", "AttributeBegin\nTranslate 1 0 0\n");
     let s = parse_with(
@@ -694,7 +719,8 @@ fn errors_name_file_line_and_column() {
         ("WorldBegin\nShape \"sphere\" \"float radius\"", "scene/main.pbrt:2:16: the file ends where the value of \"float radius\" was expected"),
         ("WorldBegin\nShape \"sphere\" \"rgb c\" [1 2]\n", "scene/main.pbrt:2:16: \"rgb c\": 2 values, not a multiple of 3"),
         ("WorldBegin\nShape \"sphere\" \"rgb c\" [1 -2 3]\n", "scene/main.pbrt:2:16: \"rgb c\": a negative component"),
-        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" \"Cu.spd\"\n", "scene/main.pbrt:2:37: \"spectrum eta\": \"Cu.spd\" is not a spectrum pbrt-v4 names"),
+        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" \"Cu.spd\"\n", "scene/main.pbrt:2:37: \"spectrum eta\" \"Cu.spd\": cannot read scene/Cu.spd"),
+        ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [\"Cu.spd\" \"metal-Cu-k\"]\n", "scene/main.pbrt:2:38: \"spectrum eta\": \"Cu.spd\" is not a spectrum pbrt-v4 names"),
         ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [400 1 300 2]\n", "scene/main.pbrt:2:22: \"spectrum eta\": wavelengths must increase (400 then 300)"),
         ("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [400 1 500]\n", "scene/main.pbrt:2:22: \"spectrum eta\": an odd number of values"),
         ("WorldBegin\nAttributeEnd\n", "scene/main.pbrt:2:1: AttributeEnd without a matching AttributeBegin"),
@@ -1313,4 +1339,169 @@ fn truncated_and_mutated_scenes_never_panic() {
             run(bytes, &p[..p.len() - rng.below(20)]);
         }
     }
+}
+
+// ---- what pbrt-v4 accepts beyond the Bitterli scenes ------------------------
+
+fn converted(text: &str, files: Files, lenient: bool) -> std::result::Result<convert::Converted, String> {
+    let scene = parse_with(text, files).map_err(|e| e.to_string())?;
+    convert::convert(&scene, Path::new("scene/main.pbrt"), lenient).map_err(|e| e.to_string())
+}
+
+#[test]
+fn spectrum_files_read_as_the_same_pairs_inline() {
+    let files = Files::default()
+        .with("scene/spds/k.spd", "# gold, k\n400 1.5  # blue\n500\t2.0\n\n600 3.25\n")
+        .with("scene/spds/odd.spd", "400 1\n500\n")
+        .with("scene/spds/down.spd", "400 1\n500 2\n450 3\n")
+        .with("scene/spds/word.spd", "400 1\n500 two\n");
+    let s = parse_with(
+        "WorldBegin\nMaterial \"conductor\" \"spectrum k\" \"spds/k.spd\"\n\
+         Material \"conductor\" \"spectrum k\" [400 1.5 500 2 600 3.25]\nShape \"sphere\"\n",
+        files,
+    )
+    .unwrap();
+    let values = |i: usize| match &s.materials[i].params.get("k").unwrap().values {
+        Values::Floats(v) => v.clone(),
+        v => panic!("{v:?}"),
+    };
+    let n = s.materials.len();
+    assert_eq!(values(n - 2), [400.0, 1.5, 500.0, 2.0, 600.0, 3.25]);
+    assert_eq!(values(n - 2), values(n - 1));
+    assert!(s.files.iter().any(|f| f == Path::new("scene/spds/k.spd")));
+    // A bad file is named with its own line, at the parameter's place.
+    for (file, what) in [
+        (
+            "odd",
+            "scene/spds/odd.spd:2: 3 values; a spectrum file holds wavelength / value pairs",
+        ),
+        (
+            "down",
+            "scene/spds/down.spd:3: wavelengths must increase (500 then 450)",
+        ),
+        ("word", "scene/spds/word.spd:2: \"two\" is not a number"),
+    ] {
+        let files = Files::default()
+            .with("scene/spds/odd.spd", "400 1\n500\n")
+            .with("scene/spds/down.spd", "400 1\n500 2\n450 3\n")
+            .with("scene/spds/word.spd", "400 1\n500 two\n");
+        error_with(
+            &format!("WorldBegin\nMaterial \"conductor\" \"spectrum k\" \"spds/{file}.spd\"\n"),
+            files,
+            &format!("scene/main.pbrt:2:35: \"spectrum k\": spectrum file {what}"),
+        );
+    }
+}
+
+#[test]
+fn interface_and_none_materials_make_no_surface() {
+    let text =
+        "WorldBegin\nShape \"sphere\"\nAttributeBegin\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\n\
+                AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"sphere\" \"float radius\" 3\nAttributeEnd\n\
+                MakeNamedMaterial \"n\" \"string type\" \"none\"\nNamedMaterial \"n\"\nShape \"disk\"\n";
+    let c = converted(text, Files::default(), false).unwrap();
+    // Only the first sphere is left: no light, no disk.
+    assert_eq!(c.desc.spheres.len(), 1, "{:?}", c.desc.spheres);
+    assert_eq!(c.desc.spheres[0].sphere.radius, 1.0);
+    assert!(c.desc.lights.is_empty() && c.desc.disks.is_empty());
+    assert!(
+        c.warnings
+            .iter()
+            .any(|w| w.starts_with("scene/main.pbrt:7: area light ignored") && w.contains("\"interface\"")),
+        "{:?}",
+        c.warnings
+    );
+}
+
+#[test]
+fn bump_maps_are_refused_or_with_lenient_dropped_keeping_the_material() {
+    let text = "WorldBegin\nTexture \"b\" \"float\" \"constant\" \"float value\" 0.1\n\
+                MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"texture displacement\" \"b\"\n\
+                NamedMaterial \"gold\"\nShape \"sphere\"\n";
+    let e = converted(text, Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with(
+            "scene/main.pbrt:3: material \"gold\" (type \"conductor\"): bump mapping (\"displacement\") is not supported"
+        ),
+        "{e}"
+    );
+    let c = converted(text, Files::default(), true).unwrap();
+    let m = c
+        .desc
+        .materials
+        .iter()
+        .find(|(n, _)| n == "gold")
+        .map(|(_, m)| m)
+        .unwrap();
+    assert!(matches!(m, crate::material::Material::Conductor { .. }), "{m:?}");
+    assert!(
+        c.warnings.iter().any(|w| w.contains("1 unsupported features ignored")),
+        "{:?}",
+        c.warnings
+    );
+    assert!(!c.warnings.iter().any(|w| w.contains("not used")), "{:?}", c.warnings);
+}
+
+#[test]
+fn iso_and_shutter_time_scale_the_lights_as_pbrt_films_do() {
+    let power = |pre: &str| {
+        let text = format!(
+            "{pre}WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 2 3]\nShape \"sphere\"\nAttributeEnd\n\
+             LightSource \"point\" \"rgb I\" [1 1 1]\n"
+        );
+        let c = converted(&text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+        c.desc.lights.iter().map(|l| l.power()).collect::<Vec<_>>()
+    };
+    let base = power("");
+    assert_eq!(base.len(), 2);
+    for (pre, k) in [
+        ("Film \"rgb\" \"float iso\" 400\n", 4.0),
+        (
+            "Camera \"perspective\" \"float shutteropen\" 0.25 \"float shutterclose\" 0.75\n",
+            0.5,
+        ),
+        (
+            "Camera \"perspective\" \"float shutterclose\" 0.5\nFilm \"rgb\" \"float iso\" 300\n",
+            1.5,
+        ),
+    ] {
+        for (a, b) in power(pre).iter().zip(&base) {
+            assert!(
+                (*a - *b * k).abs().max_element() < 1e-4 * b.max_element(),
+                "{pre}: {a} vs {b} x {k}"
+            );
+        }
+    }
+    for (pre, what) in [
+        (
+            "Film \"rgb\" \"float iso\" 0\n",
+            "scene/main.pbrt:1: Film: iso 0 must be positive",
+        ),
+        (
+            "Camera \"perspective\" \"float shutteropen\" 1\n",
+            "scene/main.pbrt:1: Camera: the shutter closes at 1, not after it opens at 1",
+        ),
+    ] {
+        let e = converted(&format!("{pre}WorldBegin\n"), Files::default(), false).unwrap_err();
+        assert!(e.starts_with(what), "{e}");
+    }
+}
+
+#[test]
+fn a_file_included_twice_lists_each_unsupported_place_once() {
+    let files = Files::default().with(
+        "scene/s.pbrt",
+        "Shape \"loopsubdiv\" \"integer indices\" [0 1 2] \"point3 P\" [0 0 0 1 0 0 0 1 0]\nShape \"curve\"\n",
+    );
+    // Moving shapes: two problems on each line of s.pbrt.
+    let e = converted(
+        "WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
+         Include \"s.pbrt\"\nInclude \"s.pbrt\"\n",
+        files,
+        false,
+    )
+    .unwrap_err();
+    assert_eq!(e.matches("loopsubdiv").count(), 1, "{e}");
+    assert_eq!(e.matches("curve").count(), 1, "{e}");
+    assert_eq!(e.matches("ActiveTransform").count(), 2, "{e}");
 }
