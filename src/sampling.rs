@@ -429,12 +429,26 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, (PI / 4.0) * (o.y / o.x))
+    // The angle is pi/4 times a ratio in [-1, 1] (or pi/2 less that, whose
+    // cosine and sine are the sine and cosine of that), where short
+    // polynomials are as good as the library's sin and cos, and cheaper: this
+    // runs at every diffuse bounce.
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
     } else {
-        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
-    };
-    Vec2::new(r * theta.cos(), r * theta.sin())
+        let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
+}
+
+/// sin x and cos x for |x| <= pi/4, by their Taylor series to the x^7 and
+/// x^8 terms: absolute errors below 3.2e-7 and 2.5e-8 there (a few ulps).
+fn sin_cos_quarter_pi(x: f32) -> (f32, f32) {
+    let x2 = x * x;
+    let s = x * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0))));
+    let c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0))));
+    (s, c)
 }
 
 /// Uniform direction in the cone around +z with half-angle cosine `cos_max`;
@@ -716,6 +730,35 @@ mod tests {
                 !std::mem::replace(&mut seen[cell], true)
             })
         })
+    }
+
+    #[test]
+    fn the_quarter_pi_sine_and_cosine_match_the_library() {
+        for i in -1000..=1000 {
+            let x = std::f32::consts::FRAC_PI_4 * i as f32 / 1000.0;
+            let (s, c) = super::sin_cos_quarter_pi(x);
+            let (xs, xc) = (x as f64).sin_cos();
+            assert!(
+                (s as f64 - xs).abs() < 4e-7 && (c as f64 - xc).abs() < 1.2e-7,
+                "{x}: {s} {c}"
+            );
+        }
+        // The disk map stays on the disk and covers its rim.
+        for (u, want) in [
+            (Vec2::new(1.0, 0.5), Vec2::new(1.0, 0.0)),
+            (Vec2::new(1.0, 1.0), Vec2::new(0.5f32.sqrt(), 0.5f32.sqrt())),
+            (Vec2::new(0.5, 0.0), Vec2::new(0.0, -1.0)),
+            (
+                Vec2::new(0.0, 0.75),
+                Vec2::new(
+                    -(0.125f32 * std::f32::consts::PI).cos(),
+                    (0.125f32 * std::f32::consts::PI).sin(),
+                ) * 1.0,
+            ),
+        ] {
+            let d = concentric_disk(u);
+            assert!((d - want).length() < 1e-6, "{u:?}: {d:?} vs {want:?}");
+        }
     }
 
     #[test]
