@@ -7,8 +7,9 @@
 //! towards the side it is seen from. A dielectric's frame keeps the surface's
 //! outward normal, because which side is inside decides its relative index.
 
-use crate::bsdf::{Bsdf, Bxdf, TrowbridgeReitz};
+use crate::bsdf::{Bsdf, Bxdf, Frame, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
+use crate::sampling::mix64;
 use crate::texture::{TexCoord, Texture};
 use std::sync::Arc;
 
@@ -148,6 +149,14 @@ pub enum Material {
         reflectance: Texture,
         transmittance: Texture,
     },
+    /// One of two materials at each shading point, the second with
+    /// probability `amount` (a float texture), as pbrt-v4's `mix`: the choice
+    /// is a hash of the point and the direction it is seen from, so it is
+    /// the same whenever the same point is seen the same way.
+    Mix {
+        materials: Box<[Material; 2]>,
+        amount: Texture,
+    },
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -201,6 +210,7 @@ impl Material {
         match self {
             Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } => roughness.is_smooth(),
             Material::ThinDielectric { .. } => true,
+            Material::Mix { materials, .. } => materials.iter().all(Material::is_specular),
             _ => false,
         }
     }
@@ -208,18 +218,40 @@ impl Material {
     /// True when light can pass through it by a specular or glossy path, or
     /// reflect off it so: light paths through such surfaces are caustics.
     pub fn is_caustic_caster(&self) -> bool {
-        matches!(
-            self,
-            Material::Conductor { .. }
-                | Material::Dielectric { .. }
-                | Material::ThinDielectric { .. }
-                | Material::CoatedDiffuse { .. }
-        )
+        match self {
+            Material::Mix { materials, .. } => materials.iter().any(Material::is_caustic_caster),
+            _ => matches!(
+                self,
+                Material::Conductor { .. }
+                    | Material::Dielectric { .. }
+                    | Material::ThinDielectric { .. }
+                    | Material::CoatedDiffuse { .. }
+            ),
+        }
+    }
+
+    /// The material a `Mix` shows at a point seen from `wo` (itself otherwise).
+    fn chosen(&self, tc: &TexCoord, wo: Vec3) -> &Material {
+        let Material::Mix { materials, amount } = self else {
+            return self;
+        };
+        let a = amount.evaluate_scalar(tc);
+        let second = if a <= 0.0 || a.is_nan() {
+            false
+        } else if a >= 1.0 {
+            true
+        } else {
+            mix_choice(tc.p, wo) <= a
+        };
+        materials[second as usize].chosen(tc, wo)
     }
 
     /// The BSDF at a surface point seen from direction `wo`.
     pub fn bsdf(&self, sp: &SurfacePoint, wo: Vec3) -> Bsdf {
         let tc = TexCoord { uv: sp.uv, p: sp.p };
+        if let Material::Mix { .. } = self {
+            return self.chosen(&tc, wo).bsdf(sp, wo);
+        }
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::diffuse(reflectance.evaluate(&tc)),
             Material::Emissive { albedo, .. } => Bxdf::diffuse(*albedo),
@@ -245,10 +277,30 @@ impl Material {
                 reflectance,
                 transmittance,
             } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
+            // Resolved to one of its materials above; a black surface if not.
+            Material::Mix { .. } => Bxdf::diffuse(Vec3::ZERO),
         };
         let ns = if sp.ng.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
+        if matches!(
+            self,
+            Material::Diffuse { .. } | Material::Emissive { .. } | Material::DiffuseTransmission { .. }
+        ) {
+            // Lambertian lobes look the same from every azimuth: any tangent
+            // will do, and one without a square root is cheaper.
+            return Bsdf {
+                bxdf,
+                frame: Frame::from_z(ns),
+            };
+        }
         Bsdf::new(bxdf, ns, sp.dpdu)
     }
+}
+
+/// A uniform number in [0, 1) from the bits of a point and a direction.
+fn mix_choice(p: Vec3, wo: Vec3) -> f32 {
+    let bits = |a: f32, b: f32| (a.to_bits() as u64) | ((b.to_bits() as u64) << 32);
+    let h = mix64(bits(p.x, p.y) ^ mix64(bits(p.z, wo.x) ^ mix64(bits(wo.y, wo.z))));
+    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 #[cfg(test)]
@@ -264,6 +316,50 @@ mod tests {
             ns: n,
             dpdu: Vec3::X,
         }
+    }
+
+    #[test]
+    fn a_mix_shows_its_second_material_with_probability_amount_the_same_each_time() {
+        let grey = |v: f32| Material::diffuse(v, v, v);
+        let mix = |amount: f32| Material::Mix {
+            materials: Box::new([grey(0.2), grey(0.8)]),
+            amount: Texture::from(Vec3::splat(amount)),
+        };
+        let albedo = |m: &Material, p: Vec3, wo: Vec3| {
+            let b = m.bsdf(&point_at(p, Vec3::Z), wo);
+            b.f(wo, Vec3::Z, TransportMode::Radiance).x * std::f32::consts::PI
+        };
+        let mut rng = crate::sampling::Rng::new(7, 0);
+        for amount in [0.0, 0.3, 0.75, 1.0] {
+            let m = mix(amount);
+            let n = 20000;
+            let mut second = 0;
+            for _ in 0..n {
+                let p = Vec3::new(rng.next_f32(), rng.next_f32(), 0.0);
+                let wo = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 1.0).normalize();
+                let a = albedo(&m, p, wo);
+                assert_eq!(a, albedo(&m, p, wo), "the same point and direction choose the same");
+                assert!((a - 0.2).abs() < 1e-5 || (a - 0.8).abs() < 1e-5, "{a}");
+                second += (a > 0.5) as u32;
+            }
+            // Four standard deviations of a binomial count.
+            let expected = amount * n as f32;
+            let sd = (n as f32 * amount * (1.0 - amount)).sqrt();
+            assert!(
+                (second as f32 - expected).abs() <= 4.0 * sd + 0.5,
+                "amount {amount}: {second} of {n}"
+            );
+        }
+        assert!(!mix(0.5).is_specular() && !mix(0.5).is_caustic_caster());
+        let glass_or_mirror = Material::Mix {
+            materials: Box::new([Material::glass(1.5), Material::mirror(Vec3::ONE)]),
+            amount: Texture::from(Vec3::splat(0.5)),
+        };
+        assert!(glass_or_mirror.is_specular() && glass_or_mirror.is_caustic_caster());
+    }
+
+    fn point_at(p: Vec3, n: Vec3) -> SurfacePoint {
+        SurfacePoint { p, ..point(n) }
     }
 
     #[test]

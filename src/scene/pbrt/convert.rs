@@ -1333,6 +1333,9 @@ fn reflects(m: &super::ir::Material) -> bool {
     }
 }
 
+/// Materials a `mix` may nest (a cycle of named materials would not end).
+const MAX_MIX_DEPTH: u32 = 16;
+
 /// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`).
 fn convert_material(
     scene: &PbrtScene,
@@ -1340,7 +1343,71 @@ fn convert_material(
     p: &Params,
     loc: &Loc,
 ) -> Result<std::result::Result<Material, String>> {
+    convert_nested(scene, ty, p, loc, 0)
+}
+
+/// `convert_material` of a material `depth` mixes deep.
+fn convert_nested(
+    scene: &PbrtScene,
+    ty: &str,
+    p: &Params,
+    loc: &Loc,
+    depth: u32,
+) -> Result<std::result::Result<Material, String>> {
     match ty {
+        "mix" => {
+            let names = p.get_strings("materials");
+            let at = place(p, "materials", loc);
+            let [a, b] = names else {
+                return Err(located(
+                    at,
+                    format!("mix: \"materials\" names {} materials, not two", names.len()),
+                ));
+            };
+            if depth >= MAX_MIX_DEPTH {
+                return Err(located(
+                    at,
+                    format!("mix: materials nest more than {MAX_MIX_DEPTH} deep (a cycle?)"),
+                ));
+            }
+            let mut parts = Vec::with_capacity(2);
+            for name in [a, b] {
+                let Some(m) = scene.named_materials.get(name).and_then(|&i| scene.materials.get(i)) else {
+                    return Err(located(at, format!("mix: material \"{name}\" is not defined")));
+                };
+                if matches!(m.ty.as_str(), "interface" | "none" | "") {
+                    return Ok(Err(format!("a mix with the \"{}\" material \"{name}\"", m.ty)));
+                }
+                let m_loc = m.loc.clone().unwrap_or_else(|| loc.clone());
+                match convert_nested(scene, &m.ty, &m.params, &m_loc, depth + 1)? {
+                    Ok(m) => parts.push(m),
+                    Err(why) => return Ok(Err(format!("mix: material \"{name}\": {why}"))),
+                }
+            }
+            let amount = match p.get_float_or_texture("amount")? {
+                None => Texture::from(Vec3::splat(0.5)),
+                Some(FloatOrTexture::Value(v)) if v.is_finite() => Texture::from(Vec3::splat(v)),
+                Some(FloatOrTexture::Value(v)) => {
+                    return Err(located(
+                        place(p, "amount", loc),
+                        format!("mix: \"amount\" {v} must be finite"),
+                    ))
+                }
+                Some(FloatOrTexture::Texture(name)) => match float_texture(scene, p, "amount", &name, loc)? {
+                    Ok(t) => t,
+                    Err(why) => return Ok(Err(why)),
+                },
+            };
+            let second = parts.pop();
+            let first = parts.pop();
+            match (first, second) {
+                (Some(x), Some(y)) => Ok(Ok(Material::Mix {
+                    materials: Box::new([x, y]),
+                    amount,
+                })),
+                _ => Ok(Err("mix: two materials expected".into())),
+            }
+        }
         "diffuse" => {
             let albedo = match p.get_spectrum_or_texture("reflectance")? {
                 None => Vec3::splat(0.5),

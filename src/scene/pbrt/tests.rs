@@ -1505,3 +1505,54 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
     assert_eq!(e.matches("curve").count(), 1, "{e}");
     assert_eq!(e.matches("ActiveTransform").count(), 2, "{e}");
 }
+
+#[test]
+fn mix_materials_convert_with_their_amount_and_refuse_what_they_cannot_hold() {
+    let text = "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.2 0.2 0.2]\n\
+                MakeNamedMaterial \"b\" \"string type\" \"conductor\"\n\
+                MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string materials\" [\"a\" \"b\"] \"float amount\" 0.25\n\
+                NamedMaterial \"m\"\nShape \"sphere\"\n";
+    let c = converted(text, Files::default(), false).unwrap();
+    let m = c.desc.materials.iter().find(|(n, _)| n == "m").map(|(_, m)| m).unwrap();
+    let crate::material::Material::Mix { materials, amount } = m else {
+        panic!("{m:?}")
+    };
+    assert_eq!(materials[0], crate::material::Material::diffuse(0.2, 0.2, 0.2));
+    assert!(matches!(materials[1], crate::material::Material::Conductor { .. }));
+    assert_eq!(*amount, crate::texture::Texture::from(Vec3::splat(0.25)));
+    // A part we lack makes the whole mix unsupported (grey with --lenient).
+    let text = "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\
+                MakeNamedMaterial \"h\" \"string type\" \"hair\"\n\
+                Material \"mix\" \"string materials\" [\"a\" \"h\"]\nShape \"sphere\"\n";
+    let e = converted(text, Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:4: material (mix: material \"h\": type \"hair\" is not supported)"),
+        "{e}"
+    );
+    // Names that are not two defined materials are errors at the parameter.
+    let e = converted(
+        "WorldBegin\nMaterial \"mix\" \"string materials\" [\"x\" \"y\"]\nShape \"sphere\"\n",
+        Files::default(),
+        true,
+    )
+    .unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:2: mix: material \"x\" is not defined"),
+        "{e}"
+    );
+    let e = converted(
+        "WorldBegin\nMaterial \"mix\" \"string materials\" \"x\"\nShape \"sphere\"\n",
+        Files::default(),
+        true,
+    )
+    .unwrap_err();
+    assert!(e.contains("names 1 materials, not two"), "{e}");
+    let e = converted(
+        "WorldBegin\nMakeNamedMaterial \"m\" \"string type\" \"mix\" \"string materials\" [\"m\" \"m\"]\n\
+         NamedMaterial \"m\"\nShape \"sphere\"\n",
+        Files::default(),
+        true,
+    )
+    .unwrap_err();
+    assert!(e.contains("mix: materials nest more than 16 deep (a cycle?)"), "{e}");
+}
