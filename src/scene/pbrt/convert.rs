@@ -692,6 +692,17 @@ impl<'a> Conv<'a> {
         let seed = sp.get_int("seed", 0)?;
         if let Some(l) = sp.loc_of("seed").cloned() {
             set(self, Some(&l), "seed", Value::Int(seed.max(0) as u64));
+        } else if let Some(o) = scene.options.iter().rev().find(|o| o.name == "seed") {
+            // pbrt-v4's samplers default their seed to the `seed` option.
+            match o.value.parse::<i64>() {
+                Ok(v) => set(self, Some(&o.loc), "seed", Value::Int(v.max(0) as u64)),
+                Err(_) => {
+                    return Err(located(
+                        &o.loc,
+                        format!("Option \"seed\": {} is not an integer", o.value),
+                    ))
+                }
+            }
         }
         for (name, ty) in [
             ("jitter", super::ParamType::Bool),
@@ -809,7 +820,7 @@ impl<'a> Conv<'a> {
             }
         }
         self.read.push(ip);
-        for o in &scene.options {
+        for o in scene.options.iter().filter(|o| o.name != "seed") {
             self.warn(&o.loc, format!("Option \"{}\" is ignored", o.name));
         }
         Ok(out)
@@ -2695,6 +2706,13 @@ mod tests {
         assert_eq!(d.preset.get("filter").map(|v| v.0), Some(Value::Name("gaussian")));
         assert_eq!(d.preset.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
         assert_eq!(s.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
+        // The seed option is the samplers' default seed; a sampler's own wins.
+        let d = ok("Option \"seed\" 7\nWorldBegin\n").desc.settings;
+        assert_eq!(d.scene_file.get("seed").map(|v| v.0), Some(Value::Int(7)));
+        let d = ok("Option \"seed\" 7\nSampler \"sobol\" \"integer seed\" 3\nWorldBegin\n")
+            .desc
+            .settings;
+        assert_eq!(d.scene_file.get("seed").map(|v| v.0), Some(Value::Int(3)));
         for (pbrt, ours) in [("sobol", "sobol"), ("pmj02bn", "sobol"), ("stratified", "independent")] {
             let d = ok(&format!("Sampler \"{pbrt}\"\nWorldBegin\n")).desc.settings;
             assert_eq!(
