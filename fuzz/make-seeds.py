@@ -247,3 +247,19 @@ Shape "plymesh" "string filename" "mesh.ply"
     "property float z\nproperty float u\nproperty float v\nelement face 1\n"
     "property list uchar int vertex_indices\nproperty int face_indices\nend_header\n"
     "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2 0\n")
+put("pbrt", "mix-spectrum-file.pbrt", """Option "seed" 3
+LookAt 0 0 -4  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 40 ] "float shutterclose" [ 0.5 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ] "float iso" [ 200 ]
+WorldBegin
+LightSource "point" "rgb I" [ 5 5 5 ] "point3 from" [ 0 0 -4 ]
+MakeNamedMaterial "a" "string type" "diffuse"
+MakeNamedMaterial "b" "string type" "conductor" "spectrum k" "gold.spd" "spectrum eta" "metal-Au-eta"
+Texture "bump" "float" "constant" "float value" [ 0.1 ]
+MakeNamedMaterial "m" "string type" "mix" "string materials" [ "a" "b" ] "float amount" [ 0.3 ]
+    "texture displacement" "bump"
+NamedMaterial "m"
+Shape "sphere"
+Material "interface"
+Shape "sphere" "float radius" [ 2 ]
+""" + "\0" + "# wavelength value\n400 1.9\n500 1.8\n600 2.9\n700 4.0\n")

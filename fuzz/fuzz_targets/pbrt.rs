@@ -6,7 +6,8 @@
 //!
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
-//! reader, as any `.ply.gz`), so the fuzzer mutates the `plymesh` path too.
+//! reader, as any `.ply.gz`) and as any `.spd` spectrum file, so the fuzzer
+//! mutates the `plymesh` and spectrum file paths too.
 //! `virtual/inc.pbrt` is a small fixed file for `Include` and `Import`.
 
 #![no_main]
@@ -24,7 +25,7 @@ use std::path::Path;
 const INCLUDE: &[u8] = b"MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
 AttributeBegin\nNamedMaterial \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n";
 
-/// The fixed include file, and the input's tail as every PLY.
+/// The fixed include file, and the input's tail as every PLY and spectrum file.
 struct Files<'a> {
     ply: &'a [u8],
 }
@@ -34,7 +35,7 @@ impl FileSource for Files<'_> {
         let name = path.to_string_lossy();
         if path == Path::new("virtual/inc.pbrt") {
             Ok(INCLUDE.to_vec())
-        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") {
+        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") || name.ends_with(".spd") {
             Ok(self.ply.to_vec())
         } else {
             Err(Error::new(ErrorKind::NotFound, "not among the fuzz target's files"))
