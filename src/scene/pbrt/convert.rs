@@ -1079,18 +1079,34 @@ impl<'a> Conv<'a> {
         };
         // Bump and normal maps only perturb the shading normal: a lenient
         // render keeps the material and drops them (pbrt-v4's look, flatter).
-        for (n, what) in [
-            ("displacement", "bump mapping (\"displacement\")"),
-            ("normalmap", "a normal map"),
-        ] {
-            if let Some(param) = m.params.get(n) {
-                let label = match &m.name {
-                    Some(n) => format!("material \"{n}\" (type \"{}\")", m.ty),
-                    None => format!("material of type \"{}\"", m.ty),
-                };
-                let at = param.loc.clone();
-                m.params.mark_used(n, param.ty);
-                self.problem(Kind::Other, &at, format!("{label}: {what} is not supported"));
+        // A mix's materials included: the one chosen at a point brings its own.
+        let mut with_parts = vec![m];
+        let mut i = 0;
+        while i < with_parts.len() && with_parts.len() <= MAX_MIX_DEPTH as usize * 2 {
+            let part = with_parts[i];
+            i += 1;
+            if part.ty == "mix" {
+                for name in part.params.get_strings("materials") {
+                    if let Some(p) = scene.named_materials.get(name).and_then(|&j| scene.materials.get(j)) {
+                        if !with_parts.iter().any(|q| std::ptr::eq(*q, p)) {
+                            with_parts.push(p);
+                        }
+                    }
+                }
+            }
+            for (n, what) in [
+                ("displacement", "bump mapping (\"displacement\")"),
+                ("normalmap", "a normal map"),
+            ] {
+                if let Some(param) = part.params.get(n) {
+                    let label = match &part.name {
+                        Some(n) => format!("material \"{n}\" (type \"{}\")", part.ty),
+                        None => format!("material of type \"{}\"", part.ty),
+                    };
+                    let at = param.loc.clone();
+                    part.params.mark_used(n, param.ty);
+                    self.problem(Kind::Other, &at, format!("{label}: {what} is not supported"));
+                }
             }
         }
         let converted = match convert_material(scene, &m.ty, &m.params, &loc)? {

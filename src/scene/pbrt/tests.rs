@@ -1440,6 +1440,16 @@ fn bump_maps_are_refused_or_with_lenient_dropped_keeping_the_material() {
         c.warnings
     );
     assert!(!c.warnings.iter().any(|w| w.contains("not used")), "{:?}", c.warnings);
+    // A bump map on a material only a mix uses is reported too, once.
+    let mixed = "WorldBegin\nTexture \"b\" \"float\" \"constant\" \"float value\" 0.1\n\
+                 MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"texture displacement\" \"b\"\n\
+                 MakeNamedMaterial \"d\" \"string type\" \"diffuse\"\n\
+                 Material \"mix\" \"string materials\" [\"d\" \"gold\"]\nShape \"sphere\"\nShape \"disk\"\n";
+    let e = converted(mixed, Files::default(), false).unwrap_err();
+    assert!(e.starts_with("scene/main.pbrt:3: material \"gold\""), "{e}");
+    assert_eq!(e.matches("bump mapping").count(), 1, "{e}");
+    let c = converted(mixed, Files::default(), true).unwrap();
+    assert!(!c.warnings.iter().any(|w| w.contains("not used")), "{:?}", c.warnings);
 }
 
 #[test]
