@@ -335,6 +335,22 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         scene.triangle_count(),
         scene.dropped_triangles
     );
+    println!(
+        "spheres: {}, disks: {} (besides the lights)",
+        scene.desc.spheres.len(),
+        scene.desc.disks.len()
+    );
+    // Lights by kind, in the order kinds first appear.
+    let mut kinds: Vec<(&str, usize)> = vec![];
+    for l in &scene.lights {
+        match kinds.iter_mut().find(|(k, _)| *k == l.kind()) {
+            Some((_, n)) => *n += 1,
+            None => kinds.push((l.kind(), 1)),
+        }
+    }
+    let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    println!("lights: {} ({})", scene.lights.len(), kinds.join(", "));
+    println!("materials: {}", scene.materials.len());
     println!("bvh nodes: {} ({} leaves), depth {}", s.nodes, s.leaves, s.depth);
     let hist: Vec<String> = s
         .leaf_sizes

@@ -295,6 +295,19 @@ impl Light {
         }
     }
 
+    /// The kind of light, as `info` names it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Sphere { .. } => "sphere",
+            Light::Point { .. } => "point",
+            Light::Triangle { .. } => "triangle",
+            Light::Disk { .. } => "disk",
+            Light::Spot { .. } => "spot",
+            Light::Distant { .. } => "distant",
+            Light::Infinite { .. } => "infinite",
+        }
+    }
+
     /// Multiplies what the light emits by `k` (a camera's exposure).
     pub fn scale_emission(&mut self, k: f32) {
         match self {

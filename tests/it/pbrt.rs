@@ -236,6 +236,33 @@ fn the_three_bitterli_scenes_render_with_their_references_mean() {
 }
 
 #[test]
+fn info_counts_the_bitterli_scenes_triangles_lights_and_materials() {
+    let Some(dir) = bitterli() else { return };
+    // From the files: cornell-box's one quad light is two emitting
+    // triangles, veach-mis has three sphere lights, water-caustic one quad;
+    // each material is a MakeNamedMaterial (8, 6 and 9 of them).
+    for (scene, lines) in [
+        (
+            "cornell-box",
+            ["triangles: 36 ", "lights: 2 (2 triangle)", "materials: 8"],
+        ),
+        ("veach-mis", ["triangles: 52 ", "lights: 3 (3 sphere)", "materials: 6"]),
+        (
+            "water-caustic",
+            ["triangles: 103487 ", "lights: 2 (2 triangle)", "materials: 9"],
+        ),
+    ] {
+        let path = dir.join(scene).join("scene-v4.pbrt");
+        let o = raytracer(&["info", "--scene", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
+        let out = String::from_utf8_lossy(&o.stdout);
+        for line in lines {
+            assert!(out.contains(line), "{scene}: no '{line}' in\n{out}");
+        }
+    }
+}
+
+#[test]
 fn veach_mis_light_bsdf_and_mis_sampling_converge_together_and_mis_wins() {
     // Veach's scene: small lights over sharp plates favour BSDF sampling,
     // large lights over rough plates light sampling; MIS must do no worse
