@@ -29,7 +29,7 @@ pub struct Cli {
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Print statistics of a scene: triangles, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
+    /// Print statistics of a scene: triangles, spheres and disks, lights by kind, materials, BVH nodes, depth, leaf sizes, SAH cost, build time, memory.
     Info(SceneArgs),
     /// Compare two linear images (EXR or PFM): RMSE, relative MSE, mean luminance ratio.
     Compare(CompareArgs),
