@@ -368,14 +368,22 @@ impl<'a> Conv<'a> {
         let scene = self.scene;
         let film = &scene.film;
         let film_loc = film.loc.clone().unwrap_or_else(|| self.default_loc());
-        if film.ty != "rgb" {
+        let fp = &film.params;
+        if film.ty == "gbuffer" {
+            // pbrt-v4's G-buffer film records the same RGB image as "rgb",
+            // with the geometry's channels beside it.
+            self.warn(
+                &film_loc,
+                "Film \"gbuffer\": its RGB image is rendered, its geometry channels are not written",
+            );
+            fp.mark_used("coordinatesystem", super::ParamType::String);
+        } else if film.ty != "rgb" {
             self.problem(
                 Kind::Other,
                 &film_loc,
-                format!("Film \"{}\" is not supported (only \"rgb\")", film.ty),
+                format!("Film \"{}\" is not supported (only \"rgb\" and \"gbuffer\")", film.ty),
             );
         }
-        let fp = &film.params;
         let width = fp.get_int("xresolution", 1280)?;
         let height = fp.get_int("yresolution", 720)?;
         if width <= 0 || height <= 0 {

@@ -1566,3 +1566,31 @@ fn mix_materials_convert_with_their_amount_and_refuse_what_they_cannot_hold() {
     .unwrap_err();
     assert!(e.contains("mix: materials nest more than 16 deep (a cycle?)"), "{e}");
 }
+
+#[test]
+fn a_gbuffer_film_renders_its_rgb_image_and_a_spectral_one_is_refused() {
+    let rgb = converted(
+        "Film \"rgb\" \"integer xresolution\" 40 \"integer yresolution\" 20\nWorldBegin\n",
+        Files::default(),
+        false,
+    )
+    .unwrap();
+    let g = converted(
+        "Film \"gbuffer\" \"integer xresolution\" 40 \"integer yresolution\" 20 \"string coordinatesystem\" \"world\"\nWorldBegin\n",
+        Files::default(),
+        false,
+    )
+    .unwrap();
+    assert_eq!((g.desc.camera.width, g.desc.camera.height), (40, 20));
+    assert_eq!(format!("{:?}", g.desc.camera), format!("{:?}", rgb.desc.camera));
+    assert!(
+        g.warnings
+            .iter()
+            .any(|w| w.contains("geometry channels are not written")),
+        "{:?}",
+        g.warnings
+    );
+    assert!(!g.warnings.iter().any(|w| w.contains("not used")), "{:?}", g.warnings);
+    let e = converted("Film \"spectral\"\nWorldBegin\n", Files::default(), false).unwrap_err();
+    assert!(e.contains("Film \"spectral\" is not supported"), "{e}");
+}
