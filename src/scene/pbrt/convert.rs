@@ -1433,14 +1433,12 @@ fn convert_nested(
                     Err(why) => return Ok(Err(why)),
                 },
             };
-            let second = parts.pop();
-            let first = parts.pop();
-            match (first, second) {
-                (Some(x), Some(y)) => Ok(Ok(Material::Mix {
-                    materials: Box::new([x, y]),
+            match <[Material; 2]>::try_from(parts) {
+                Ok(materials) => Ok(Ok(Material::Mix {
+                    materials: Box::new(materials),
                     amount,
                 })),
-                _ => Ok(Err("mix: two materials expected".into())),
+                Err(_) => Ok(Err("mix: two materials expected".into())),
             }
         }
         "diffuse" => {
