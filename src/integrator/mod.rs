@@ -426,11 +426,21 @@ pub fn add_pixel_samples(
         let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
         let ray = camera_ray(cam, pos, &mut sampler);
         stats.camera_rays += 1;
-        let l = est.li(scene, &ray, &mut sampler, stats);
+        let l = clamp_sample(est.li(scene, &ray, &mut sampler, stats), settings.max_component);
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
             block.splat((x, y), pos, l);
         }
+    }
+}
+
+/// `l` scaled down so that its largest component is at most `max`, as
+/// pbrt-v4's film does with `maxcomponentvalue`: scaling the whole colour
+/// keeps the sample's hue.
+pub fn clamp_sample(l: Vec3, max: Option<f32>) -> Vec3 {
+    match max {
+        Some(m) if l.max_element() > m => l * (m / l.max_element()),
+        _ => l,
     }
 }
 

@@ -192,7 +192,7 @@ impl checkpoint::Progressive for Progressive<'_> {
         let r = self.rect;
         format!(
             "integrator=path film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} sampler={} \
-             filter={:?} seed={} crop={},{},{},{}",
+             filter={:?} seed={} crop={},{},{},{}{}",
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
@@ -203,7 +203,9 @@ impl checkpoint::Progressive for Progressive<'_> {
             r.x0,
             r.y0,
             r.x1,
-            r.y1
+            r.y1,
+            // Absent when unset, so older checkpoints still match.
+            s.max_component.map_or(String::new(), |m| format!(" max_component={m}"))
         )
     }
 
@@ -294,6 +296,34 @@ mod tests {
             let expected = Vec3::new(le, 2.0 * le, 0.5 * le) / (1.0 - a);
             let err = ((mean - expected) / expected).abs().max_element();
             assert!(err < 0.01, "albedo {a}: {mean:?} vs {expected:?}");
+        }
+    }
+
+    #[test]
+    fn max_component_scales_each_sample_down_keeping_its_hue() {
+        // Every sample here is at least Le (1 + a + ... + a^4), whose green
+        // is above 1: clamped to 1, each sample is Le / Le.y exactly.
+        let le = Vec3::new(1.0, 2.0, 0.5);
+        let scene = closed_sphere(
+            Material::Emissive {
+                albedo: Vec3::splat(0.5),
+                le,
+            },
+            None,
+            8,
+        );
+        let free = render(&scene, &path(16, None), &|| {}).unwrap().film;
+        assert!((free.mean(0, 0, 8, 8).y - 4.0).abs() < 0.1);
+        for integrator in [IntegratorKind::Path, IntegratorKind::Direct] {
+            let s = RenderSettings {
+                integrator,
+                max_component: Some(1.0),
+                ..path(16, None)
+            };
+            let film = render(&scene, &s, &|| {}).unwrap().film;
+            for p in &film.pixels {
+                assert!((*p - le / 2.0).abs().max_element() < 1e-5, "{integrator:?}: {p:?}");
+            }
         }
     }
 

@@ -244,6 +244,9 @@ pub struct RenderSettings {
     pub light_sampling: LightSampling,
     /// Where camera samples' random numbers come from.
     pub sampler: SamplerKind,
+    /// Largest RGB component a camera sample keeps (the sample is scaled
+    /// down to it); `None`: no clamp. SPPM ignores it, as pbrt-v4 does.
+    pub max_component: Option<f32>,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
@@ -313,6 +316,9 @@ impl RenderSettings {
         }
         if let Some(k) = p.gather.k {
             v.push(("gather_k", Value::Int(k as u64)));
+        }
+        if let Some(m) = self.max_component {
+            v.push(("max_component", Value::Real(m)));
         }
         if let Some(t) = self.threads {
             v.push(("threads", Value::Int(t as u64)));
@@ -682,6 +688,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         max_depth: int("max_depth").map(|d| d as u32),
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
+        max_component: real("max_component"),
         photon: PhotonSettings {
             photons: int("photons").unwrap_or_default(),
             // SPPM converges to the answer only if photon paths are not cut

@@ -87,6 +87,20 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &[],
     },
     Spec {
+        name: "max_component",
+        kind: Kind::Real {
+            min: 0.0,
+            min_inclusive: false,
+            max: f32::MAX,
+        },
+        default: DefaultValue::Unset("no clamp"),
+        doc: "Scale down each camera sample whose largest RGB component exceeds this, to it, before it reaches the \
+              film (pbrt-v4's Film \"maxcomponentvalue\"; not SPPM, as there): fireflies go, at the price of darkening \
+              what is bright",
+        in_scene_file: true,
+        only_for: &["direct", "photon", "path"],
+    },
+    Spec {
         name: "photons",
         kind: Kind::Count { min: 0, max: 1 << 40 },
         default: DefaultValue::Int(200_000),

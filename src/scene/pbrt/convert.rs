@@ -718,6 +718,14 @@ impl<'a> Conv<'a> {
         ] {
             sp.mark_used(name, ty);
         }
+        // The film's clamp of each sample (pbrt-v4: infinite by default).
+        let fp = &scene.film.params;
+        if let Some(l) = fp.loc_of("maxcomponentvalue").cloned() {
+            let max = fp.get_float("maxcomponentvalue", f32::INFINITY)?;
+            if max < f32::MAX {
+                set(self, Some(&l), "max_component", Value::Real(max));
+            }
+        }
         self.read.push(sp);
 
         // Pixel filter.
@@ -2743,6 +2751,26 @@ mod tests {
                 "{pbrt}"
             );
         }
+    }
+
+    #[test]
+    fn film_clamp_is_the_max_component_setting() {
+        let c = ok("Film \"rgb\" \"float maxcomponentvalue\" [ 10 ]\nWorldBegin\n");
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("max_component").map(|v| v.0), Some(Value::Real(10.0)));
+        assert!(
+            c.warnings.iter().all(|w| !w.contains("maxcomponentvalue")),
+            "{:?}",
+            c.warnings
+        );
+        // Unset, pbrt-v4's film does not clamp.
+        let d = ok("WorldBegin\n").desc.settings;
+        assert!(d.scene_file.get("max_component").is_none() && d.preset.get("max_component").is_none());
+        // A clamp that leaves nothing is refused where it is written.
+        let e = convert_text("Film \"rgb\"\n  \"float maxcomponentvalue\" [ 0 ]\nWorldBegin\n", false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("dir/main.pbrt:2:") && e.contains("max_component"), "{e}");
     }
 
     #[test]
