@@ -7,7 +7,7 @@
 //! towards the side it is seen from. A dielectric's frame keeps the surface's
 //! outward normal, because which side is inside decides its relative index.
 
-use crate::bsdf::{Bsdf, Bxdf, Frame, TrowbridgeReitz};
+use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::mix64;
 use crate::texture::{TexCoord, Texture};
@@ -144,6 +144,21 @@ pub enum Material {
         eta: f32,
         thickness: f32,
     },
+    /// A dielectric coat of index `eta` over a metal (pbrt-v4
+    /// `coatedconductor`, the random-walk model of
+    /// `bsdf::CoatedConductorBxdf`); the metal's Fresnel terms are given as
+    /// in air.
+    CoatedConductor {
+        interface_roughness: MaterialRoughness,
+        eta: f32,
+        thickness: f32,
+        conductor: ConductorFresnel,
+        conductor_roughness: MaterialRoughness,
+        /// Scattering events of a walk inside the coat (pbrt-v4: 10).
+        max_depth: u32,
+        /// Walks per evaluation (pbrt-v4: 1).
+        samples: u32,
+    },
     /// Lambertian reflection and transmission (pbrt-v4 `diffusetransmission`).
     DiffuseTransmission {
         reflectance: Texture,
@@ -210,6 +225,11 @@ impl Material {
         match self {
             Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } => roughness.is_smooth(),
             Material::ThinDielectric { .. } => true,
+            Material::CoatedConductor {
+                interface_roughness,
+                conductor_roughness,
+                ..
+            } => interface_roughness.is_smooth() && conductor_roughness.is_smooth(),
             Material::Mix { materials, .. } => materials.iter().all(Material::is_specular),
             _ => false,
         }
@@ -226,6 +246,7 @@ impl Material {
                     | Material::Dielectric { .. }
                     | Material::ThinDielectric { .. }
                     | Material::CoatedDiffuse { .. }
+                    | Material::CoatedConductor { .. }
             ),
         }
     }
@@ -273,6 +294,23 @@ impl Material {
                 eta,
                 thickness,
             } => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, reflectance.evaluate(&tc), *thickness),
+            Material::CoatedConductor {
+                interface_roughness,
+                eta,
+                thickness,
+                conductor,
+                conductor_roughness,
+                max_depth,
+                samples,
+            } => {
+                let coat = DielectricBxdf::new(interface_roughness.distribution(&tc), *eta);
+                let d = conductor_roughness.distribution(&tc);
+                let metal = match conductor {
+                    ConductorFresnel::Ior { eta, k } => ConductorBxdf::new(d, *eta, *k),
+                    ConductorFresnel::Reflectance(r) => ConductorBxdf::from_reflectance(d, r.evaluate(&tc)),
+                };
+                Bxdf::coated_conductor(coat, metal, *thickness, *max_depth, *samples)
+            }
             Material::DiffuseTransmission {
                 reflectance,
                 transmittance,

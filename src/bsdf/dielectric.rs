@@ -18,6 +18,27 @@ use super::fresnel::{fr_dielectric, reflect, refract};
 use super::{abs_cos_theta, cos_theta, mirror, same_hemisphere, BsdfSample, BxdfFlags, TransportMode, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 
+/// Which of an interface's lobes a sample may take (pbrt-v4's
+/// `BxDFReflTransFlags`): a layered model walks inside a coat by asking for
+/// one of them, with the density of that choice alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Lobes {
+    All,
+    Reflection,
+    Transmission,
+}
+
+impl Lobes {
+    /// The probabilities of reflecting and transmitting, R and T masked.
+    fn mask(self, r: f32, t: f32) -> (f32, f32) {
+        match self {
+            Lobes::All => (r, t),
+            Lobes::Reflection => (r, 0.0),
+            Lobes::Transmission => (0.0, t),
+        }
+    }
+}
+
 /// An interface between the outside (+z side) and a medium of relative index
 /// `eta` (inside / outside) below it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,7 +56,7 @@ impl DielectricBxdf {
     }
 
     /// True when the interface scatters only in the specular directions.
-    fn is_specular(&self) -> bool {
+    pub(super) fn is_specular(&self) -> bool {
         self.eta == 1.0 || self.distrib.effectively_smooth()
     }
 
@@ -56,16 +77,28 @@ impl DielectricBxdf {
     }
 
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        self.sample_lobes(wo, uc, u, mode, Lobes::All)
+    }
+
+    /// `sample_f` limited to `lobes`, its density that of the choice within them.
+    pub(super) fn sample_lobes(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
         if self.is_specular() {
-            self.sample_specular(wo, uc, mode)
+            self.sample_specular(wo, uc, mode, lobes)
         } else {
-            self.sample_rough(wo, uc, u, mode)
+            self.sample_rough(wo, uc, u, mode, lobes)
         }
     }
 
-    fn sample_specular(&self, wo: Vec3, uc: f32, mode: TransportMode) -> Option<BsdfSample> {
-        let r = fr_dielectric(cos_theta(wo), self.eta);
-        let t = 1.0 - r;
+    fn sample_specular(&self, wo: Vec3, uc: f32, mode: TransportMode, lobes: Lobes) -> Option<BsdfSample> {
+        let r0 = fr_dielectric(cos_theta(wo), self.eta);
+        let (r, t) = lobes.mask(r0, 1.0 - r0);
         if r + t <= 0.0 {
             return None;
         }
@@ -98,13 +131,13 @@ impl DielectricBxdf {
         })
     }
 
-    fn sample_rough(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample_rough(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode, lobes: Lobes) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
         let wm = self.distrib.sample_wm(wo, u);
-        let r = fr_dielectric(wo.dot(wm), self.eta);
-        let t = 1.0 - r;
+        let r0 = fr_dielectric(wo.dot(wm), self.eta);
+        let (r, t) = lobes.mask(r0, 1.0 - r0);
         if r + t <= 0.0 {
             return None;
         }
@@ -198,14 +231,19 @@ impl DielectricBxdf {
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_lobes(wo, wi, Lobes::All)
+    }
+
+    /// `pdf` of [`Self::sample_lobes`] limited to `lobes`.
+    pub(super) fn pdf_lobes(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
         if self.is_specular() {
             return 0.0;
         }
         let Some((wm, etap)) = self.half_vector(wo, wi) else {
             return 0.0;
         };
-        let r = fr_dielectric(wo.dot(wm), self.eta);
-        let t = 1.0 - r;
+        let r0 = fr_dielectric(wo.dot(wm), self.eta);
+        let (r, t) = lobes.mask(r0, 1.0 - r0);
         if r + t <= 0.0 {
             return 0.0;
         }

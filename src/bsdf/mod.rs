@@ -13,6 +13,7 @@
 //! | [`ConductorBxdf`] | `conductor` | pbrt-v4 9.4 (complex Fresnel), 9.6 (Torrance-Sparrow, Trowbridge-Reitz) |
 //! | [`DielectricBxdf`], [`ThinDielectricBxdf`] | `dielectric` | pbrt-v4 9.3, 9.5, 9.7; Walter et al. 2007 |
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
+//! | [`CoatedConductorBxdf`] | `layered` | pbrt-v4's `LayeredBxDF` random walk (Guo et al. 2018) for `f`; a deterministic mixture for sampling |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
 //! | Fresnel terms | `fresnel` | pbrt-v4 9.3-9.4 |
 //! | named metals | `metals` | pbrt-v4's `metal-*-eta/k` spectra, fitted to RGB |
@@ -33,6 +34,7 @@ mod dielectric;
 mod diffuse;
 mod frame;
 mod fresnel;
+mod layered;
 mod metals;
 mod microfacet;
 
@@ -47,6 +49,7 @@ pub use dielectric::{DielectricBxdf, ThinDielectricBxdf};
 pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
 pub use frame::Frame;
 pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, reflect, refract};
+pub use layered::CoatedConductorBxdf;
 pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
 pub use microfacet::TrowbridgeReitz;
 
@@ -229,6 +232,7 @@ pub enum Bxdf {
     Dielectric(DielectricBxdf),
     ThinDielectric(ThinDielectricBxdf),
     CoatedDiffuse(CoatedDiffuseBxdf),
+    CoatedConductor(CoatedConductorBxdf),
 }
 
 impl Bxdf {
@@ -269,6 +273,19 @@ impl Bxdf {
         Bxdf::CoatedDiffuse(CoatedDiffuseBxdf::new(distrib, eta, r, thickness))
     }
 
+    /// A dielectric coat over a metal given as it would be in air (pbrt-v4's
+    /// `coatedconductor`; its defaults: thickness 0.01, 10 scattering
+    /// events, 1 walk per evaluation).
+    pub fn coated_conductor(
+        coat: DielectricBxdf,
+        base: ConductorBxdf,
+        thickness: f32,
+        max_depth: u32,
+        samples: u32,
+    ) -> Self {
+        Bxdf::CoatedConductor(CoatedConductorBxdf::new(coat, base, thickness, max_depth, samples))
+    }
+
     /// The BSDF value for the pair (`wo`, `wi`), without the cosine; zero
     /// for specular lobes.
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
@@ -279,6 +296,7 @@ impl Bxdf {
             Bxdf::Dielectric(b) => b.f(wo, wi, mode),
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
+            Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -294,6 +312,7 @@ impl Bxdf {
             Bxdf::Dielectric(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
+            Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }
@@ -309,6 +328,7 @@ impl Bxdf {
             Bxdf::Dielectric(b) => b.pdf(wo, wi),
             Bxdf::ThinDielectric(_) => 0.0,
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
+            Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
         }
     }
 
@@ -320,6 +340,7 @@ impl Bxdf {
             Bxdf::Dielectric(b) => b.flags(),
             Bxdf::ThinDielectric(b) => b.flags(),
             Bxdf::CoatedDiffuse(b) => b.flags(),
+            Bxdf::CoatedConductor(b) => b.flags(),
         }
     }
 }
@@ -369,7 +390,12 @@ impl Bsdf {
     /// Like [`Bxdf::sample_f`], with `wo` and the returned `wi` in world space.
     /// Whether `sample_f` reads its `uc` (to choose between lobes).
     pub fn uses_lobe_choice(&self) -> bool {
-        !matches!(self.bxdf, Bxdf::Diffuse(_) | Bxdf::Conductor(_))
+        match self.bxdf {
+            Bxdf::Diffuse(_) | Bxdf::Conductor(_) => false,
+            // Both smooth: one specular reflection, no choice.
+            Bxdf::CoatedConductor(b) => b.flags() != BxdfFlags::SPECULAR_REFLECTION,
+            _ => true,
+        }
     }
 
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {

@@ -1587,6 +1587,97 @@ fn convert_nested(
                 thickness,
             }))
         }
+        "coatedconductor" => {
+            if p.get_spectrum("albedo")?
+                .is_some_and(|a| a.to_rgb().is_none_or(|c| c.max_element() > 0.0))
+            {
+                return Ok(Err(
+                    "a coat medium that scatters (\"albedo\" > 0) is not supported".into()
+                ));
+            }
+            p.mark_used("g", super::ParamType::Float);
+            let interface_roughness = match roughness_of(scene, p, loc, "interface.")? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            let conductor_roughness = match roughness_of(scene, p, loc, "conductor.")? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            if p.has("reflectance") && (p.has("conductor.eta") || p.has("conductor.k")) {
+                return Err(located(
+                    loc,
+                    "coatedconductor: give \"reflectance\" or \"conductor.eta\" and \"conductor.k\", not both",
+                ));
+            }
+            let conductor = if p.has("reflectance") {
+                match colour(p, "reflectance", loc)? {
+                    Ok(r) => ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE))),
+                    Err(why) => return Ok(Err(why)),
+                }
+            } else {
+                // pbrt-v4's default metal under the coat is copper.
+                let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
+                let read = |name: &str, default: Vec3| -> Result<std::result::Result<Vec3, String>> {
+                    if p.has(name) {
+                        colour(p, name, loc)
+                    } else {
+                        Ok(Ok(default))
+                    }
+                };
+                match (read("conductor.eta", cu_eta)?, read("conductor.k", cu_k)?) {
+                    (Ok(eta), Ok(k)) => {
+                        if eta.min_element() <= 0.0 || k.min_element() < 0.0 {
+                            return Err(located(
+                                loc,
+                                "coatedconductor: \"conductor.eta\" must be positive and \"conductor.k\" not negative",
+                            ));
+                        }
+                        ConductorFresnel::Ior { eta, k }
+                    }
+                    (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
+                }
+            };
+            let eta = match p.get("interface.eta") {
+                Some(e) if e.ty != super::ParamType::Float => match p.get_spectrum("interface.eta")? {
+                    Some(SpectrumValue::Sampled(s))
+                        if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
+                    {
+                        s.value[0]
+                    }
+                    _ => {
+                        return Ok(Err(
+                            "an \"interface.eta\" that varies with wavelength (dispersion) is not supported".into(),
+                        ))
+                    }
+                },
+                _ => p.get_float("interface.eta", 1.5)?,
+            };
+            let thickness = p.get_float("thickness", 0.01)?;
+            let max_depth = p.get_int("maxdepth", 10)?;
+            let samples = p.get_int("nsamples", 1)?;
+            if !(eta.is_finite() && eta > 0.0 && thickness.is_finite() && thickness >= 0.0) {
+                return Err(located(
+                    loc,
+                    "coatedconductor: \"interface.eta\" must be positive and \"thickness\" not negative",
+                ));
+            }
+            if !(0..=1000).contains(&max_depth) || !(1..=1000).contains(&samples) {
+                return Err(located(
+                    loc,
+                    "coatedconductor: \"maxdepth\" must be in 0..1000 and \"nsamples\" in 1..1000",
+                ));
+            }
+            Ok(Ok(Material::CoatedConductor {
+                interface_roughness,
+                eta,
+                thickness,
+                conductor,
+                conductor_roughness,
+                max_depth: max_depth as u32,
+                samples: samples as u32,
+            }))
+        }
         "diffusetransmission" => {
             let scale = p.get_float("scale", 1.0)?;
             let mut rt = Vec::new();
@@ -1820,18 +1911,31 @@ fn texture(
 /// a float texture, and `remaproughness`. A constant texture becomes a
 /// number: a roughness that does not vary keeps the constant path.
 fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<MaterialRoughness, String>> {
+    roughness_of(scene, p, loc, "")
+}
+
+/// The roughness of one interface of a layered material, whose parameters
+/// are `prefix` + `roughness` and so on (`interface.`, `conductor.`).
+fn roughness_of(
+    scene: &PbrtScene,
+    p: &Params,
+    loc: &Loc,
+    prefix: &str,
+) -> Result<std::result::Result<MaterialRoughness, String>> {
     let remap = p.get_bool("remaproughness", true)?;
-    let r = p.get_float_or_texture("roughness")?;
+    let both = format!("{prefix}roughness");
+    let r = p.get_float_or_texture(&both)?;
     // `roughness` is converted once when both directions take it: its
     // texture is then one `Arc`, looked up once per point.
     let mut shared: Option<OneRoughness> = None;
     let mut uv = [OneRoughness::Value(0.0), OneRoughness::Value(0.0)];
-    for (i, n) in ["uroughness", "vroughness"].into_iter().enumerate() {
+    let names = [format!("{prefix}uroughness"), format!("{prefix}vroughness")];
+    for (i, n) in names.iter().map(String::as_str).enumerate() {
         let (from, given) = match p.get_float_or_texture(n)? {
             Some(x) => (n, Some(x)),
-            None => ("roughness", r.clone()),
+            None => (both.as_str(), r.clone()),
         };
-        let x = match shared.as_ref().filter(|_| from == "roughness") {
+        let x = match shared.as_ref().filter(|_| from == both) {
             Some(x) => x.clone(),
             None => {
                 let x = match given {
@@ -1843,7 +1947,7 @@ fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Re
                         Ok(t) => OneRoughness::Texture(Arc::new(t)),
                     },
                 };
-                if from == "roughness" {
+                if from == both {
                     shared = Some(x.clone());
                 }
                 x
@@ -2751,6 +2855,63 @@ mod tests {
                 "{pbrt}"
             );
         }
+    }
+
+    #[test]
+    fn coated_conductor_reads_pbrt_v4s_parameters() {
+        let m = |params: &str| {
+            convert_text(
+                &format!("WorldBegin\nMaterial \"coatedconductor\" {params}\n{}", quad(0.0)),
+                false,
+            )
+        };
+        let c = m(
+            "\"float interface.roughness\" [ 0.1 ] \"float conductor.uroughness\" [ 0.2 ] \
+                   \"float conductor.vroughness\" [ 0.3 ] \"spectrum conductor.eta\" \"metal-Al-eta\" \
+                   \"spectrum conductor.k\" \"metal-Al-k\" \"float interface.eta\" [ 1.4 ] \"integer maxdepth\" [ 7 ]",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let (al_eta, al_k) = crate::bsdf::named_metal("Al").unwrap();
+        assert_eq!(
+            c.desc.materials[0].1,
+            Material::CoatedConductor {
+                interface_roughness: Roughness {
+                    u: 0.1,
+                    v: 0.1,
+                    remap: true
+                }
+                .into(),
+                eta: 1.4,
+                thickness: 0.01,
+                conductor: ConductorFresnel::Ior { eta: al_eta, k: al_k },
+                conductor_roughness: Roughness {
+                    u: 0.2,
+                    v: 0.3,
+                    remap: true
+                }
+                .into(),
+                max_depth: 7,
+                samples: 1,
+            }
+        );
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        // pbrt-v4's defaults: a smooth coat of 1.5 over smooth copper.
+        let c = m("").unwrap_or_else(|e| panic!("{e}"));
+        let Material::CoatedConductor { eta, conductor, .. } = &c.desc.materials[0].1 else {
+            panic!("{:?}", c.desc.materials)
+        };
+        let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap();
+        assert_eq!(
+            (*eta, conductor),
+            (1.5, &ConductorFresnel::Ior { eta: cu_eta, k: cu_k })
+        );
+        assert!(c.desc.materials[0].1.is_specular());
+        let e = m("\"rgb reflectance\" [ 0.5 0.5 0.5 ] \"spectrum conductor.k\" \"metal-Al-k\"")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("dir/main.pbrt:2: coatedconductor: give"), "{e}");
+        let e = m("\"rgb albedo\" [ 0.5 0.5 0.5 ]").unwrap_err().to_string();
+        assert!(e.contains("scatters"), "{e}");
     }
 
     #[test]
