@@ -1527,32 +1527,9 @@ fn convert_nested(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            let fresnel = if p.has("reflectance") {
-                match colour(p, "reflectance", loc)? {
-                    Ok(r) => ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE))),
-                    Err(why) => return Ok(Err(why)),
-                }
-            } else {
-                // pbrt-v4's default conductor is copper.
-                let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
-                let eta = if p.has("eta") {
-                    colour(p, "eta", loc)?
-                } else {
-                    Ok(cu_eta)
-                };
-                let k = if p.has("k") { colour(p, "k", loc)? } else { Ok(cu_k) };
-                match (eta, k) {
-                    (Ok(eta), Ok(k)) => {
-                        if eta.min_element() <= 0.0 || k.min_element() < 0.0 {
-                            return Err(located(
-                                loc,
-                                "conductor: \"eta\" must be positive and \"k\" not negative",
-                            ));
-                        }
-                        ConductorFresnel::Ior { eta, k }
-                    }
-                    (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
-                }
+            let fresnel = match conductor_fresnel(p, loc, "conductor", "")? {
+                Ok(f) => f,
+                Err(why) => return Ok(Err(why)),
             };
             Ok(Ok(Material::Conductor { fresnel, roughness }))
         }
@@ -1604,39 +1581,9 @@ fn convert_nested(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            if p.has("reflectance") && (p.has("conductor.eta") || p.has("conductor.k")) {
-                return Err(located(
-                    loc,
-                    "coatedconductor: give \"reflectance\" or \"conductor.eta\" and \"conductor.k\", not both",
-                ));
-            }
-            let conductor = if p.has("reflectance") {
-                match colour(p, "reflectance", loc)? {
-                    Ok(r) => ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE))),
-                    Err(why) => return Ok(Err(why)),
-                }
-            } else {
-                // pbrt-v4's default metal under the coat is copper.
-                let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
-                let read = |name: &str, default: Vec3| -> Result<std::result::Result<Vec3, String>> {
-                    if p.has(name) {
-                        colour(p, name, loc)
-                    } else {
-                        Ok(Ok(default))
-                    }
-                };
-                match (read("conductor.eta", cu_eta)?, read("conductor.k", cu_k)?) {
-                    (Ok(eta), Ok(k)) => {
-                        if eta.min_element() <= 0.0 || k.min_element() < 0.0 {
-                            return Err(located(
-                                loc,
-                                "coatedconductor: \"conductor.eta\" must be positive and \"conductor.k\" not negative",
-                            ));
-                        }
-                        ConductorFresnel::Ior { eta, k }
-                    }
-                    (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
-                }
+            let conductor = match conductor_fresnel(p, loc, "coatedconductor", "conductor.")? {
+                Ok(f) => f,
+                Err(why) => return Ok(Err(why)),
             };
             let eta = match p.get("interface.eta") {
                 Some(e) if e.ty != super::ParamType::Float => match p.get_spectrum("interface.eta")? {
@@ -1912,6 +1859,47 @@ fn texture(
 /// number: a roughness that does not vary keeps the constant path.
 fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<MaterialRoughness, String>> {
     roughness_of(scene, p, loc, "")
+}
+
+/// A metal's Fresnel terms: `reflectance`, or `prefix` + `eta` and `k`
+/// (copper by default, as pbrt-v4's); both at once is an error, as there.
+fn conductor_fresnel(
+    p: &Params,
+    loc: &Loc,
+    ty: &str,
+    prefix: &str,
+) -> Result<std::result::Result<ConductorFresnel, String>> {
+    let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
+    if p.has("reflectance") && (p.has(&eta_name) || p.has(&k_name)) {
+        return Err(located(
+            loc,
+            format!("{ty}: give \"reflectance\" or \"{eta_name}\" and \"{k_name}\", not both"),
+        ));
+    }
+    if p.has("reflectance") {
+        return Ok(colour(p, "reflectance", loc)?
+            .map(|r| ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE)))));
+    }
+    let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
+    let read = |name: &str, default: Vec3| -> Result<std::result::Result<Vec3, String>> {
+        if p.has(name) {
+            colour(p, name, loc)
+        } else {
+            Ok(Ok(default))
+        }
+    };
+    match (read(&eta_name, cu_eta)?, read(&k_name, cu_k)?) {
+        (Ok(eta), Ok(k)) => {
+            if eta.min_element() <= 0.0 || k.min_element() < 0.0 {
+                return Err(located(
+                    loc,
+                    format!("{ty}: \"{eta_name}\" must be positive and \"{k_name}\" not negative"),
+                ));
+            }
+            Ok(Ok(ConductorFresnel::Ior { eta, k }))
+        }
+        (Err(why), _) | (_, Err(why)) => Ok(Err(why)),
+    }
 }
 
 /// The roughness of one interface of a layered material, whose parameters
@@ -2912,6 +2900,17 @@ mod tests {
         assert!(e.starts_with("dir/main.pbrt:2: coatedconductor: give"), "{e}");
         let e = m("\"rgb albedo\" [ 0.5 0.5 0.5 ]").unwrap_err().to_string();
         assert!(e.contains("scatters"), "{e}");
+        // So is the plain conductor, as pbrt-v4's.
+        let e = convert_text(
+            &format!(
+                "WorldBegin\nMaterial \"conductor\" \"rgb reflectance\" [ 0.5 0.5 0.5 ] \"float eta\" [ 1.2 ]\n{}",
+                quad(0.0)
+            ),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("dir/main.pbrt:2: conductor: give"), "{e}");
     }
 
     #[test]
