@@ -366,19 +366,19 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
         }
         Ok(e)
     };
-    let roughness = || -> Result<Roughness> {
-        let r = k.num("roughness")?;
-        let (u, v) = (k.num("uroughness")?, k.num("vroughness")?);
+    // The roughness keys of one interface: `roughness`, or, with a prefix,
+    // `metal_roughness` and so on.
+    let roughness_of = |prefix: &str| -> Result<Roughness> {
+        let [r_key, u_key, v_key] = ["roughness", "uroughness", "vroughness"].map(|n| format!("{prefix}{n}"));
+        let r = k.num(&r_key)?;
+        let (u, v) = (k.num(&u_key)?, k.num(&v_key)?);
         if r.is_some() && (u.is_some() || v.is_some()) {
-            return Err(k.err(
-                Some("roughness"),
-                "give `roughness` or `uroughness`/`vroughness`, not both".into(),
-            ));
+            return Err(k.err(Some(&r_key), format!("give `{r_key}` or `{u_key}`/`{v_key}`, not both")));
         }
         let (u, v) = (u.or(r).unwrap_or(0.0), v.or(r).unwrap_or(0.0));
-        for (key, x) in [("roughness", r.unwrap_or(0.0)), ("uroughness", u), ("vroughness", v)] {
+        for (key, x) in [(&r_key, r.unwrap_or(0.0)), (&u_key, u), (&v_key, v)] {
             if x < 0.0 {
-                let key = if k.has(key) { key } else { "roughness" };
+                let key = if k.has(key) { key } else { &r_key };
                 return Err(k.err(Some(key), format!("{key} {x} must be >= 0")));
             }
         }
@@ -388,6 +388,50 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             remap: k.boolean("remap_roughness")?.unwrap_or(true),
         })
     };
+    let roughness = || roughness_of("");
+    // A metal's Fresnel terms: `reflectance`, a named `metal`, or `eta` and
+    // `k` (with a prefix: `metal_eta`, `metal_k`); copper by default.
+    let metal_fresnel =
+        |prefix: &str, albedo: &mut dyn FnMut(&str, f32) -> Result<Texture>| -> Result<ConductorFresnel> {
+            let (eta_key, k_key) = (format!("{prefix}eta"), format!("{prefix}k"));
+            let (eta_key, k_key) = (eta_key.as_str(), k_key.as_str());
+            if k.has("reflectance") {
+                if let Some(key) = [eta_key, k_key, "metal"].into_iter().find(|x| k.has(x)) {
+                    return Err(k.err(Some(key), format!("give `reflectance` or `{key}`, not both")));
+                }
+                return Ok(ConductorFresnel::Reflectance(albedo("reflectance", 1.0)?));
+            }
+            if let Some(m) = k.string("metal")? {
+                if let Some(key) = [eta_key, k_key].into_iter().find(|x| k.has(x)) {
+                    return Err(k.err(Some(key), format!("give `metal` or `{key}`, not both")));
+                }
+                let (eta, kk) = named_metal(m).ok_or_else(|| {
+                    k.err(
+                        Some("metal"),
+                        format!("unknown metal '{m}' (known: Ag, Al, Au, Cu, CuZn)"),
+                    )
+                })?;
+                return Ok(ConductorFresnel::Ior { eta, k: kk });
+            }
+            if k.has(eta_key) || k.has(k_key) {
+                let eta = k
+                    .rgb(eta_key)?
+                    .ok_or_else(|| k.err(Some(k_key), format!("`{k_key}` needs `{eta_key}` too")))?;
+                let kk = k
+                    .rgb(k_key)?
+                    .ok_or_else(|| k.err(Some(eta_key), format!("`{eta_key}` needs `{k_key}` too")))?;
+                if eta.min_element() <= 0.0 {
+                    return Err(k.err(Some(eta_key), format!("{eta_key} {:?} must be > 0", eta.to_array())));
+                }
+                if kk.min_element() < 0.0 {
+                    return Err(k.err(Some(k_key), format!("{k_key} {:?} must be >= 0", kk.to_array())));
+                }
+                return Ok(ConductorFresnel::Ior { eta, k: kk });
+            }
+            // pbrt-v4's default: copper.
+            let (eta, kk) = named_metal("Cu").expect("copper is a named metal");
+            Ok(ConductorFresnel::Ior { eta, k: kk })
+        };
     Ok(match kind {
         "diffuse" => {
             k.only(kind, &["reflectance", "albedo"])?;
@@ -421,41 +465,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             let mut keys = vec!["eta", "k", "metal", "reflectance"];
             keys.extend(ROUGHNESS_KEYS);
             k.only(kind, &keys)?;
-            let fresnel = if k.has("reflectance") {
-                if let Some(key) = ["eta", "k", "metal"].into_iter().find(|x| k.has(x)) {
-                    return Err(k.err(Some(key), format!("give `reflectance` or `{key}`, not both")));
-                }
-                ConductorFresnel::Reflectance(albedo("reflectance", 1.0)?)
-            } else if let Some(m) = k.string("metal")? {
-                if let Some(key) = ["eta", "k"].into_iter().find(|x| k.has(x)) {
-                    return Err(k.err(Some(key), format!("give `metal` or `{key}`, not both")));
-                }
-                let (eta, kk) = named_metal(m).ok_or_else(|| {
-                    k.err(
-                        Some("metal"),
-                        format!("unknown metal '{m}' (known: Ag, Al, Au, Cu, CuZn)"),
-                    )
-                })?;
-                ConductorFresnel::Ior { eta, k: kk }
-            } else if k.has("eta") || k.has("k") {
-                let eta = k
-                    .rgb("eta")?
-                    .ok_or_else(|| k.err(Some("k"), "`k` needs `eta` too".into()))?;
-                let kk = k
-                    .rgb("k")?
-                    .ok_or_else(|| k.err(Some("eta"), "`eta` needs `k` too".into()))?;
-                if eta.min_element() <= 0.0 {
-                    return Err(k.err(Some("eta"), format!("eta {:?} must be > 0", eta.to_array())));
-                }
-                if kk.min_element() < 0.0 {
-                    return Err(k.err(Some("k"), format!("k {:?} must be >= 0", kk.to_array())));
-                }
-                ConductorFresnel::Ior { eta, k: kk }
-            } else {
-                // pbrt-v4's default: copper.
-                let (eta, kk) = named_metal("Cu").expect("copper is a named metal");
-                ConductorFresnel::Ior { eta, k: kk }
-            };
+            let fresnel = metal_fresnel("", &mut albedo)?;
             Material::Conductor {
                 fresnel,
                 roughness: roughness()?.into(),
@@ -489,6 +499,44 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 thickness,
             }
         }
+        "coatedconductor" => {
+            let mut keys = vec![
+                "eta",
+                "thickness",
+                "metal",
+                "metal_eta",
+                "metal_k",
+                "reflectance",
+                "metal_roughness",
+                "metal_uroughness",
+                "metal_vroughness",
+                "max_depth",
+                "samples",
+            ];
+            keys.extend(ROUGHNESS_KEYS);
+            k.only(kind, &keys)?;
+            let thickness = k.num("thickness")?.unwrap_or(0.01);
+            if thickness.is_nan() || thickness < 0.0 {
+                return Err(k.err(Some("thickness"), format!("thickness {thickness} must be >= 0")));
+            }
+            let count = |key: &str, default: f32, lo: f32| -> Result<u32> {
+                let n = k.num(key)?.unwrap_or(default);
+                if n.fract() != 0.0 || !(lo..=1000.0).contains(&n) {
+                    return Err(k.err(Some(key), format!("{key} {n} must be a whole number in {lo}..1000")));
+                }
+                Ok(n as u32)
+            };
+            let conductor = metal_fresnel("metal_", &mut albedo)?;
+            Material::CoatedConductor {
+                interface_roughness: roughness()?.into(),
+                eta: eta(1.5)?,
+                thickness,
+                conductor,
+                conductor_roughness: roughness_of("metal_")?.into(),
+                max_depth: count("max_depth", 10.0, 0.0)?,
+                samples: count("samples", 1.0, 1.0)?,
+            }
+        }
         "diffusetransmission" => {
             k.only(kind, &["reflectance", "transmittance"])?;
             Material::DiffuseTransmission {
@@ -501,7 +549,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 Some("type"),
                 format!(
                     "unknown material type '{other}' (diffuse, mirror, glass, conductor, dielectric, \
-                     thindielectric, coateddiffuse, diffusetransmission)"
+                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission)"
                 ),
             ))
         }

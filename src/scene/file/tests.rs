@@ -1,5 +1,6 @@
 use super::*;
 use crate::integrator::{render, RenderSettings};
+use crate::material::{ConductorFresnel, Roughness};
 use crate::scene::builtin;
 use crate::scene::mesh::tests::bunny_path;
 use crate::Scene;
@@ -326,6 +327,60 @@ fn mirror_and_glass_materials_are_read_and_checked() {
         ("[materials.x]\ntype = \"metal\"\n", "metal"),
     ] {
         let text = format!("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 40\n{bad}");
+        let e = parse_str(&text).unwrap_err().to_string();
+        assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn coated_conductor_materials_are_read_and_checked() {
+    let text = format!(
+        "{CAMERA}[materials.rims]\ntype = \"coatedconductor\"\nroughness = 0.1\nmetal = \"Al\"\n\
+         metal_uroughness = 0.2\nmetal_vroughness = 0.3\nthickness = 0\nmax_depth = 20\n\
+         [materials.plain]\ntype = \"coatedconductor\"\nmetal_eta = [0.2, 0.3, 0.4]\nmetal_k = 3\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m.clone());
+    let (al_eta, al_k) = crate::bsdf::named_metal("Al").unwrap();
+    let rough = |u: f32, v: f32| Roughness { u, v, remap: true }.into();
+    assert_eq!(
+        get("rims"),
+        Some(Material::CoatedConductor {
+            interface_roughness: rough(0.1, 0.1),
+            eta: 1.5,
+            thickness: 0.0,
+            conductor: ConductorFresnel::Ior { eta: al_eta, k: al_k },
+            conductor_roughness: rough(0.2, 0.3),
+            max_depth: 20,
+            samples: 1,
+        })
+    );
+    let Some(Material::CoatedConductor {
+        conductor, thickness, ..
+    }) = get("plain")
+    else {
+        panic!("{:?}", get("plain"))
+    };
+    assert_eq!(thickness, 0.01);
+    assert_eq!(
+        conductor,
+        ConductorFresnel::Ior {
+            eta: Vec3::new(0.2, 0.3, 0.4),
+            k: Vec3::splat(3.0)
+        }
+    );
+    for (bad, what) in [
+        ("metal_eta = 1.2\n", "`metal_eta` needs `metal_k` too"),
+        ("metal = \"Au\"\nmetal_k = 2\n", "give `metal` or `metal_k`"),
+        (
+            "metal_roughness = 0.1\nmetal_uroughness = 0.2\n",
+            "give `metal_roughness`",
+        ),
+        ("metal_roughness = -1\n", "metal_roughness -1 must be >= 0"),
+        ("samples = 0\n", "samples 0 must be a whole number"),
+        ("eta = 1.5\nior = 1.5\n", "ior"),
+    ] {
+        let text = format!("{CAMERA}[materials.x]\ntype = \"coatedconductor\"\n{bad}");
         let e = parse_str(&text).unwrap_err().to_string();
         assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
     }
