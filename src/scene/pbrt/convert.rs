@@ -34,7 +34,7 @@
 //! * A diffuse area light's `power` is met per shape as pbrt-v4 does it: a
 //!   mesh is one light per triangle there, so each triangle emits `power`.
 
-use super::error::Loc;
+use super::error::{Loc, PbrtError};
 use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
@@ -992,7 +992,8 @@ impl<'a> Conv<'a> {
             return Ok(None);
         }
         let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
-            return Err(located(&at, format!("infinite: image \"{file}\" not found")));
+            // With the column, as a missing mesh or include is reported.
+            return Err(PbrtError::at(&at, format!("infinite: image \"{file}\" not found")).into());
         };
         let film =
             crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
@@ -1814,10 +1815,7 @@ fn texture(
             };
             let file_at = place(p, "filename", &t.loc).clone();
             let Some(path) = scene.candidates(&file_at, &file).into_iter().find(|c| c.is_file()) else {
-                return Err(located(
-                    &file_at,
-                    format!("imagemap \"{name}\": image \"{file}\" not found"),
-                ));
+                return Err(PbrtError::at(&file_at, format!("imagemap \"{name}\": image \"{file}\" not found")).into());
             };
             let wrap_name = p.get_string_or("wrap", "repeat")?;
             let Some(wrap) = WrapMode::parse(&wrap_name) else {
@@ -2629,7 +2627,7 @@ mod tests {
             .replace("\"check\"\n", "\"img\"\n");
         let e = convert_text(&missing, false).unwrap_err().to_string();
         assert!(
-            e.starts_with("dir/main.pbrt:7: imagemap \"img\": image \"none.png\" not found"),
+            e.starts_with("dir/main.pbrt:7: column 37: imagemap \"img\": image \"none.png\" not found"),
             "{e}"
         );
         assert!(!e.contains('\n'));
@@ -2789,7 +2787,10 @@ mod tests {
         let missing = text.replace("sky.pfm", "none.exr");
         let scene = super::super::parse_bytes(&path, missing.as_bytes().to_vec(), &crate::scene::mesh::Disk).unwrap();
         let e = convert(&scene, &path, false).unwrap_err().to_string();
-        assert!(e.contains("main.pbrt:2: infinite: image \"none.exr\" not found"), "{e}");
+        assert!(
+            e.contains("main.pbrt:2: column 24: infinite: image \"none.exr\" not found"),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 
