@@ -1242,6 +1242,16 @@ fn coated_conductor_against_layered_random_walk() {
                         "coat {coat} base {base} thickness {thickness} theta {theta}: ours {} vs walk {walk}",
                         mine.x
                     );
+                    // Photons see the same reflectance: the coat's 1/eta^2
+                    // going in is undone coming out in either mode.
+                    let (imp, imp_se) = sampled_albedo(&ours, wo, TransportMode::Importance, n as u32, 7);
+                    let noise = 4.0 * (imp_se * imp_se + se * se).sqrt() + 2e-3;
+                    assert!(
+                        (imp.x - mine.x).abs() < noise,
+                        "importance {} vs radiance {}",
+                        imp.x,
+                        mine.x
+                    );
                 }
             }
         }
