@@ -7,9 +7,10 @@
 //!
 //! Under a coat, a rough metal reflects much of the light it receives into
 //! directions the coat reflects back by total internal reflection (with
-//! alpha 0.3 and eta 1.5, about 40% of it at normal incidence), and that
-//! light scatters again and again before it leaves, with a colour that
-//! deepens at every bounce. A single-scattering closed form would lose all
+//! alpha 0.3 and eta 1.5, 38% of it at normal incidence: what leaves the
+//! metal more than 41.8 degrees from the normal), and that light scatters
+//! again and again before it leaves, with a colour that deepens at every
+//! bounce. A single-scattering closed form would lose all
 //! of it; a diffuse base forgets directions, which is what made a closed form
 //! possible for [`super::CoatedDiffuseBxdf`]. So `f` is pbrt-v4's stochastic
 //! estimate: an unbiased estimate of the layered BSDF (cut, as pbrt-v4's,
