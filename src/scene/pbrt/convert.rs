@@ -47,7 +47,7 @@ use crate::scene::mesh::MeshReport;
 use crate::scene::DiskDesc;
 use crate::scene::FilmCrop;
 use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
-use crate::settings::{Layer, Origin, SceneSettings, Value};
+use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -655,14 +655,16 @@ impl<'a> Conv<'a> {
         let scene = self.scene;
         let mut out = SceneSettings::default();
         let defaults = Origin::Preset("pbrt-v4 defaults".into());
-        let mut set = |c: &mut Self, given: Option<&Loc>, name: &str, value: Value| {
+        // A value no setting can take (no pixel samples, a clamp of 0) is
+        // an error of the file, named where it is written, lenient or not.
+        let mut invalid: Option<Error> = None;
+        let mut set = |_: &mut Self, given: Option<&Loc>, name: &str, value: Value| {
             let (layer, o) = match given {
                 Some(l) => (&mut out.scene_file, origin(l)),
                 None => (&mut out.preset, defaults.clone()),
             };
-            if let Err(e) = set_in(layer, name, value, o) {
-                let loc = given.cloned().unwrap_or_else(|| c.default_loc());
-                c.problem(Kind::Other, &loc, e);
+            if let Err(e) = layer.set(name, value, o) {
+                invalid.get_or_insert(Error::Setting(e));
             }
         };
 
@@ -838,6 +840,9 @@ impl<'a> Conv<'a> {
         self.read.push(ip);
         for o in scene.options.iter().filter(|o| o.name != "seed") {
             self.warn(&o.loc, format!("Option \"{}\" is ignored", o.name));
+        }
+        if let Some(e) = invalid {
+            return Err(e);
         }
         Ok(out)
     }
@@ -1343,10 +1348,6 @@ impl<'a> Conv<'a> {
         }
         Ok(())
     }
-}
-
-fn set_in(layer: &mut Layer, name: &str, value: Value, o: Origin) -> std::result::Result<(), String> {
-    layer.set(name, value, o).map_err(|e| e.to_string())
 }
 
 fn located(loc: &Loc, message: impl Into<String>) -> Error {
@@ -2931,7 +2932,13 @@ mod tests {
         let e = convert_text("Film \"rgb\"\n  \"float maxcomponentvalue\" [ 0 ]\nWorldBegin\n", false)
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("dir/main.pbrt:2:") && e.contains("max_component"), "{e}");
+        assert!(e.starts_with("dir/main.pbrt:2: max_component = 0: must be"), "{e}");
+        // Such a value is the file's error, once, even with --lenient (it
+        // was listed as an unsupported feature, its place twice).
+        let e = convert_text("Sampler \"halton\" \"integer pixelsamples\" [ 0 ]\nWorldBegin\n", true)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "dir/main.pbrt:1: spp = 0: must be between 1 and 1048576");
     }
 
     #[test]
