@@ -89,7 +89,19 @@ impl Drop for Guard {
 /// Starts Xvfb on a free display it picks itself; returns it and ":N".
 fn start_xvfb() -> Option<(Guard, String)> {
     let mut child = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "640x480x24", "-nolisten", "tcp"])
+        // -noreset: by default the server resets when its last client
+        // leaves, and a client connecting during the reset (the viewer,
+        // right after the probe below) is refused: "XOpenDisplay failed".
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "640x480x24",
+            "-nolisten",
+            "tcp",
+            "-noreset",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
