@@ -81,7 +81,7 @@
 
 use super::diffuse::clamp_unit;
 use super::fresnel::{fr_dielectric, reflect, refract};
-use super::{mirror, BsdfSample, BxdfFlags, TrowbridgeReitz};
+use super::{mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use std::f32::consts::FRAC_1_PI;
@@ -500,15 +500,7 @@ impl CoatedDiffuseBxdf {
     }
 
     pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        if wo.z * wi.z <= 0.0 {
-            return Vec3::ZERO;
-        }
-        // Two-sided: the lower side scatters as the upper one.
-        if wo.z < 0.0 {
-            self.f_upper(-wo, -wi)
-        } else {
-            self.f_upper(wo, wi)
-        }
+        two_sided(wo, wi, |wo, wi| self.f_upper(wo, wi))
     }
 
     fn f_upper(&self, wo: Vec3, wi: Vec3) -> Vec3 {
@@ -525,27 +517,39 @@ impl CoatedDiffuseBxdf {
         base + Vec3::splat(coat)
     }
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
-        let flip = wo.z < 0.0;
-        let wo = if flip { -wo } else { wo };
-        if wo.z == 0.0 {
-            return None;
-        }
-        let alpha = self.coat_alpha();
-        let p_coat = self.coat_probability(wo.z, alpha);
-        let mut bs = if uc < p_coat {
-            if self.distrib.effectively_smooth() {
-                // The coat's specular reflection, a delta.
-                let fr = fr_dielectric(wo.z, self.eta);
-                BsdfSample {
-                    f: Vec3::splat(fr / wo.z),
-                    wi: mirror(wo),
-                    pdf: p_coat,
-                    flags: BxdfFlags::SPECULAR_REFLECTION,
-                    eta: 1.0,
+        two_sided_sample(wo, |wo| {
+            if wo.z == 0.0 {
+                return None;
+            }
+            let alpha = self.coat_alpha();
+            let p_coat = self.coat_probability(wo.z, alpha);
+            let bs = if uc < p_coat {
+                if self.distrib.effectively_smooth() {
+                    // The coat's specular reflection, a delta.
+                    let fr = fr_dielectric(wo.z, self.eta);
+                    BsdfSample {
+                        f: Vec3::splat(fr / wo.z),
+                        wi: mirror(wo),
+                        pdf: p_coat,
+                        flags: BxdfFlags::SPECULAR_REFLECTION,
+                        eta: 1.0,
+                    }
+                } else {
+                    let wm = self.distrib.sample_wm(wo, u);
+                    let wi = reflect(wo, wm);
+                    if wi.z <= 0.0 {
+                        return None;
+                    }
+                    BsdfSample {
+                        f: self.f_upper(wo, wi),
+                        wi,
+                        pdf: self.pdf_upper(wo, wi),
+                        flags: BxdfFlags::GLOSSY_REFLECTION,
+                        eta: 1.0,
+                    }
                 }
             } else {
-                let wm = self.distrib.sample_wm(wo, u);
-                let wi = reflect(wo, wm);
+                let wi = cosine_hemisphere(u);
                 if wi.z <= 0.0 {
                     return None;
                 }
@@ -553,38 +557,16 @@ impl CoatedDiffuseBxdf {
                     f: self.f_upper(wo, wi),
                     wi,
                     pdf: self.pdf_upper(wo, wi),
-                    flags: BxdfFlags::GLOSSY_REFLECTION,
+                    flags: BxdfFlags::DIFFUSE_REFLECTION,
                     eta: 1.0,
                 }
-            }
-        } else {
-            let wi = cosine_hemisphere(u);
-            if wi.z <= 0.0 {
-                return None;
-            }
-            BsdfSample {
-                f: self.f_upper(wo, wi),
-                wi,
-                pdf: self.pdf_upper(wo, wi),
-                flags: BxdfFlags::DIFFUSE_REFLECTION,
-                eta: 1.0,
-            }
-        };
-        if flip {
-            bs.wi = -bs.wi;
-        }
-        Some(bs)
+            };
+            Some(bs)
+        })
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z <= 0.0 {
-            return 0.0;
-        }
-        if wo.z < 0.0 {
-            self.pdf_upper(-wo, -wi)
-        } else {
-            self.pdf_upper(wo, wi)
-        }
+        two_sided(wo, wi, |wo, wi| self.pdf_upper(wo, wi))
     }
 
     fn pdf_upper(&self, wo: Vec3, wi: Vec3) -> f32 {

@@ -47,7 +47,7 @@
 
 use super::dielectric::Lobes;
 use super::fresnel::{fr_complex_rgb, fr_dielectric};
-use super::{mirror, BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf, TransportMode};
+use super::{mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere, mix64, Rng};
 use std::f32::consts::FRAC_1_PI;
@@ -152,15 +152,7 @@ impl CoatedConductorBxdf {
     }
 
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        if wo.z * wi.z <= 0.0 {
-            return Vec3::ZERO;
-        }
-        // Two-sided, as pbrt-v4's coated materials.
-        if wo.z < 0.0 {
-            self.f_upper(-wo, -wi, mode)
-        } else {
-            self.f_upper(wo, wi, mode)
-        }
+        two_sided(wo, wi, |wo, wi| self.f_upper(wo, wi, mode))
     }
 
     /// pbrt-v4's estimate of the layered BSDF, for `wo` and `wi` above.
@@ -255,68 +247,58 @@ impl CoatedConductorBxdf {
     }
 
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        let flip = wo.z < 0.0;
-        let wo = if flip { -wo } else { wo };
-        if wo.z == 0.0 {
-            return None;
-        }
-        let mut bs = if self.coat_smooth() && self.base_smooth() {
-            let r = self.specular_reflectance(wo.z);
-            BsdfSample {
-                f: r / wo.z,
-                wi: mirror(wo),
-                pdf: 1.0,
-                flags: BxdfFlags::SPECULAR_REFLECTION,
-                eta: 1.0,
+        two_sided_sample(wo, |wo| {
+            if wo.z == 0.0 {
+                return None;
             }
-        } else {
-            let (p_coat, p_base, _) = self.lobe_weights(wo.z);
-            if uc < p_coat && self.coat_smooth() {
-                let fr = fr_dielectric(wo.z, self.coat.eta);
+            let bs = if self.coat_smooth() && self.base_smooth() {
+                let r = self.specular_reflectance(wo.z);
                 BsdfSample {
-                    f: Vec3::splat(fr / wo.z),
+                    f: r / wo.z,
                     wi: mirror(wo),
-                    pdf: p_coat,
+                    pdf: 1.0,
                     flags: BxdfFlags::SPECULAR_REFLECTION,
                     eta: 1.0,
                 }
             } else {
-                let wi = if uc < p_coat {
-                    let wm = self.coat.distrib.sample_wm(wo, u);
-                    super::reflect(wo, wm)
-                } else if uc < p_coat + p_base {
-                    let inner = self.base.sample_f(self.inside(wo)?, u)?.wi;
-                    self.outside(inner)?
+                let (p_coat, p_base, _) = self.lobe_weights(wo.z);
+                if uc < p_coat && self.coat_smooth() {
+                    let fr = fr_dielectric(wo.z, self.coat.eta);
+                    BsdfSample {
+                        f: Vec3::splat(fr / wo.z),
+                        wi: mirror(wo),
+                        pdf: p_coat,
+                        flags: BxdfFlags::SPECULAR_REFLECTION,
+                        eta: 1.0,
+                    }
                 } else {
-                    cosine_hemisphere(u)
-                };
-                if wi.z <= 0.0 {
-                    return None;
+                    let wi = if uc < p_coat {
+                        let wm = self.coat.distrib.sample_wm(wo, u);
+                        super::reflect(wo, wm)
+                    } else if uc < p_coat + p_base {
+                        let inner = self.base.sample_f(self.inside(wo)?, u)?.wi;
+                        self.outside(inner)?
+                    } else {
+                        cosine_hemisphere(u)
+                    };
+                    if wi.z <= 0.0 {
+                        return None;
+                    }
+                    BsdfSample {
+                        f: self.f_upper(wo, wi, mode),
+                        wi,
+                        pdf: self.pdf_upper(wo, wi),
+                        flags: BxdfFlags::GLOSSY_REFLECTION,
+                        eta: 1.0,
+                    }
                 }
-                BsdfSample {
-                    f: self.f_upper(wo, wi, mode),
-                    wi,
-                    pdf: self.pdf_upper(wo, wi),
-                    flags: BxdfFlags::GLOSSY_REFLECTION,
-                    eta: 1.0,
-                }
-            }
-        };
-        if flip {
-            bs.wi = -bs.wi;
-        }
-        Some(bs)
+            };
+            Some(bs)
+        })
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z * wi.z <= 0.0 {
-            return 0.0;
-        }
-        if wo.z < 0.0 {
-            self.pdf_upper(-wo, -wi)
-        } else {
-            self.pdf_upper(wo, wi)
-        }
+        two_sided(wo, wi, |wo, wi| self.pdf_upper(wo, wi))
     }
 
     /// Density of the mixture's non-specular lobes.

@@ -439,3 +439,29 @@ pub fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
 pub(crate) fn mirror(w: Vec3) -> Vec3 {
     Vec3::new(-w.x, -w.y, w.z)
 }
+
+// Two-sided BxDFs (pbrt-v4's coated materials): the lower side scatters as
+// the upper one, so each is written for directions above the surface and
+// these mirror both directions through the surface when `wo` is below.
+
+/// `upper(wo, wi)` with both directions mirrored above the surface; zero when
+/// they lie on opposite sides (a reflection-only BxDF).
+pub(crate) fn two_sided<T: Default>(wo: Vec3, wi: Vec3, upper: impl FnOnce(Vec3, Vec3) -> T) -> T {
+    if wo.z * wi.z <= 0.0 {
+        T::default()
+    } else if wo.z < 0.0 {
+        upper(-wo, -wi)
+    } else {
+        upper(wo, wi)
+    }
+}
+
+/// `upper(wo)` with `wo` mirrored above the surface and its sample mirrored back.
+pub(crate) fn two_sided_sample(wo: Vec3, upper: impl FnOnce(Vec3) -> Option<BsdfSample>) -> Option<BsdfSample> {
+    let flip = wo.z < 0.0;
+    let mut bs = upper(if flip { -wo } else { wo })?;
+    if flip {
+        bs.wi = -bs.wi;
+    }
+    Some(bs)
+}

@@ -1479,28 +1479,9 @@ fn convert_nested(
             Ok(Ok(Material::diffuse(a.x, a.y, a.z)))
         }
         "dielectric" => {
-            let eta = match p.get("eta") {
-                None => 1.5,
-                Some(e) if e.ty == super::ParamType::Float => p.get_float("eta", 1.5)?,
-                // pbrt-v4's dielectric takes a float or a spectrum for
-                // "eta", never a texture (only its hair material does).
-                Some(e) if e.ty == super::ParamType::Texture => {
-                    return Ok(Err(
-                        "a textured \"eta\" is not supported (pbrt-v4's dielectric takes a float or a spectrum)".into(),
-                    ))
-                }
-                Some(_) => match p.get_spectrum("eta")? {
-                    Some(SpectrumValue::Sampled(s))
-                        if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
-                    {
-                        s.value[0]
-                    }
-                    _ => {
-                        return Ok(Err(
-                            "an \"eta\" that varies with wavelength (dispersion) is not supported".into(),
-                        ))
-                    }
-                },
+            let eta = match constant_eta(p, "eta")? {
+                Ok(eta) => eta,
+                Err(why) => return Ok(Err(why)),
             };
             if !(eta.is_finite() && eta > 0.0) {
                 return Err(located(
@@ -1587,20 +1568,9 @@ fn convert_nested(
                 Ok(f) => f,
                 Err(why) => return Ok(Err(why)),
             };
-            let eta = match p.get("interface.eta") {
-                Some(e) if e.ty != super::ParamType::Float => match p.get_spectrum("interface.eta")? {
-                    Some(SpectrumValue::Sampled(s))
-                        if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() =>
-                    {
-                        s.value[0]
-                    }
-                    _ => {
-                        return Ok(Err(
-                            "an \"interface.eta\" that varies with wavelength (dispersion) is not supported".into(),
-                        ))
-                    }
-                },
-                _ => p.get_float("interface.eta", 1.5)?,
+            let eta = match constant_eta(p, "interface.eta")? {
+                Ok(eta) => eta,
+                Err(why) => return Ok(Err(why)),
             };
             let thickness = p.get_float("thickness", 0.01)?;
             let max_depth = p.get_int("maxdepth", 10)?;
@@ -1858,6 +1828,27 @@ fn texture(
 /// number: a roughness that does not vary keeps the constant path.
 fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<MaterialRoughness, String>> {
     roughness_of(scene, p, loc, "")
+}
+
+/// An index of refraction that pbrt-v4 takes as a float or a spectrum (never
+/// a texture; only its hair material does): 1.5 when absent. A spectrum must
+/// be constant, since one index serves all three colour channels.
+fn constant_eta(p: &Params, name: &str) -> Result<std::result::Result<f32, String>> {
+    Ok(match p.get(name) {
+        None => Ok(1.5),
+        Some(e) if e.ty == super::ParamType::Float => Ok(p.get_float(name, 1.5)?),
+        Some(e) if e.ty == super::ParamType::Texture => Err(format!(
+            "a textured \"{name}\" is not supported (pbrt-v4 takes a float or a spectrum)"
+        )),
+        Some(_) => match p.get_spectrum(name)? {
+            Some(SpectrumValue::Sampled(s)) if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() => {
+                Ok(s.value[0])
+            }
+            _ => Err(format!(
+                "an \"{name}\" that varies with wavelength (dispersion) is not supported"
+            )),
+        },
+    })
 }
 
 /// A metal's Fresnel terms: `reflectance`, or `prefix` + `eta` and `k`
@@ -2913,6 +2904,39 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.starts_with("dir/main.pbrt:2: conductor: give"), "{e}");
+    }
+
+    #[test]
+    fn an_index_of_refraction_is_a_float_or_a_constant_spectrum() {
+        let eta = |material: &str, name: &str, value: &str| {
+            convert_text(
+                &format!(
+                    "WorldBegin\nTexture \"t\" \"float\" \"constant\" \"float value\" [ 1.5 ]\n\
+                     Material \"{material}\" {value}\n{}",
+                    quad(0.0)
+                ),
+                false,
+            )
+            .map(|c| match &c.desc.materials[0].1 {
+                Material::Dielectric { eta, .. } | Material::CoatedConductor { eta, .. } => *eta,
+                m => panic!("{m:?}"),
+            })
+            .map_err(|e| e.to_string())
+            .map_err(|e| {
+                assert!(e.contains(&format!("\"{name}\"")), "{e}");
+                e
+            })
+        };
+        for (material, name) in [("dielectric", "eta"), ("coatedconductor", "interface.eta")] {
+            assert_eq!(eta(material, name, &format!("\"float {name}\" [ 1.33 ]")), Ok(1.33));
+            assert_eq!(eta(material, name, ""), Ok(1.5));
+            let flat = format!("\"spectrum {name}\" [ 300 1.7 800 1.7 ]");
+            assert_eq!(eta(material, name, &flat), Ok(1.7));
+            let e = eta(material, name, &format!("\"spectrum {name}\" \"glass-BK7\"")).unwrap_err();
+            assert!(e.contains("dispersion"), "{e}");
+            let e = eta(material, name, &format!("\"texture {name}\" \"t\"")).unwrap_err();
+            assert!(e.contains("textured"), "{e}");
+        }
     }
 
     #[test]
