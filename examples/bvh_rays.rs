@@ -5,10 +5,12 @@
 //! our BVH and the `obvhs` crate's CWBVH on them, single-threaded.
 //!
 //! ```text
-//! cargo run --release --example bvh_rays -- [--write FILE] [--reps N] [--builds N] [--ours-only]
+//! cargo run --release --example bvh_rays -- [--write FILE] [--reps N] [--builds N] [--ours-only] [--set NAME]
 //! ```
 //!
-//! `--reps 0` skips the ray sets and times the builds only.
+//! `--reps 0` skips the ray sets and times the builds only; `--set NAME`
+//! (primary, incoherent or shadow) times that set alone, for counting one
+//! query's instructions.
 //!
 //! Lines starting with `build` and `result` are read by `bench/bvh-vs-embree.sh`.
 //! Builds are timed on the wall clock (median; single-threaded ones also in
@@ -31,6 +33,8 @@ struct Args {
     builds: usize,
     /// Skip the obvhs crate (quicker runs while tuning ours).
     ours_only: bool,
+    /// Time only the ray set of this name.
+    set: Option<String>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -39,6 +43,7 @@ fn parse_args() -> Result<Args, String> {
         reps: 5,
         builds: 9,
         ours_only: false,
+        set: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -48,6 +53,7 @@ fn parse_args() -> Result<Args, String> {
             "--reps" => a.reps = value()?.parse().map_err(|e| format!("--reps: {e}"))?,
             "--builds" => a.builds = value()?.parse().map_err(|e| format!("--builds: {e}"))?,
             "--ours-only" => a.ours_only = true,
+            "--set" => a.set = Some(value()?),
             _ => return Err(format!("unknown option {k}")),
         }
     }
@@ -100,11 +106,18 @@ fn main() -> ExitCode {
     };
     let world = common::world_triangles(&desc);
     // `--reps 0` times builds only.
-    let sets = if args.reps > 0 || args.write.is_some() {
+    let mut sets = if args.reps > 0 || args.write.is_some() {
         common::standard_ray_sets(&desc)
     } else {
         vec![]
     };
+    if let Some(name) = &args.set {
+        if !sets.iter().any(|s| s.name == name.as_str()) {
+            eprintln!("bvh_rays: --set: no ray set named {name}");
+            return ExitCode::from(2);
+        }
+        sets.retain(|s| s.name == name.as_str());
+    }
     if let Some(path) = &args.write {
         if let Err(e) = common::write_ray_file(path, &world, &sets) {
             eprintln!("bvh_rays: {}: {e}", path.display());

@@ -56,6 +56,15 @@ fn check_ray(bvh: &Bvh, tris: &[Triangle], ray: &Ray, t_min: f32, t_max: f32) ->
         return Ok(Outcome::Skipped);
     }
     let got = bvh.intersect(ray, t_min, t_max);
+    // The wide (AVX) node test, where the CPU has it, agrees with SSE bit
+    // for bit, hit for hit.
+    let baseline = bvh.intersect_baseline(ray, t_min, t_max);
+    prop_assert_eq!(
+        got.map(|(s, h)| (s, h.t.to_bits(), h.u.to_bits(), h.v.to_bits())),
+        baseline.map(|(s, h)| (s, h.t.to_bits(), h.u.to_bits(), h.v.to_bits())),
+        "AVX and SSE traversals differ for {:?}",
+        ray
+    );
     match (got, want) {
         (None, None) => {}
         (Some((slot, h)), Some((id, t))) => {
@@ -76,6 +85,7 @@ fn check_ray(bvh: &Bvh, tris: &[Triangle], ray: &Ray, t_min: f32, t_max: f32) ->
     let part = want.map_or(t_max, |(_, t)| t * 0.999);
     for end in [t_max, part] {
         let (any, any_genuine) = brute_occluded(tris, ray, t_min, end);
+        prop_assert_eq!(bvh.occluded(ray, t_min, end), bvh.occluded_baseline(ray, t_min, end));
         if any == any_genuine {
             prop_assert_eq!(
                 bvh.occluded(ray, t_min, end),

@@ -117,7 +117,7 @@ impl BoxBvh {
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
-                let (mask, t_near) = r.hit_boxes(node, t_max);
+                let (mask, t_near) = r.hit_boxes(&node.bounds, t_max);
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
@@ -181,7 +181,7 @@ impl BoxBvh {
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
-                let (mut mask, _) = r.hit_boxes(node, t_max);
+                let (mut mask, _) = r.hit_boxes(&node.bounds, t_max);
                 if mask != 0 {
                     cur = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;

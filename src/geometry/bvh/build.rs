@@ -18,7 +18,8 @@
 //! the same for any number of threads.
 
 use super::{
-    Bvh, Node4, Tri4, EMPTY_CHILD, INTERSECT_COST, LEAF, LEAF_COUNT_SHIFT, MAX_LEAF, SAH_DEPTH, TRAVERSAL_COST, WIDTH,
+    Bvh, Node4, Node8, Tri4, EMPTY_CHILD, INTERSECT_COST, LEAF, LEAF_COUNT_SHIFT, MAX_LEAF, NODE_WIDTH, SAH_DEPTH,
+    TRAVERSAL_COST, WIDTH,
 };
 use crate::geometry::triangle::Triangle;
 use crate::math::Vec3;
@@ -51,7 +52,15 @@ impl Bvh {
                 }
             })
             .collect();
-        let tree = build_tree::<{ WIDTH as u32 }>(refs);
+        let (root, ids) = build_root::<{ WIDTH as u32 }, NODE_WIDTH>(refs);
+        let mut nodes = Vec::with_capacity(ids.len() / 4 + 1);
+        let mut packet_slots = Vec::with_capacity(ids.len() / 2 + 1);
+        flatten8(&root, &mut nodes, &mut packet_slots);
+        let tree = Tree {
+            nodes,
+            packet_slots,
+            ids,
+        };
         let ids = tree.ids;
         let packets = tree
             .packet_slots
@@ -70,8 +79,8 @@ impl Bvh {
 /// A tree over boxes, before its leaves are filled: the nodes, each leaf
 /// packet's first slot and size (a leaf reference numbers its packets), and
 /// the input index of the primitive at each slot.
-pub(super) struct Tree {
-    pub(super) nodes: Vec<Node4>,
+pub(super) struct Tree<N> {
+    pub(super) nodes: Vec<N>,
     pub(super) packet_slots: Vec<(u32, u32)>,
     pub(super) ids: Vec<u32>,
 }
@@ -80,7 +89,21 @@ pub(super) struct Tree {
 /// BVH of analytic shapes (`BoxBvh`) share it. `P` is how many primitives a
 /// leaf tests at once, for the SAH's leaf cost: 4 for triangle packets, 1
 /// for shapes tested one by one.
-pub(super) fn build_tree<const P: u32>(mut refs: Vec<PrimRef>) -> Tree {
+pub(super) fn build_tree<const P: u32>(refs: Vec<PrimRef>) -> Tree<Node4> {
+    let (root, ids) = build_root::<P, WIDTH>(refs);
+    let mut nodes = Vec::with_capacity(ids.len() / 4 + 1);
+    let mut packet_slots = Vec::with_capacity(ids.len() / 2 + 1);
+    flatten(&root, &mut nodes, &mut packet_slots);
+    Tree {
+        nodes,
+        packet_slots,
+        ids,
+    }
+}
+
+/// The tree of nodes of up to `W` children, and the input index of the
+/// primitive at each slot of the build order.
+fn build_root<const P: u32, const W: usize>(mut refs: Vec<PrimRef>) -> (BuildNode, Vec<u32>) {
     let n = refs.len();
     let mut ids: Vec<u32> = (0..n as u32).collect();
     let (bounds, cbounds) = bounds_of(&refs);
@@ -89,7 +112,7 @@ pub(super) fn build_tree<const P: u32>(mut refs: Vec<PrimRef>) -> Tree {
         ids: &mut ids,
     };
     let root = match plan_split::<P>(prims.refs, &cbounds, 0) {
-        Some(split) => build_node::<P>(prims, 0, bounds, cbounds, split, 0),
+        Some(split) => build_node::<P, W>(prims, 0, bounds, cbounds, split, 0),
         None => BuildNode::Leaf { start: 0, count: n },
     };
     // The root is always a node, even over a single leaf.
@@ -97,14 +120,7 @@ pub(super) fn build_tree<const P: u32>(mut refs: Vec<PrimRef>) -> Tree {
         BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
         inner => inner,
     };
-    let mut nodes = Vec::with_capacity(n / 4 + 1);
-    let mut packet_slots = Vec::with_capacity(n / 2 + 1);
-    flatten(&root, &mut nodes, &mut packet_slots);
-    Tree {
-        nodes,
-        packet_slots,
-        ids,
-    }
+    (root, ids)
 }
 
 /// A primitive's bounds during the build (its input index lives beside it,
@@ -430,7 +446,7 @@ struct Pending {
 
 /// Builds the node over `prims` (which start at `start` in the build order),
 /// whose first cut is `split`.
-fn build_node<const P: u32>(
+fn build_node<const P: u32, const W: usize>(
     mut prims: Prims,
     start: usize,
     bounds: Bounds3,
@@ -440,7 +456,7 @@ fn build_node<const P: u32>(
 ) -> BuildNode {
     // On the stack: most nodes are small, and a heap vector each cost more
     // than their binning.
-    let mut children: ArrayVec<Pending, WIDTH> = ArrayVec::new();
+    let mut children: ArrayVec<Pending, NODE_WIDTH> = ArrayVec::new();
     children.push(Pending {
         start: 0,
         end: prims.len(),
@@ -448,8 +464,8 @@ fn build_node<const P: u32>(
         cbounds,
         split: Some(split),
     });
-    // Split the largest child that wants splitting until there are four.
-    while children.len() < WIDTH {
+    // Split the largest child that wants splitting until there are W.
+    while children.len() < W {
         let mut pick: Option<(usize, Split, f32)> = None;
         for (i, c) in children.iter().enumerate() {
             if let Some(split) = c.split {
@@ -491,7 +507,7 @@ fn build_node<const P: u32>(
 
     // Cut the triangles into the children's disjoint ranges and recurse.
     let n = prims.len();
-    let mut parts: ArrayVec<(Prims, &Pending), WIDTH> = ArrayVec::new();
+    let mut parts: ArrayVec<(Prims, &Pending), NODE_WIDTH> = ArrayVec::new();
     let mut rest = prims;
     let mut offset = 0;
     for c in &children {
@@ -503,7 +519,7 @@ fn build_node<const P: u32>(
     let build = |(part, c): (Prims, &Pending)| {
         let node = match c.split {
             Some(_) if part.len() <= WIDTH => small_node::<P>(part, start + c.start, &c.bounds),
-            Some(split) => build_node::<P>(part, start + c.start, c.bounds, c.cbounds, split, depth + 1),
+            Some(split) => build_node::<P, W>(part, start + c.start, c.bounds, c.cbounds, split, depth + 1),
             None => BuildNode::Leaf {
                 start: start + c.start,
                 count: c.end - c.start,
@@ -638,6 +654,37 @@ fn flatten(node: &BuildNode, nodes: &mut Vec<Node4>, packet_slots: &mut Vec<(u32
                 for axis in 0..3 {
                     n.bounds[axis][0][lane] = b.min[axis];
                     n.bounds[axis][1][lane] = b.max[axis];
+                }
+            }
+            idx as u32
+        }
+    }
+}
+
+/// `flatten` for nodes of up to eight children.
+fn flatten8(node: &BuildNode, nodes: &mut Vec<Node8>, packet_slots: &mut Vec<(u32, u32)>) -> u32 {
+    match node {
+        BuildNode::Leaf { start, count } => {
+            let first = packet_slots.len() as u32;
+            for s in (*start..start + count).step_by(WIDTH) {
+                packet_slots.push((s as u32, WIDTH.min(start + count - s) as u32));
+            }
+            let n = packet_slots.len() as u32 - first;
+            LEAF | (n << LEAF_COUNT_SHIFT) | first
+        }
+        BuildNode::Inner(children) => {
+            let idx = nodes.len();
+            nodes.push(Node8 {
+                bounds: [[[Vec4::INFINITY; 2], [Vec4::NEG_INFINITY; 2]]; 3],
+                child: [EMPTY_CHILD; NODE_WIDTH],
+            });
+            for (lane, (b, child)) in children.iter().enumerate() {
+                let r = flatten8(child, nodes, packet_slots);
+                let n = &mut nodes[idx];
+                n.child[lane] = r;
+                for axis in 0..3 {
+                    n.bounds[axis][0][lane / WIDTH][lane % WIDTH] = b.min[axis];
+                    n.bounds[axis][1][lane / WIDTH][lane % WIDTH] = b.max[axis];
                 }
             }
             idx as u32

@@ -23,8 +23,11 @@ use glam::Vec4;
 
 pub use boxes::BoxBvh;
 
-/// Children of one node and triangles of one leaf packet.
+/// Children of one node of the build's tree, and triangles of one leaf packet.
 const WIDTH: usize = 4;
+/// Children of one node of the traversed tree: the build's nodes merged
+/// with their children up to eight, tested as two groups of four lanes.
+const NODE_WIDTH: usize = 8;
 /// Most triangles in one leaf (four packets).
 const MAX_LEAF: usize = 16;
 /// SAH cost of visiting a node relative to testing one packet of triangles:
@@ -57,6 +60,19 @@ struct Node4 {
     child: [u32; WIDTH],
 }
 
+/// One node of the traversed tree: the boxes of its eight children, lane
+/// by lane, and their references. The eight minima (or maxima) along an axis
+/// are contiguous, so AVX tests them at once and SSE as two halves. Aligned
+/// to cache lines (four of them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+struct Node8 {
+    /// `bounds[axis][0][half]` holds the minima along `axis` of children
+    /// 4 * half .. 4 * half + 4, `[1]` their maxima.
+    bounds: [[[Vec4; 2]; 2]; 3],
+    child: [u32; NODE_WIDTH],
+}
+
 /// Four triangles in the layout of `Triangle` (vertex and two edges), lane by
 /// lane; `slot[i]` is the slot of lane i, or `u32::MAX` for padding (a
 /// degenerate triangle no ray hits).
@@ -73,7 +89,7 @@ struct Tri4 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
     /// `nodes[0]` is the root.
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     packets: Vec<Tri4>,
     /// `order[i]` is the input index of the triangle stored at slot `i`.
     pub order: Vec<u32>,
@@ -105,7 +121,7 @@ impl Bvh {
 
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
-        for lane in 0..WIDTH {
+        for lane in 0..NODE_WIDTH {
             if let Some(l) = self.child_bounds(&self.nodes[0], lane) {
                 b = b.union(&l);
             }
@@ -113,14 +129,14 @@ impl Bvh {
         b
     }
 
-    fn child_bounds(&self, node: &Node4, lane: usize) -> Option<Aabb> {
+    fn child_bounds(&self, node: &Node8, lane: usize) -> Option<Aabb> {
         if node.child[lane] == EMPTY_CHILD {
             return None;
         }
-        let b = &node.bounds;
+        let (b, h, l) = (&node.bounds, lane / WIDTH, lane % WIDTH);
         Some(Aabb {
-            min: Vec3::new(b[0][0][lane], b[1][0][lane], b[2][0][lane]),
-            max: Vec3::new(b[0][1][lane], b[1][1][lane], b[2][1][lane]),
+            min: Vec3::new(b[0][0][h][l], b[1][0][h][l], b[2][0][h][l]),
+            max: Vec3::new(b[0][1][h][l], b[1][1][h][l], b[2][1][h][l]),
         })
     }
 
@@ -138,7 +154,7 @@ impl Bvh {
             depth: 0,
             leaf_sizes: vec![0; MAX_LEAF + 1],
             sah_cost: 0.0,
-            bytes: self.nodes.len() * std::mem::size_of::<Node4>()
+            bytes: self.nodes.len() * std::mem::size_of::<Node8>()
                 + self.packets.len() * std::mem::size_of::<Tri4>()
                 + self.order.len() * 4,
         };
@@ -148,7 +164,7 @@ impl Bvh {
         while let Some((i, d)) = stack.pop() {
             let node = &self.nodes[i];
             s.depth = s.depth.max(d);
-            for lane in 0..WIDTH {
+            for lane in 0..NODE_WIDTH {
                 let Some(b) = self.child_bounds(node, lane) else {
                     continue;
                 };

@@ -46,7 +46,12 @@ fn matches_brute_force_on_random_soup() {
             .map(|(s, h)| (bvh.order[s as usize], h.t));
         let want = brute(&tris, &ray);
         assert_eq!(got, want);
+        let baseline = bvh
+            .intersect_baseline(&ray, 0.0, f32::INFINITY)
+            .map(|(s, h)| (bvh.order[s as usize], h.t));
+        assert_eq!(baseline, want);
         assert_eq!(bvh.occluded(&ray, 0.0, f32::INFINITY), want.is_some());
+        assert_eq!(bvh.occluded_baseline(&ray, 0.0, f32::INFINITY), want.is_some());
         hits += want.is_some() as usize;
     }
     assert!(hits > 500);
@@ -80,7 +85,7 @@ fn subtree_cost(bvh: &Bvh, i: usize, area: f32, check: &mut dyn FnMut(usize, f32
     let node = &bvh.nodes[i];
     let mut tris = 0;
     let mut cost = TRAVERSAL_COST * area;
-    for lane in 0..WIDTH {
+    for lane in 0..NODE_WIDTH {
         let Some(b) = bvh.child_bounds(node, lane) else {
             continue;
         };

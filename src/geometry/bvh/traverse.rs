@@ -16,19 +16,66 @@
 //! all triangles would (but for the test's spurious hits far off a triangle
 //! for rays almost in its plane, which the boxes rightly cull).
 
-use super::{Bvh, Node4, Tri4, LEAF, SAH_DEPTH, WIDTH};
+use super::{Bvh, Node8, Tri4, LEAF, NODE_WIDTH, SAH_DEPTH, WIDTH};
 use crate::geometry::triangle::TriHit;
 use crate::math::Ray;
 use arrayvec::ArrayVec;
 use glam::{BVec4A, Vec4};
 
-/// Traversal stack entries: at most three pushes per level of a tree at most
-/// SAH_DEPTH + 16 levels deep (halving by count four ways).
-pub(super) const STACK: usize = 3 * (SAH_DEPTH + 16) + 1;
+/// Traversal stack entries: at most seven pushes per level of a tree at most
+/// SAH_DEPTH + 32 levels deep (below SAH_DEPTH the build halves by count, and
+/// a BVH holds fewer than 2^32 triangles).
+pub(super) const STACK: usize = (NODE_WIDTH - 1) * (SAH_DEPTH + 32) + 1;
 
 impl Bvh {
     /// Closest hit in (t_min, t_max): the slot of the triangle and the hit.
+    /// Where the CPU has AVX, nodes test their eight boxes at once; the
+    /// result is the same bit for bit.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX.
+            return unsafe { self.intersect_avx(ray, t_min, t_max) };
+        }
+        self.closest::<Sse>(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::intersect`] with nodes tested four boxes at a time (SSE2, every
+    /// x86-64 CPU's), whatever the CPU: for checking that both agree.
+    pub fn intersect_baseline(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
+        self.closest::<Sse>(ray, t_min, t_max)
+    }
+
+    /// Whether any triangle blocks the ray in (t_min, t_max); AVX as in
+    /// [`Bvh::intersect`].
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX.
+            return unsafe { self.occluded_avx(ray, t_min, t_max) };
+        }
+        self.any_hit::<Sse>(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::occluded`] without AVX, as [`Bvh::intersect_baseline`].
+    pub fn occluded_baseline(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.any_hit::<Sse>(ray, t_min, t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn intersect_avx(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
+        self.closest::<Avx>(ray, t_min, t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn occluded_avx(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.any_hit::<Avx>(ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn closest<B: BoxTest>(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
         let r = TraversalRay::new(ray, t_min);
         let mut t_max = t_max;
         let mut best: Option<(u32, TriHit)> = None;
@@ -39,13 +86,13 @@ impl Bvh {
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
-                let (mask, t_near) = r.hit_boxes(node, t_max);
+                let (mask, t_near) = B::hit_boxes8(&r, node, t_max);
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    let t = t_near.to_array();
+                    let t = t_near;
                     let a = mask.trailing_zeros() as usize;
                     let rest = mask & (mask - 1);
                     if rest & (rest - 1) == 0 {
@@ -57,8 +104,8 @@ impl Bvh {
                         cur = node.child[near];
                         continue;
                     }
-                    // Three or four children: push all but the nearest, farthest first.
-                    let mut hits = [(0u32, 0.0f32); WIDTH];
+                    // Three or more children: push all but the nearest, farthest first.
+                    let mut hits = [(0u32, 0.0f32); NODE_WIDTH];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
@@ -100,15 +147,15 @@ impl Bvh {
         }
     }
 
-    /// Whether any triangle blocks the ray in (t_min, t_max).
-    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    #[inline(always)]
+    fn any_hit<B: BoxTest>(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let r = TraversalRay::new(ray, t_min);
         let mut stack: ArrayVec<u32, STACK> = ArrayVec::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF == 0 {
                 let node = &self.nodes[cur as usize];
-                let (mut mask, _) = r.hit_boxes(node, t_max);
+                let (mut mask, _) = B::hit_boxes8(&r, node, t_max);
                 // Leaf children first: their packets may end the query before
                 // another node is loaded. Inner children go on the stack.
                 while mask != 0 {
@@ -129,6 +176,82 @@ impl Bvh {
             }
         }
     }
+}
+
+/// How a node's eight boxes are tested: the traversal loops are written once
+/// and compiled for each.
+trait BoxTest {
+    /// Which of the node's children the ray enters within (t_min, t_max)
+    /// (bit i for lane i), and the entry distances. Every lane is computed
+    /// with the same operations in the same order by each implementation, so
+    /// all agree bit for bit.
+    fn hit_boxes8(r: &TraversalRay, node: &Node8, t_max: f32) -> (u32, [f32; NODE_WIDTH]);
+}
+
+/// Two groups of four lanes (SSE2).
+struct Sse;
+
+impl BoxTest for Sse {
+    #[inline(always)]
+    fn hit_boxes8(r: &TraversalRay, node: &Node8, t_max: f32) -> (u32, [f32; NODE_WIDTH]) {
+        let b = &node.bounds;
+        let (m0, t0) = r.slabs(|axis, side| b[axis][side][0], t_max);
+        let (m1, t1) = r.slabs(|axis, side| b[axis][side][1], t_max);
+        let (t0, t1) = (t0.to_array(), t1.to_array());
+        (
+            m0 | m1 << WIDTH,
+            [t0[0], t0[1], t0[2], t0[3], t1[0], t1[1], t1[2], t1[3]],
+        )
+    }
+}
+
+/// Eight lanes at once; only the functions compiled with AVX use it.
+#[cfg(target_arch = "x86_64")]
+struct Avx;
+
+#[cfg(target_arch = "x86_64")]
+impl BoxTest for Avx {
+    #[inline(always)]
+    fn hit_boxes8(r: &TraversalRay, node: &Node8, t_max: f32) -> (u32, [f32; NODE_WIDTH]) {
+        // SAFETY: `Avx` is used only by `intersect_avx` and `occluded_avx`,
+        // which are called only where the CPU has AVX.
+        unsafe { hit_boxes8_avx(r, node, t_max) }
+    }
+}
+
+/// `Sse::hit_boxes8` in 256-bit registers: the same operations on the same
+/// operands in the same order, lane by lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn hit_boxes8_avx(r: &TraversalRay, node: &Node8, t_max: f32) -> (u32, [f32; NODE_WIDTH]) {
+    use std::arch::x86_64::*;
+    let splat = |v: Vec4| {
+        let v = __m128::from(v);
+        _mm256_set_m128(v, v)
+    };
+    let bound = |axis: usize, side: usize| {
+        let [lo, hi] = node.bounds[axis][side];
+        _mm256_set_m128(__m128::from(hi), __m128::from(lo))
+    };
+    let slab = |axis: usize| {
+        let near = r.near[axis] as usize;
+        let inv = splat(r.inv_d[axis]);
+        let t0 = _mm256_mul_ps(_mm256_sub_ps(bound(axis, near), splat(r.o_near[axis])), inv);
+        let t1 = _mm256_mul_ps(_mm256_sub_ps(bound(axis, 1 - near), splat(r.o_far[axis])), inv);
+        (t0, t1)
+    };
+    let (nx, fx) = slab(0);
+    let (ny, fy) = slab(1);
+    let (nz, fz) = slab(2);
+    let t_near = _mm256_max_ps(_mm256_max_ps(nx, ny), _mm256_max_ps(nz, splat(r.t_min)));
+    let far = _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, _mm256_set1_ps(t_max)));
+    let t_far = _mm256_mul_ps(far, _mm256_set1_ps(FAR_WIDEN));
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t_near, t_far)) as u32;
+    let mut t = [0.0f32; NODE_WIDTH];
+    // SAFETY: `t` holds eight floats; an unaligned store needs no more.
+    unsafe { _mm256_storeu_ps(t.as_mut_ptr(), t_near) };
+    (mask, t)
 }
 
 /// A ray prepared for box and packet tests: its origin and direction in all
@@ -187,15 +310,21 @@ impl TraversalRay {
         }
     }
 
-    /// Which of the four child boxes the ray enters within (t_min, t_max)
-    /// (bit i for lane i), and the entry distances.
+    /// Which of four boxes (`bounds[axis][0]` their minima along `axis`,
+    /// `[1]` their maxima) the ray enters within (t_min, t_max) (bit i for
+    /// lane i), and the entry distances.
     #[inline(always)]
-    pub(super) fn hit_boxes(&self, node: &Node4, t_max: f32) -> (u32, Vec4) {
-        let b = &node.bounds;
+    pub(super) fn hit_boxes(&self, b: &[[Vec4; 2]; 3], t_max: f32) -> (u32, Vec4) {
+        self.slabs(|axis, side| b[axis][side], t_max)
+    }
+
+    /// `hit_boxes` of the boxes `bound(axis, side)` gives (side 0: minima).
+    #[inline(always)]
+    fn slabs(&self, bound: impl Fn(usize, usize) -> Vec4, t_max: f32) -> (u32, Vec4) {
         let slab = |axis: usize| {
             let near = self.near[axis] as usize;
-            let t0 = (b[axis][near] - self.o_near[axis]) * self.inv_d[axis];
-            let t1 = (b[axis][1 - near] - self.o_far[axis]) * self.inv_d[axis];
+            let t0 = (bound(axis, near) - self.o_near[axis]) * self.inv_d[axis];
+            let t1 = (bound(axis, 1 - near) - self.o_far[axis]) * self.inv_d[axis];
             (t0, t1)
         };
         let (nx, fx) = slab(0);
