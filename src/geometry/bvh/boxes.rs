@@ -60,7 +60,7 @@ impl BoxBvh {
             })
             .collect();
         // Shapes are tested one at a time: the SAH counts each.
-        let tree = build_tree::<1>(refs);
+        let tree = build_tree::<1, WIDTH, Node4>(refs);
         BoxBvh {
             nodes: tree.nodes,
             packets: tree.packet_slots,

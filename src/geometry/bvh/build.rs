@@ -3,10 +3,11 @@
 //! the layout declared in `mod.rs`.
 //!
 //! Build: top-down binned SAH (Wald 2007, "On fast Construction of SAH-based
-//! Bounding Volume Hierarchies"). Each BVH4 node starts as one child holding
-//! all its triangles and splits, by the best binned SAH plane, the child of
-//! largest surface area until it has four, as Embree's wide builders do (Wald
-//! et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing").
+//! Bounding Volume Hierarchies"). Each node starts as one child holding all
+//! its triangles and splits, by the best binned SAH plane, the child of
+//! largest surface area until it has eight (four for `BoxBvh`), as Embree's
+//! wide builders do (Wald et al. 2014, "Embree: A Kernel Framework for
+//! Efficient CPU Ray Tracing").
 //! Leaf cost counts blocks of four triangles, since a leaf is tested four
 //! triangles at a time. Whether a set of up to `MAX_LEAF` triangles becomes
 //! a leaf is decided bottom-up, against the SAH cost of the subtree built
@@ -52,15 +53,7 @@ impl Bvh {
                 }
             })
             .collect();
-        let (root, ids) = build_root::<{ WIDTH as u32 }, NODE_WIDTH>(refs);
-        let mut nodes = Vec::with_capacity(ids.len() / 4 + 1);
-        let mut packet_slots = Vec::with_capacity(ids.len() / 2 + 1);
-        flatten8(&root, &mut nodes, &mut packet_slots);
-        let tree = Tree {
-            nodes,
-            packet_slots,
-            ids,
-        };
+        let tree = build_tree::<{ WIDTH as u32 }, NODE_WIDTH, Node8>(refs);
         let ids = tree.ids;
         let packets = tree
             .packet_slots
@@ -85,25 +78,12 @@ pub(super) struct Tree<N> {
     pub(super) ids: Vec<u32>,
 }
 
-/// Builds the tree over the primitives' boxes; the triangle BVH and the
-/// BVH of analytic shapes (`BoxBvh`) share it. `P` is how many primitives a
-/// leaf tests at once, for the SAH's leaf cost: 4 for triangle packets, 1
-/// for shapes tested one by one.
-pub(super) fn build_tree<const P: u32>(refs: Vec<PrimRef>) -> Tree<Node4> {
-    let (root, ids) = build_root::<P, WIDTH>(refs);
-    let mut nodes = Vec::with_capacity(ids.len() / 4 + 1);
-    let mut packet_slots = Vec::with_capacity(ids.len() / 2 + 1);
-    flatten(&root, &mut nodes, &mut packet_slots);
-    Tree {
-        nodes,
-        packet_slots,
-        ids,
-    }
-}
-
-/// The tree of nodes of up to `W` children, and the input index of the
-/// primitive at each slot of the build order.
-fn build_root<const P: u32, const W: usize>(mut refs: Vec<PrimRef>) -> (BuildNode, Vec<u32>) {
+/// Builds the tree over the primitives' boxes, in nodes of up to `W`
+/// children laid out as `N`; the triangle BVH and the BVH of analytic shapes
+/// (`BoxBvh`) share it. `P` is how many primitives a leaf tests at once, for
+/// the SAH's leaf cost: 4 for triangle packets, 1 for shapes tested one by
+/// one.
+pub(super) fn build_tree<const P: u32, const W: usize, N: FlatNode>(mut refs: Vec<PrimRef>) -> Tree<N> {
     let n = refs.len();
     let mut ids: Vec<u32> = (0..n as u32).collect();
     let (bounds, cbounds) = bounds_of(&refs);
@@ -120,7 +100,51 @@ fn build_root<const P: u32, const W: usize>(mut refs: Vec<PrimRef>) -> (BuildNod
         BuildNode::Leaf { .. } => BuildNode::Inner(vec![(bounds, root)]),
         inner => inner,
     };
-    (root, ids)
+    let mut nodes = Vec::with_capacity(n / W + 1);
+    let mut packet_slots = Vec::with_capacity(n / 2 + 1);
+    flatten(&root, &mut nodes, &mut packet_slots);
+    Tree {
+        nodes,
+        packet_slots,
+        ids,
+    }
+}
+
+/// A node layout the build fills: an empty node, and one child's reference
+/// and box put in a lane.
+pub(super) trait FlatNode {
+    const EMPTY: Self;
+    fn set(&mut self, lane: usize, child: u32, b: &Bounds3);
+}
+
+impl FlatNode for Node4 {
+    const EMPTY: Self = Node4 {
+        bounds: [[Vec4::INFINITY, Vec4::NEG_INFINITY]; 3],
+        child: [EMPTY_CHILD; WIDTH],
+    };
+
+    fn set(&mut self, lane: usize, child: u32, b: &Bounds3) {
+        self.child[lane] = child;
+        for axis in 0..3 {
+            self.bounds[axis][0][lane] = b.min[axis];
+            self.bounds[axis][1][lane] = b.max[axis];
+        }
+    }
+}
+
+impl FlatNode for Node8 {
+    const EMPTY: Self = Node8 {
+        bounds: [[[Vec4::INFINITY; 2], [Vec4::NEG_INFINITY; 2]]; 3],
+        child: [EMPTY_CHILD; NODE_WIDTH],
+    };
+
+    fn set(&mut self, lane: usize, child: u32, b: &Bounds3) {
+        self.child[lane] = child;
+        for axis in 0..3 {
+            self.bounds[axis][0][lane / WIDTH][lane % WIDTH] = b.min[axis];
+            self.bounds[axis][1][lane / WIDTH][lane % WIDTH] = b.max[axis];
+        }
+    }
 }
 
 /// A primitive's bounds during the build (its input index lives beside it,
@@ -179,7 +203,7 @@ impl<'a> Prims<'a> {
 
 /// Bounds of boxes and of their (doubled) centroids, in SIMD registers.
 #[derive(Clone, Copy, Debug)]
-struct Bounds3 {
+pub(super) struct Bounds3 {
     min: Vec3A,
     max: Vec3A,
 }
@@ -631,7 +655,7 @@ impl BuildNode {
 /// Lays the tree out depth first; returns the reference to `node`. Leaves
 /// only reserve their packets: `packet_slots` gets each packet's first slot
 /// and triangle count, and `make_packet` fills it in afterwards, in parallel.
-fn flatten(node: &BuildNode, nodes: &mut Vec<Node4>, packet_slots: &mut Vec<(u32, u32)>) -> u32 {
+fn flatten<N: FlatNode>(node: &BuildNode, nodes: &mut Vec<N>, packet_slots: &mut Vec<(u32, u32)>) -> u32 {
     match node {
         BuildNode::Leaf { start, count } => {
             let first = packet_slots.len() as u32;
@@ -643,49 +667,10 @@ fn flatten(node: &BuildNode, nodes: &mut Vec<Node4>, packet_slots: &mut Vec<(u32
         }
         BuildNode::Inner(children) => {
             let idx = nodes.len();
-            nodes.push(Node4 {
-                bounds: [[Vec4::INFINITY, Vec4::NEG_INFINITY]; 3],
-                child: [EMPTY_CHILD; WIDTH],
-            });
+            nodes.push(N::EMPTY);
             for (lane, (b, child)) in children.iter().enumerate() {
                 let r = flatten(child, nodes, packet_slots);
-                let n = &mut nodes[idx];
-                n.child[lane] = r;
-                for axis in 0..3 {
-                    n.bounds[axis][0][lane] = b.min[axis];
-                    n.bounds[axis][1][lane] = b.max[axis];
-                }
-            }
-            idx as u32
-        }
-    }
-}
-
-/// `flatten` for nodes of up to eight children.
-fn flatten8(node: &BuildNode, nodes: &mut Vec<Node8>, packet_slots: &mut Vec<(u32, u32)>) -> u32 {
-    match node {
-        BuildNode::Leaf { start, count } => {
-            let first = packet_slots.len() as u32;
-            for s in (*start..start + count).step_by(WIDTH) {
-                packet_slots.push((s as u32, WIDTH.min(start + count - s) as u32));
-            }
-            let n = packet_slots.len() as u32 - first;
-            LEAF | (n << LEAF_COUNT_SHIFT) | first
-        }
-        BuildNode::Inner(children) => {
-            let idx = nodes.len();
-            nodes.push(Node8 {
-                bounds: [[[Vec4::INFINITY; 2], [Vec4::NEG_INFINITY; 2]]; 3],
-                child: [EMPTY_CHILD; NODE_WIDTH],
-            });
-            for (lane, (b, child)) in children.iter().enumerate() {
-                let r = flatten8(child, nodes, packet_slots);
-                let n = &mut nodes[idx];
-                n.child[lane] = r;
-                for axis in 0..3 {
-                    n.bounds[axis][0][lane / WIDTH][lane % WIDTH] = b.min[axis];
-                    n.bounds[axis][1][lane / WIDTH][lane % WIDTH] = b.max[axis];
-                }
+                nodes[idx].set(lane, r, b);
             }
             idx as u32
         }

@@ -1,5 +1,5 @@
-//! Bounding volume hierarchy over triangles: a four-wide BVH (a BVH4) whose
-//! leaves hold packets of four triangles.
+//! Bounding volume hierarchy over triangles: an eight-wide BVH (a BVH8, as
+//! Embree's on CPUs with AVX) whose leaves hold packets of four triangles.
 //!
 //! The build (`build`) and the traversal (`traverse`) share nothing but the
 //! layout declared here: the nodes, the triangle packets, and how a child
@@ -8,8 +8,9 @@
 //! the render's innermost loop and must agree bit for bit with
 //! `Triangle::intersect_mt`; either can be read, tuned and tested alone.
 //!
-//! `BoxBvh` (in `boxes`) is the same tree over bounding boxes, for the
-//! analytic shapes: it shares the build and the box test, not the leaves.
+//! `BoxBvh` (in `boxes`) is the same build over bounding boxes, for the
+//! analytic shapes, with four-wide nodes: it shares the build and the box
+//! test, not the leaves.
 
 mod boxes;
 mod build;
@@ -23,10 +24,10 @@ use glam::Vec4;
 
 pub use boxes::BoxBvh;
 
-/// Children of one node of the build's tree, and triangles of one leaf packet.
+/// Triangles of one leaf packet, SSE lanes of a box test, and children of a
+/// `BoxBvh` node.
 const WIDTH: usize = 4;
-/// Children of one node of the traversed tree: the build's nodes merged
-/// with their children up to eight, tested as two groups of four lanes.
+/// Children of one node of the triangle BVH.
 const NODE_WIDTH: usize = 8;
 /// Most triangles in one leaf (four packets).
 const MAX_LEAF: usize = 16;
@@ -50,7 +51,8 @@ const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
 /// Unused child lanes: a leaf of no packets behind an empty box.
 const EMPTY_CHILD: u32 = LEAF;
 
-/// One node: the boxes of its four children, lane by lane, and their references.
+/// One node of a `BoxBvh`: the boxes of its four children, lane by lane,
+/// and their references.
 /// Aligned to a cache line so that a node spans exactly two.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]

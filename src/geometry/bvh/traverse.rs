@@ -2,9 +2,12 @@
 //! the build so that its exactness (every hit bit for bit as a loop over all
 //! triangles would find it) can be read and checked on its own.
 //!
-//! Traversal tests a ray against the four child boxes of a node at once (SIMD
-//! lanes: glam's `Vec4` is an SSE register on x86-64), with the near and far
-//! planes chosen by the sign of the direction. Closest-hit queries visit the
+//! Traversal tests a ray against the eight child boxes of a node at once: in
+//! one AVX register where the CPU has AVX (chosen at run time, as Embree
+//! chooses its kernels; the build targets baseline x86-64), else as two SSE
+//! halves (glam's `Vec4`), with the same operations lane by lane, so that
+//! both give the same bits. The near and far planes are chosen by the sign
+//! of the direction. Closest-hit queries visit the
 //! nearest child first and skip stacked nodes farther than the closest hit so
 //! far; `occluded` tests a node's leaf children before it descends and stops
 //! at the first blocker. The far distance of every box
