@@ -81,7 +81,7 @@
 
 use super::diffuse::clamp_unit;
 use super::fresnel::{fr_dielectric, reflect, refract};
-use super::{mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, TrowbridgeReitz};
+use super::{coat_reflection, two_sided, two_sided_sample, BsdfSample, BxdfFlags, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use std::f32::consts::FRAC_1_PI;
@@ -523,45 +523,25 @@ impl CoatedDiffuseBxdf {
             }
             let alpha = self.coat_alpha();
             let p_coat = self.coat_probability(wo.z, alpha);
-            let bs = if uc < p_coat {
-                if self.distrib.effectively_smooth() {
-                    // The coat's specular reflection, a delta.
-                    let fr = fr_dielectric(wo.z, self.eta);
-                    BsdfSample {
-                        f: Vec3::splat(fr / wo.z),
-                        wi: mirror(wo),
-                        pdf: p_coat,
-                        flags: BxdfFlags::SPECULAR_REFLECTION,
-                        eta: 1.0,
-                    }
-                } else {
-                    let wm = self.distrib.sample_wm(wo, u);
-                    let wi = reflect(wo, wm);
-                    if wi.z <= 0.0 {
-                        return None;
-                    }
-                    BsdfSample {
-                        f: self.f_upper(wo, wi),
-                        wi,
-                        pdf: self.pdf_upper(wo, wi),
-                        flags: BxdfFlags::GLOSSY_REFLECTION,
-                        eta: 1.0,
-                    }
-                }
+            if uc < p_coat && self.distrib.effectively_smooth() {
+                return Some(coat_reflection(wo, self.eta, p_coat));
+            }
+            let (wi, flags) = if uc < p_coat {
+                let wm = self.distrib.sample_wm(wo, u);
+                (reflect(wo, wm), BxdfFlags::GLOSSY_REFLECTION)
             } else {
-                let wi = cosine_hemisphere(u);
-                if wi.z <= 0.0 {
-                    return None;
-                }
-                BsdfSample {
-                    f: self.f_upper(wo, wi),
-                    wi,
-                    pdf: self.pdf_upper(wo, wi),
-                    flags: BxdfFlags::DIFFUSE_REFLECTION,
-                    eta: 1.0,
-                }
+                (cosine_hemisphere(u), BxdfFlags::DIFFUSE_REFLECTION)
             };
-            Some(bs)
+            if wi.z <= 0.0 {
+                return None;
+            }
+            Some(BsdfSample {
+                f: self.f_upper(wo, wi),
+                wi,
+                pdf: self.pdf_upper(wo, wi),
+                flags,
+                eta: 1.0,
+            })
         })
     }
 

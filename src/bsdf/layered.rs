@@ -47,7 +47,10 @@
 
 use super::dielectric::Lobes;
 use super::fresnel::{fr_complex_rgb, fr_dielectric};
-use super::{mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf, TransportMode};
+use super::{
+    coat_reflection, mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf,
+    TransportMode,
+};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere, mix64, Rng};
 use std::f32::consts::FRAC_1_PI;
@@ -263,14 +266,7 @@ impl CoatedConductorBxdf {
             } else {
                 let (p_coat, p_base, _) = self.lobe_weights(wo.z);
                 if uc < p_coat && self.coat_smooth() {
-                    let fr = fr_dielectric(wo.z, self.coat.eta);
-                    BsdfSample {
-                        f: Vec3::splat(fr / wo.z),
-                        wi: mirror(wo),
-                        pdf: p_coat,
-                        flags: BxdfFlags::SPECULAR_REFLECTION,
-                        eta: 1.0,
-                    }
+                    coat_reflection(wo, self.coat.eta, p_coat)
                 } else {
                     let wi = if uc < p_coat {
                         let wm = self.coat.distrib.sample_wm(wo, u);

@@ -456,6 +456,18 @@ pub(crate) fn two_sided<T: Default>(wo: Vec3, wi: Vec3, upper: impl FnOnce(Vec3,
     }
 }
 
+/// A smooth coat's specular reflection of `wo` (above the surface), a delta
+/// lobe chosen with probability `p`: Fresnel reflectance over the cosine.
+pub(crate) fn coat_reflection(wo: Vec3, eta: f32, p: f32) -> BsdfSample {
+    BsdfSample {
+        f: Vec3::splat(fresnel::fr_dielectric(wo.z, eta) / wo.z),
+        wi: mirror(wo),
+        pdf: p,
+        flags: BxdfFlags::SPECULAR_REFLECTION,
+        eta: 1.0,
+    }
+}
+
 /// `upper(wo)` with `wo` mirrored above the surface and its sample mirrored back.
 pub(crate) fn two_sided_sample(wo: Vec3, upper: impl FnOnce(Vec3) -> Option<BsdfSample>) -> Option<BsdfSample> {
     let flip = wo.z < 0.0;
