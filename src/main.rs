@@ -220,7 +220,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
             report_photons(p, &settings.files);
         }
         println!(
-            "{} {}x{}{}, {} spp, {} shadow samples, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
+            "{} {}x{}{}, {} spp{}, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
             scene.name,
             w,
             h,
@@ -229,7 +229,12 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
                 None => String::new(),
             },
             settings.samples_per_pixel(),
-            settings.shadow_samples,
+            // The path tracer and SPPM take one light sample a vertex.
+            match settings.integrator {
+                integrator::IntegratorKind::Direct | integrator::IntegratorKind::Photon =>
+                    format!(", {} shadow samples", settings.shadow_samples),
+                integrator::IntegratorKind::Path | integrator::IntegratorKind::Sppm => String::new(),
+            },
             settings.integrator,
             out.seconds,
             out.stats.total() as f64 / out.seconds.max(1e-9) / 1e6,

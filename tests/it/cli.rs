@@ -285,7 +285,28 @@ fn summary_line_reports_size_samples_time_and_ray_rate() {
         stdout.contains("48x32") && stdout.contains("9 spp") && stdout.contains("Mrays/s"),
         "{stdout}"
     );
+    // The default photon mapper's direct light takes the scene's shadow samples.
+    assert!(stdout.contains(", 4 shadow samples,"), "{stdout}");
     assert!(dir.path().join("render.png").exists());
+    // The path tracer takes one light sample a vertex: no count to report.
+    let out = raytracer(
+        &[
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--integrator",
+            "path",
+            "--spp",
+            "2",
+            "-o",
+            "path.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("2 spp, Path") && !stdout.contains("shadow"), "{stdout}");
 }
 
 #[test]
