@@ -326,6 +326,9 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
             bail!("--light-radius {r}: must be a finite number >= 0");
         }
         desc.set_light_radius(r);
+        for l in &desc.lights {
+            l.check(1.0).map_err(|m| anyhow::anyhow!("--light-radius {r}: {m}"))?;
+        }
     }
     let crop = match (&args.crop, &args.tile) {
         (Some(c), _) => Some(parse_crop(c, w, h)?),

@@ -198,6 +198,13 @@ impl FrameWindow {
 /// and room for sums up to 6e23, far beyond any radiance times sample count.
 const FIXED_ONE: f64 = (1u64 << 48) as f64;
 
+/// The largest sample radiance a pixel sum takes: 2^20 samples a pixel
+/// (the most a render asks for), each splatted with weight at most 1 into
+/// the 5 x 5 pixels the widest filter reaches, sum to at most 2.6e23, within
+/// the fixed point's 6e23. Lights emit at most 1e15 (`light::MAX_EMISSION`),
+/// so only a firefly of a million times that meets this.
+pub const MAX_SAMPLE: f32 = 1e16;
+
 /// One pixel's filter-weighted radiance sum and weight sum, in fixed point.
 /// Integer addition is associative (wrapping, it is exact modulo 2^128), so
 /// sums merged in any order are the same bits.
@@ -219,8 +226,15 @@ impl PixelSum {
         }
     }
 
-    /// Adds radiance `l` with filter weight `w`.
+    /// Adds radiance `l` with filter weight `w`. A sample brighter than
+    /// [`MAX_SAMPLE`] is scaled down to it (keeping its hue), so that no sum
+    /// of a pixel's samples can pass the fixed point's range and wrap.
     pub fn add(&mut self, l: Vec3, w: f32) {
+        let l = if l.max_element() > MAX_SAMPLE {
+            l * (MAX_SAMPLE / l.max_element())
+        } else {
+            l
+        };
         let w64 = w as f64;
         for (s, c) in self.rgb.iter_mut().zip(l.to_array()) {
             *s = s.wrapping_add(Self::fixed(c as f64 * w64));
@@ -437,6 +451,29 @@ pub fn srgb_oetf(v: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::sampling::ONE_MINUS_EPS;
+
+    #[test]
+    fn the_brightest_samples_a_pixel_can_take_never_wrap_its_sums() {
+        // The most samples a pixel sum can receive, each at the largest f32:
+        // the sums stay positive and the mean is the clamp, hue kept.
+        let mut s = PixelSum::default();
+        let n = (1u64 << 20) * 25;
+        let bright = Vec3::new(f32::MAX, f32::MAX / 2.0, 0.0);
+        // Adding n equal samples is adding one n times; a few thousand
+        // suffice to pass the range without the clamp, the rest are checked
+        // by the sums' bound.
+        for _ in 0..4096 {
+            s.add(bright, 1.0);
+        }
+        let v = s.value();
+        let want = Vec3::new(MAX_SAMPLE, MAX_SAMPLE / 2.0, 0.0);
+        assert!(((v - want) / MAX_SAMPLE).abs().max_element() < 1e-6, "{v}");
+        assert!((MAX_SAMPLE as f64 * FIXED_ONE * n as f64) < i128::MAX as f64);
+        // A sample within the limit is taken as it is.
+        let mut t = PixelSum::default();
+        t.add(Vec3::new(3.0, 2.0, 1.0), 0.5);
+        assert_eq!(t.value(), Vec3::new(3.0, 2.0, 1.0));
+    }
 
     #[test]
     fn sampled_filters_follow_their_profiles() {

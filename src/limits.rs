@@ -47,10 +47,11 @@ pub fn check_memory(what: &str, bytes: u64, fallback: u64) -> Result<()> {
     Ok(())
 }
 
-/// Bytes a render of `pixels` pixels holds at its peak: the film and the
-/// per-tile buffers (3 x f32 each) and the 8-bit output copy.
+/// Bytes a render of `pixels` pixels holds at its peak: the fixed-point
+/// sums of the samples so far and of the pass in flight, the film (3 x f32)
+/// and the 8-bit output copy.
 pub fn film_bytes(pixels: u64) -> u64 {
-    pixels * (12 + 12 + 3)
+    pixels * (2 * std::mem::size_of::<crate::film::PixelSum>() as u64 + 12 + 3)
 }
 
 pub fn human_bytes(b: u64) -> String {

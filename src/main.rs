@@ -63,12 +63,7 @@ fn main() -> ExitCode {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
-            let text = e.render().to_string();
-            let line = text
-                .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("invalid arguments");
-            eprintln!("{line}");
+            eprintln!("{}", clap_error_line(&e.render().to_string()));
             return ExitCode::from(2);
         }
     };
@@ -79,6 +74,24 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// clap's error on one line: its first line, and when that ends in a colon
+/// (the missing arguments), the indented lines it introduces.
+fn clap_error_line(text: &str) -> String {
+    let mut lines = text.lines().skip_while(|l| l.trim().is_empty());
+    let Some(first) = lines.next() else {
+        return "invalid arguments".into();
+    };
+    let mut line = first.trim_end().to_string();
+    if line.ends_with(':') {
+        let items: Vec<&str> = lines
+            .take_while(|l| l.starts_with(char::is_whitespace) && !l.trim().is_empty())
+            .map(str::trim)
+            .collect();
+        line = format!("{} {}", line, items.join(", "));
+    }
+    line
 }
 
 /// The error and its causes on one line. Library errors that name their

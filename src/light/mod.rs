@@ -83,6 +83,11 @@ pub enum Light {
 }
 
 /// The bounding sphere of a light before `Scene::build` has given it the scene's.
+/// The most a light may emit (power, radiance or intensity, per channel):
+/// far beyond any scene's, and far enough below f32's range that the light
+/// sample weights built on it stay finite.
+pub const MAX_EMISSION: f32 = 1e15;
+
 const NO_WORLD: Sphere = Sphere {
     centre: Vec3::ZERO,
     radius: 0.0,
@@ -306,6 +311,46 @@ impl Light {
             Light::Distant { .. } => "distant",
             Light::Infinite { .. } => "infinite",
         }
+    }
+
+    /// Why the light cannot be rendered once its emission is multiplied by
+    /// `k`, if it cannot: one line, for the user who wrote it.
+    pub fn check(&self, k: f32) -> Result<(), String> {
+        let kind = self.kind();
+        if !self.position().is_finite() {
+            return Err(format!("{kind} light: its position is not finite"));
+        }
+        if let Light::Sphere { sphere, .. } = self {
+            if !(sphere.radius > 0.0 && sphere.radius.is_finite()) {
+                return Err(format!("sphere light: radius {} must be finite and > 0", sphere.radius));
+            }
+        }
+        let emission = match self {
+            Light::Sphere { power, .. } => vec![("power", *power), ("radiance", self.radiance())],
+            Light::Point { power, .. } => vec![("power", *power)],
+            Light::Triangle { radiance, .. }
+            | Light::Disk { radiance, .. }
+            | Light::Distant { radiance, .. }
+            | Light::Infinite { radiance, .. } => vec![("radiance", *radiance)],
+            Light::Spot { intensity, .. } => vec![("intensity", *intensity)],
+        };
+        for (what, v) in emission {
+            let v = v * k;
+            if v.is_nan() || !v.max_element().is_finite() || v.max_element() > MAX_EMISSION {
+                let value = if v.is_nan() {
+                    "not a number".into()
+                } else {
+                    format!("{:e}", v.max_element())
+                };
+                return Err(format!(
+                    "{kind} light: its {what} is {value}, beyond the limit of {MAX_EMISSION:e} (a light too small for its power, or too large a scale?)"
+                ));
+            }
+            if v.min_element() < 0.0 {
+                return Err(format!("{kind} light: its {what} {v} must be >= 0"));
+            }
+        }
+        Ok(())
     }
 
     /// Multiplies what the light emits by `k` (a camera's exposure).

@@ -166,6 +166,23 @@ impl CameraDesc {
         self.camera_at(self.position, self.look_at, self.up)
     }
 
+    /// Why `camera()` gives no camera: one line for the user.
+    pub fn problem(&self) -> String {
+        let forward = self.look_at - self.position;
+        if !(self.position.is_finite() && self.look_at.is_finite() && self.up.is_finite()) {
+            "the camera's position, look_at or up is not finite".into()
+        } else if forward.length_squared() == 0.0 || !forward.length_squared().is_finite() {
+            format!("the camera looks at its own position {}", self.position)
+        } else if forward.cross(self.up).length_squared() == 0.0 {
+            format!("the camera's up {} is zero or along its viewing direction", self.up)
+        } else {
+            format!(
+                "the camera's field of view ({} degrees), orthographic window, screen window or lens is out of range",
+                self.fov_y_deg
+            )
+        }
+    }
+
     /// The camera it describes, moved to `position`, looking at `look_at`
     /// with `up` (the preview's moves).
     pub fn camera_at(&self, position: Vec3, look_at: Vec3, up: Vec3) -> Option<Camera> {
@@ -468,13 +485,7 @@ pub struct Scene {
 impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
-        let camera = c.camera()
-            .ok_or_else(|| {
-                Error::Scene(format!(
-                    "degenerate camera (position {:?}, look_at {:?}, up {:?}, fov {} degrees, {}x{}, window {:?}, lens {:?})",
-                    c.position, c.look_at, c.up, c.fov_y_deg, c.width, c.height, c.window, c.lens
-                ))
-            })?;
+        let camera = c.camera().ok_or_else(|| Error::Scene(c.problem()))?;
         let nmat = desc.materials.len() as u32;
         let mut tris = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::with_capacity(desc.triangles.len());
@@ -520,12 +531,17 @@ impl Scene {
             })
             .collect();
         for s in &spheres {
-            if s.material >= nmat
-                || s.sphere.radius <= 0.0
-                || !s.sphere.centre.is_finite()
-                || !s.sphere.radius.is_finite()
-            {
-                return Err(Error::Scene(format!("invalid sphere {:?}", s.sphere)));
+            if s.material >= nmat {
+                return Err(Error::Scene(format!(
+                    "a sphere names material {} of {nmat}",
+                    s.material
+                )));
+            }
+            if s.sphere.radius <= 0.0 || !s.sphere.centre.is_finite() || !s.sphere.radius.is_finite() {
+                return Err(Error::Scene(format!(
+                    "a sphere at {} of radius {}: the radius must be finite and > 0, the centre finite",
+                    s.sphere.centre, s.sphere.radius
+                )));
             }
         }
         let mut disks = desc
@@ -553,16 +569,10 @@ impl Scene {
         materials.push(Material::diffuse(0.0, 0.0, 0.0));
         names.push("<light>".into());
         for (i, l) in lights.iter_mut().enumerate() {
-            let p = l.power();
-            if !l.position().is_finite() || !p.is_finite() || p.min_element() < 0.0 {
-                return Err(Error::Scene(format!("invalid light {l:?}")));
-            }
+            l.check(1.0).map_err(|m| Error::Scene(format!("light {i}: {m}")))?;
             // Emitters reflect nothing and block light like any surface.
             match l {
                 Light::Sphere { sphere, .. } => {
-                    if !sphere.radius.is_finite() || sphere.radius <= 0.0 {
-                        return Err(Error::Scene(format!("invalid light radius {}", sphere.radius)));
-                    }
                     spheres.push(SphereObject {
                         sphere: *sphere,
                         material: black,

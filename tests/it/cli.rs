@@ -199,6 +199,7 @@ fn bad_input_exits_2_with_one_line_and_no_file() {
         &["--scene", "no-such-scene"],
         &["--light-radius", "-1"],
         &["--light-radius", "NaN"],
+        &["--light-radius", "1e-20"],
         &["--exposure", "inf"],
         &["--width", "abc"],
         &["--no-such-option"],
@@ -220,6 +221,24 @@ fn bad_input_exits_2_with_one_line_and_no_file() {
             files_in(dir.path()).is_empty(),
             "{case:?} left {:?}",
             files_in(dir.path())
+        );
+    }
+}
+
+#[test]
+fn a_missing_argument_is_named_on_the_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, missing) in [
+        (&["compare", "a.exr"][..], "<REFERENCE>"),
+        (&["merge", "m.exr"][..], "<PARTS>"),
+    ] {
+        let out = raytracer(args, dir.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("not provided") && stderr.contains(missing),
+            "{args:?}: {stderr}"
         );
     }
 }

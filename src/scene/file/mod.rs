@@ -98,7 +98,10 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     let textures = materials::textures(&src, &file.textures, &dir, files)?;
     let materials = materials::materials(&src, &file.materials, &textures)?;
     for l in &file.lights {
-        desc.lights.extend(light(&src, l)?);
+        for light in light(&src, l)? {
+            light.check(1.0).map_err(|m| src.error(l.span(), m))?;
+            desc.lights.push(light);
+        }
     }
 
     let meshes = shapes(&src, &file.shapes, &materials, opts, files, &mut desc)?;
@@ -160,6 +163,9 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
     // An absurd size is refused here, at its line, before anything is sized by it.
     crate::limits::check_resolution(camera.width, camera.height)
         .map_err(|m| src.error(cam_span.clone(), format!("camera {m}")))?;
+    if camera.camera().is_none() {
+        return Err(src.error(cam_span, camera.problem()));
+    }
     Ok(camera)
 }
 
@@ -222,7 +228,7 @@ fn shapes(
                 if uv.len() != n {
                     return Err(err(format!("`uvs` needs {n} pairs [u, v], found {}", uv.len())));
                 }
-                Some(uv.iter().map(|[u, v]| Vec2::new(u.0, v.0)).collect::<Vec<_>>())
+                Some(uv.iter().map(|t| Vec2::new(t.0[0].0, t.0[1].0)).collect::<Vec<_>>())
             }
         };
         let mut tri = |v: [Vec3; 3], normals: Option<[Vec3; 3]>, uvs: Option<[Vec2; 3]>, m: u32| {

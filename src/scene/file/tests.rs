@@ -190,7 +190,11 @@ fn errors_name_the_file_and_line() {
     let m = "[materials.grey]\nalbedo = [0.5, 0.5, 0.5]\n";
     let cases: Vec<(String, usize, &str)> = vec![
         (format!("{CAMERA}fov = 3\n"), 5, "unknown field `fov`"),
-        ("[camera]\nposition = [0, 0]\n".into(), 2, "length 2"),
+        ("[camera]\nposition = [0, 0]\n".into(), 2, "three numbers, found 2"),
+        ("[camera]\nposition = [0, 0, -3, 7]\n".into(), 2, "three numbers, found 4"),
+        ("[camera]\nposition = [0, 0, 0, \"junk\"]\n".into(), 2, "invalid type: string"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"triangle\"\nmaterial = \"grey\"\nvertices = [[0, 0, 0, 9], [1, 0, 0], [0, 1, 0]]\n"), 10, "three numbers, found 4"),
+        (format!("{CAMERA}{m}[[shapes]]\ntype = \"triangle\"\nmaterial = \"grey\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nuvs = [[0, 0, 1], [1, 0], [0, 1]]\n"), 11, "two numbers, found 3"),
         ("[camera\n".into(), 1, ""),
         (format!("{CAMERA}[settings]\nssaa = -1\n"), 6, "ssaa = -1: expected a whole number"),
         (format!("{CAMERA}{m}[[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\ncentre = [0, 0, 0]\n"), 7, "missing `radius`"),
@@ -210,6 +214,10 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n"), 5, "give `radiance` or `power`"),
         (format!("{CAMERA}[[lights]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0]]\nradiance = [1, -1, 1]\n"), 5, "radiance must be >= 0"),
         ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 180\n".into(), 1, "fov_y"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, -3]\nfov_y = 40\n".into(), 1, "the camera looks at its own position [0, 0, -3]"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\nfov_y = 40\n".into(), 1, "the camera's up [0, 0, 1] is zero or along its viewing direction"),
+        (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\npower = 1e25\n"), 5, "point light: its power is 1e25, beyond the limit of 1e15"),
+        (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1e-20\npower = 10\n"), 5, "sphere light: its radiance is inf"),
         (format!("{CAMERA}lens_radius = 0.1\n"), 1, "a lens needs both lens_radius and focal_distance"),
         (format!("{CAMERA}lens_radius = 0.1\nfocal_distance = -1\n"), 1, "must be positive (lens_radius 0: a pinhole)"),
         (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 7, "ssaa = 0: must be between 1 and 64"),

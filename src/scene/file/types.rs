@@ -26,12 +26,17 @@ impl TryFrom<f64> for Num {
 
 /// Three finite numbers: a point, a direction or an RGB colour.
 #[derive(Clone, Copy, Debug, Deserialize)]
-#[serde(try_from = "[f64; 3]")]
+// Read as a list: serde's fixed-size arrays take the first three values of
+// a longer one and drop the rest unseen.
+#[serde(try_from = "Vec<f64>")]
 pub(super) struct Vec3Spec(pub(super) Vec3);
 
-impl TryFrom<[f64; 3]> for Vec3Spec {
+impl TryFrom<Vec<f64>> for Vec3Spec {
     type Error = String;
-    fn try_from(v: [f64; 3]) -> std::result::Result<Self, String> {
+    fn try_from(v: Vec<f64>) -> std::result::Result<Self, String> {
+        if v.len() != 3 {
+            return Err(format!("expected an array of three numbers, found {} numbers", v.len()));
+        }
         let p = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
         if p.is_finite() {
             Ok(Vec3Spec(p))
@@ -39,6 +44,21 @@ impl TryFrom<[f64; 3]> for Vec3Spec {
             Err(format!(
                 "{v:?} has a number that is not a finite single-precision number"
             ))
+        }
+    }
+}
+
+/// Two finite numbers: texture coordinates.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(try_from = "Vec<Num>")]
+pub(super) struct UvSpec(pub(super) [Num; 2]);
+
+impl TryFrom<Vec<Num>> for UvSpec {
+    type Error = String;
+    fn try_from(v: Vec<Num>) -> std::result::Result<Self, String> {
+        match v[..] {
+            [u, v] => Ok(UvSpec([u, v])),
+            _ => Err(format!("expected an array of two numbers, found {} numbers", v.len())),
         }
     }
 }
@@ -150,7 +170,7 @@ pub(super) struct ShapeSpec {
     pub(super) vertices: Option<Vec<Vec3Spec>>,
     pub(super) normals: Option<Vec<Vec3Spec>>,
     /// Texture coordinates per vertex (triangles and quads).
-    pub(super) uvs: Option<Vec<[Num; 2]>>,
+    pub(super) uvs: Option<Vec<UvSpec>>,
     pub(super) min: Option<Vec3Spec>,
     pub(super) max: Option<Vec3Spec>,
     pub(super) centre: Option<Vec3Spec>,

@@ -262,6 +262,14 @@ fn place<'p>(params: &'p Params, name: &str, directive: &'p Loc) -> &'p Loc {
 }
 
 impl<'a> Conv<'a> {
+    /// Adds a light, refusing at its place one that cannot be rendered once
+    /// the film's imaging ratio scales it.
+    fn push_light(&self, desc: &mut SceneDesc, light: Light, loc: &Loc) -> Result<()> {
+        light.check(self.imaging_ratio).map_err(|m| located(loc, m))?;
+        desc.lights.push(light);
+        Ok(())
+    }
+
     fn problem(&mut self, kind: Kind, loc: &Loc, message: impl Into<String>) {
         self.problems.push(Problem {
             loc: loc.clone(),
@@ -474,6 +482,12 @@ impl<'a> Conv<'a> {
                 "Camera \"orthographic\": a lens (\"lensradius\" > 0) is not supported",
             );
         }
+        if lens_radius < 0.0 || lens_radius.is_nan() {
+            return Err(located(
+                place(cp, "lensradius", &cam_loc),
+                format!("Camera: lensradius {lens_radius} must be >= 0 (0: a pinhole)"),
+            ));
+        }
         let lens_radius = if orthographic { 0.0 } else { lens_radius };
         if lens_radius > 0.0 && !(lens_radius.is_finite() && focal_distance > 0.0 && focal_distance.is_finite()) {
             return Err(located(
@@ -671,16 +685,26 @@ impl<'a> Conv<'a> {
         // Sampler.
         let s = &scene.sampler;
         let sp = &s.params;
-        let spp = if s.ty == "stratified" {
-            sp.get_int("xsamples", 4)? as i64 * sp.get_int("ysamples", 4)? as i64
+        let (spp, counts) = if s.ty == "stratified" {
+            let (x, y) = (sp.get_int("xsamples", 4)?, sp.get_int("ysamples", 4)?);
+            (
+                x as i64 * y as i64,
+                (x < 0 || y < 0).then(|| format!("xsamples {x}, ysamples {y}")),
+            )
         } else {
-            sp.get_int("pixelsamples", 16)? as i64
+            let n = sp.get_int("pixelsamples", 16)?;
+            (n as i64, (n < 0).then(|| format!("pixelsamples {n}")))
         };
         let spp_loc = sp
             .loc_of("pixelsamples")
             .or(sp.loc_of("xsamples"))
             .or(s.loc.as_ref())
             .cloned();
+        if let Some(counts) = counts {
+            let at = spp_loc.clone().unwrap_or_else(|| self.default_loc());
+            // (A count of 0 is the settings' to refuse, with their range.)
+            return Err(located(&at, format!("Sampler: {counts}: must be at least 1")));
+        }
         set(self, spp_loc.as_ref(), "spp", Value::Int(spp.max(0) as u64));
         // pbrt-v4's samplers onto ours: its default and Z-order `zsobol`;
         // the other low-discrepancy ones onto the per-pixel Sobol points; the
@@ -784,6 +808,10 @@ impl<'a> Conv<'a> {
         let iloc = i.loc.clone().unwrap_or_else(|| self.default_loc());
         let depth_loc = ip.loc_of("maxdepth").cloned();
         let max_depth = ip.get_int("maxdepth", 5)?;
+        if max_depth < 0 {
+            let at = depth_loc.clone().unwrap_or_else(|| iloc.clone());
+            return Err(located(&at, format!("Integrator: maxdepth {max_depth} must be >= 0")));
+        }
         match i.ty.as_str() {
             "path" | "volpath" | "bdpt" | "mlt" | "simplepath" | "simplevolpath" | "randomwalk" | "lightpath" => {
                 set(self, i.loc.as_ref(), "integrator", Value::Name("path"));
@@ -874,7 +902,7 @@ impl<'a> Conv<'a> {
                     if phi > 0.0 {
                         power = i * scale * phi;
                     }
-                    desc.lights.push(Light::Point { position, power });
+                    self.push_light(desc, Light::Point { position, power }, &l.loc)?;
                     self.read.push(p);
                 }
                 "spot" => {
@@ -907,8 +935,8 @@ impl<'a> Conv<'a> {
                         let k_e = 2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
                         scale *= phi / k_e;
                     }
-                    desc.lights
-                        .push(Light::spot(position, direction, i * scale, cone_angle, cone_delta));
+                    let spot = Light::spot(position, direction, i * scale, cone_angle, cone_delta);
+                    self.push_light(desc, spot, &l.loc)?;
                     self.read.push(p);
                 }
                 "distant" => {
@@ -928,12 +956,12 @@ impl<'a> Conv<'a> {
                     if e > 0.0 {
                         scale *= e;
                     }
-                    desc.lights.push(Light::distant(direction, radiance * scale));
+                    self.push_light(desc, Light::distant(direction, radiance * scale), &l.loc)?;
                     self.read.push(p);
                 }
                 "infinite" => {
                     if let Some(light) = self.infinite(l)? {
-                        desc.lights.push(light);
+                        self.push_light(desc, light, &l.loc)?;
                         self.read.push(p);
                     } else {
                         self.skipped_lights += 1;
@@ -1243,11 +1271,12 @@ impl<'a> Conv<'a> {
                             };
                             let vertices = if side.dot(cross) < 0.0 { [a, c, b] } else { [a, b, c] };
                             let radiance = e.radiance_for(area);
-                            desc.lights.push(Light::Triangle {
+                            let light = Light::Triangle {
                                 vertices,
                                 radiance,
                                 two_sided: e.two_sided,
-                            });
+                            };
+                            self.push_light(desc, light, &shape.loc)?;
                         }
                     } else {
                         let material = self.material(desc, shape.material)?;
@@ -1287,10 +1316,11 @@ impl<'a> Conv<'a> {
                         }
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
                         let radiance = e.radiance_for(area);
-                        desc.lights.push(Light::Sphere {
+                        let light = Light::Sphere {
                             sphere,
                             power: radiance * PI * area,
-                        });
+                        };
+                        self.push_light(desc, light, &shape.loc)?;
                     } else {
                         let material = self.material(desc, shape.material)?;
                         desc.spheres.push(SphereDesc { sphere, material });
@@ -1330,11 +1360,12 @@ impl<'a> Conv<'a> {
                         let disk = crate::geometry::Disk::new(centre, normal, radius, inner_radius, Some(axes))
                             .map_err(|msg| located(&shape.loc, format!("disk: {msg}")))?;
                         let radiance = e.radiance_for(disk.area());
-                        desc.lights.push(Light::Disk {
+                        let light = Light::Disk {
                             disk,
                             radiance,
                             two_sided: e.two_sided,
-                        });
+                        };
+                        self.push_light(desc, light, &shape.loc)?;
                     } else {
                         let material = self.material(desc, shape.material)?;
                         let mut disk = DiskDesc::new(centre, normal, radius, inner_radius, material);
