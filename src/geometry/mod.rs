@@ -4,6 +4,7 @@
 pub mod bvh;
 pub mod disk;
 pub mod sphere;
+pub mod subdivision;
 pub mod triangle;
 
 pub use bvh::{BoxBvh, Bvh, BvhStats};

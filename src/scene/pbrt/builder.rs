@@ -470,6 +470,14 @@ impl<'a> Builder<'a> {
             };
             let name = name.to_string();
             let values = self.values(&t, ty, &name)?;
+            if let (ParamType::Blackbody, Values::Floats(kelvin)) = (ty, &values) {
+                if let Some(k) = kelvin.iter().find(|k| !(**k > 0.0 && k.is_finite())) {
+                    return Err(PbrtError::at(
+                        &t.loc,
+                        format!("\"{decl}\": a blackbody's temperature {k} (kelvin) must be positive and finite"),
+                    ));
+                }
+            }
             out.push(Param::new(ty, name, values, t.loc.clone(), self.gs.color_space.clone()));
         }
     }
@@ -1228,6 +1236,7 @@ impl<'a> Builder<'a> {
         let geometry = match ty.as_str() {
             "trianglemesh" => Geometry::Mesh(Arc::new(shapes::triangle_mesh(&params, &t.loc, &mut found)?)),
             "bilinearmesh" => Geometry::Mesh(Arc::new(shapes::bilinear_mesh(&params, &t.loc, &mut found)?)),
+            "loopsubdiv" => Geometry::Mesh(Arc::new(shapes::loop_subdiv(&params, &t.loc, &mut found)?)),
             "plymesh" => {
                 let name = params.get_string("filename")?.unwrap_or_default();
                 if params.get_texture("displacement")?.is_some() {
@@ -1237,7 +1246,7 @@ impl<'a> Builder<'a> {
                 }
                 Geometry::Mesh(self.ply(&t.loc, &name)?)
             }
-            "sphere" => Geometry::Sphere(shapes::sphere(&params, &mut found)?),
+            "sphere" => Geometry::Sphere(shapes::sphere(&params, &t.loc, &mut found)?),
             "disk" => Geometry::Disk(shapes::disk(&params, &mut found)?),
             _ if shapes::SHAPE_TYPES.contains(&ty.as_str()) => {
                 found.unsupported.push(format!("shape \"{ty}\" is not supported"));

@@ -1,10 +1,11 @@
 //! The shapes the reader decodes from their parameters (pbrt-v4 shapes.cpp):
-//! `trianglemesh`, `bilinearmesh`, `sphere`, `disk`; `plymesh` files are read
+//! `trianglemesh`, `bilinearmesh`, `loopsubdiv`, `sphere`, `disk`; `plymesh` files are read
 //! by the builder (it owns file access) through [`super::ply`].
 
 use super::error::{Loc, PbrtError, Result};
 use super::ir::{Disk, Sphere, TriMesh};
 use super::params::Params;
+use crate::geometry::subdivision::loop_subdivide;
 
 /// What decoding a shape found worth telling, besides errors.
 #[derive(Default)]
@@ -118,8 +119,42 @@ pub fn bilinear_mesh(params: &Params, loc: &Loc, found: &mut Findings) -> Result
     Ok(mesh)
 }
 
-pub fn sphere(params: &Params, found: &mut Findings) -> Result<Sphere> {
+/// A Loop subdivision surface (pbrt-v4 `loopsubdiv`: `levels` [3],
+/// `indices`, `P`; `scheme` is read and ignored, as pbrt-v4 does), as the
+/// triangles of its limit surface with limit normals. pbrt-v4's limit
+/// normals point against the control mesh's winding and its triangles face
+/// them; the triangles are wound the other way round here so that they
+/// face the normals too, and so face (and, as lights, emit) where pbrt's do.
+pub fn loop_subdiv(params: &Params, loc: &Loc, found: &mut Findings) -> Result<TriMesh> {
+    let levels = params.get_int("levels", 3)?;
+    let _ = params.get_string("scheme")?;
+    if levels < 0 {
+        return Err(PbrtError::at(loc, format!("loopsubdiv: levels {levels} must be >= 0")));
+    }
+    let control = vertices("loopsubdiv", params, loc, found)?;
+    let indices = grouped_indices("loopsubdiv", params, 3, control.positions.len(), loc, found)?;
+    let triangles: Vec<[u32; 3]> = indices
+        .chunks_exact(3)
+        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+        .collect();
+    let mesh = loop_subdivide(levels as u32, &control.positions, &triangles)
+        .map_err(|e| PbrtError::at(loc, format!("loopsubdiv: {e}")))?;
+    Ok(TriMesh {
+        positions: mesh.positions,
+        normals: Some(mesh.normals.into_iter().map(|n| -n).collect()),
+        triangles: mesh.triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect(),
+        ..TriMesh::default()
+    })
+}
+
+pub fn sphere(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Sphere> {
     let radius = params.get_float("radius", 1.0)?;
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(PbrtError::at(
+            loc,
+            format!("sphere: radius {radius} must be positive and finite"),
+        ));
+    }
     let s = Sphere {
         radius,
         zmin: params.get_float("zmin", -radius)?,

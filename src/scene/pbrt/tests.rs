@@ -749,6 +749,9 @@ fn errors_name_file_line_and_column() {
         ("WorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 2]\n", "scene/main.pbrt:2:1: trianglemesh: vertex positions \"P\" are required"),
         ("WorldBegin\nShape \"plymesh\" \"string filename\" \"gone.ply\"\n", "scene/main.pbrt:2:1: plymesh \"gone.ply\": cannot read scene/gone.ply"),
         ("WorldBegin\nShape \"plymesh\"\n", "scene/main.pbrt:2:1: plymesh: no file name given"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" 0\n", "scene/main.pbrt:2:1: sphere: radius 0 must be positive and finite"),
+        ("WorldBegin\nShape \"sphere\" \"float radius\" -1\n", "scene/main.pbrt:2:1: sphere: radius -1 must be positive and finite"),
+        ("WorldBegin\nLightSource \"point\" \"blackbody I\" -6500\n", "scene/main.pbrt:2:21: \"blackbody I\": a blackbody's temperature -6500 (kelvin) must be positive"),
     ];
     for (text, place) in cases {
         error(text, place);
@@ -1453,6 +1456,25 @@ fn bump_maps_are_refused_or_with_lenient_dropped_keeping_the_material() {
 }
 
 #[test]
+fn settings_and_lights_that_cannot_render_are_refused_at_their_place() {
+    for (text, what) in [
+        ("Sampler \"halton\" \"integer pixelsamples\" -1\nWorldBegin\n", "scene/main.pbrt:1: Sampler: pixelsamples -1: must be at least 1"),
+        ("Sampler \"stratified\" \"integer xsamples\" -2\nWorldBegin\n", "scene/main.pbrt:1: Sampler: xsamples -2, ysamples 4: must be at least 1"),
+        ("Integrator \"path\" \"integer maxdepth\" -5\nWorldBegin\n", "scene/main.pbrt:1: Integrator: maxdepth -5 must be >= 0"),
+        ("Camera \"perspective\" \"float lensradius\" -1\nWorldBegin\n", "scene/main.pbrt:1: Camera: lensradius -1 must be >= 0"),
+        ("WorldBegin\nLightSource \"point\" \"rgb I\" [3e38 3e38 3e38]\n", "scene/main.pbrt:2: point light: its power is inf, beyond the limit of 1e15"),
+        ("WorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1] \"float scale\" -1\n", "scene/main.pbrt:2: point light: its power [-12.566371, -12.566371, -12.566371] must be >= 0"),
+        ("Film \"rgb\" \"float iso\" 1e30\nWorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1]\n", "scene/main.pbrt:3: point light: its power is 1.2566372e29, beyond"),
+        ("WorldBegin\nAreaLightSource \"diffuse\" \"float power\" 10\nShape \"sphere\" \"float radius\" 1e-25\n", "scene/main.pbrt:3: sphere light: its power is not a number"),
+        ("WorldBegin\nLightSource \"spot\" \"rgb I\" [1 1 1] \"float power\" 10 \"float coneangle\" 1e-20 \"float conedelta\" 0\n", "scene/main.pbrt:2: spot light: its intensity is inf"),
+    ] {
+        let e = converted(text, Files::default(), false).unwrap_err();
+        assert!(e.starts_with(what), "{text}: {e}");
+        assert!(!e.contains('\n') && !e.contains("Vec3("), "{e}");
+    }
+}
+
+#[test]
 fn iso_and_shutter_time_scale_the_lights_as_pbrt_films_do() {
     let power = |pre: &str| {
         let text = format!(
@@ -1498,11 +1520,67 @@ fn iso_and_shutter_time_scale_the_lights_as_pbrt_films_do() {
 }
 
 #[test]
+fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
+    // A tetrahedron wound outwards, one level: 4 x 4 triangles on the limit
+    // surface, inside the control hull, every vertex with a unit normal.
+    let tet = "\"point3 P\" [0 0 0 1 0 0 0 1 0 0 0 1] \"integer indices\" [0 2 1 0 1 3 0 3 2 1 2 3]";
+    let text = format!("WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 1 {tet}\n");
+    let c = converted(&text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let tris = &c.desc.triangles;
+    assert_eq!(tris.len(), 16);
+    // The default camera shows pbrt's picture as the mirror image of ours
+    // (x negated); mirrored back, points are pbrt's.
+    assert!(c.mirrored);
+    let centre = Vec3::splat(0.25);
+    for t in tris {
+        let ns = t.normals.expect("limit normals").map(|n| n * Vec3::new(-1.0, 1.0, 1.0));
+        let v = t.vertices.map(|p| p * Vec3::new(-1.0, 1.0, 1.0));
+        // The mirror reverses the winding too.
+        let winding = -(v[1] - v[0]).cross(v[2] - v[0]);
+        for (p, n) in v.iter().zip(ns) {
+            assert!((n.length() - 1.0).abs() < 1e-5);
+            assert!(p.min_element() > -1e-6 && p.x + p.y + p.z < 1.0 + 1e-6, "{p}");
+            // pbrt-v4's limit normals point inwards on an outward-wound
+            // mesh, and its triangles face them.
+            assert!(n.dot(*p - centre) < 0.0, "{p} {n}");
+            assert!(n.dot(winding) > 0.0, "{p} {n} {winding}");
+        }
+    }
+    // The default is three levels; bad control meshes are refused at their place.
+    let text = format!("WorldBegin\nShape \"loopsubdiv\" {tet}\n");
+    let c = converted(&text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(c.desc.triangles.len(), 4 * 64);
+    for (shape, what) in [
+        (
+            "\"integer levels\" -1 \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]",
+            "levels -1 must be >= 0",
+        ),
+        (
+            "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 1]",
+            "uses a vertex more than once",
+        ),
+        (
+            "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 5]",
+            "vertex index 5 is out of range",
+        ),
+        (
+            "\"integer levels\" 40 \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]",
+            "limit of 16777216",
+        ),
+    ] {
+        let e = converted(
+            &format!("WorldBegin\nShape \"loopsubdiv\" {shape}\n"),
+            Files::default(),
+            false,
+        )
+        .unwrap_err();
+        assert!(e.starts_with("scene/main.pbrt:2:1: ") && e.contains(what), "{e}");
+    }
+}
+
+#[test]
 fn a_file_included_twice_lists_each_unsupported_place_once() {
-    let files = Files::default().with(
-        "scene/s.pbrt",
-        "Shape \"loopsubdiv\" \"integer indices\" [0 1 2] \"point3 P\" [0 0 0 1 0 0 0 1 0]\nShape \"curve\"\n",
-    );
+    let files = Files::default().with("scene/s.pbrt", "Shape \"cylinder\"\nShape \"curve\"\n");
     // Moving shapes: two problems on each line of s.pbrt.
     let e = converted(
         "WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
@@ -1511,7 +1589,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
         false,
     )
     .unwrap_err();
-    assert_eq!(e.matches("loopsubdiv").count(), 1, "{e}");
+    assert_eq!(e.matches("cylinder").count(), 1, "{e}");
     assert_eq!(e.matches("curve").count(), 1, "{e}");
     assert_eq!(e.matches("ActiveTransform").count(), 2, "{e}");
 }
