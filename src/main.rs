@@ -439,6 +439,16 @@ fn compare(args: &cli::CompareArgs) -> Result<()> {
 fn merge(args: &cli::MergeArgs) -> Result<()> {
     use raytracer::image_io::{check_writable, read_exr_in_frame};
     check_writable(&args.output)?;
+    // Writing over a part would lose it if anything then went wrong.
+    if let Ok(out) = std::fs::canonicalize(&args.output) {
+        if let Some(p) = args
+            .parts
+            .iter()
+            .find(|p| std::fs::canonicalize(p).is_ok_and(|c| c == out))
+        {
+            anyhow::bail!("merge: the output {} is one of the parts", p.display());
+        }
+    }
     let mut parts = vec![];
     let mut names = vec![];
     for p in &args.parts {

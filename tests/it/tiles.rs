@@ -139,6 +139,12 @@ fn crops_merge_to_the_full_render_and_bad_sets_are_refused() {
     assert_eq!(overlap.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&overlap.stderr).contains("overlap"));
     assert!(!dir.path().join("x.exr").exists());
+    // The output may not be one of the parts, however it is named.
+    let a = std::fs::read(dir.path().join("a.exr")).unwrap();
+    let onto = run(&["merge", "./a.exr", "a.exr", "b.exr", "c.exr", "d.exr"], dir.path());
+    assert_eq!(onto.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&onto.stderr).contains("is one of the parts"));
+    assert_eq!(std::fs::read(dir.path().join("a.exr")).unwrap(), a);
 
     let mut other = vec![
         "--quiet",

@@ -202,12 +202,11 @@ fn scan(bytes: &[u8], faces_only: bool) -> Option<(usize, String)> {
                 }
                 nv += 1;
             }
-            Some("vt") => {
-                if let Err(m) = numbers(&mut words, 2, "texture coordinate") {
-                    return fail(m);
-                }
-                nvt += 1;
-            }
+            Some("vt") => match numbers(&mut words, 2, "texture coordinate") {
+                Ok(t) if t.iter().all(|x| x.is_finite()) => nvt += 1,
+                Ok(t) => return fail(format!("texture coordinate is not finite ({} {})", t[0], t[1])),
+                Err(m) => return fail(m),
+            },
             Some("vn") => match numbers(&mut words, 3, "normal") {
                 Ok(n) if n.iter().all(|x| x.is_finite()) => nvn += 1,
                 Ok(_) => return fail("normal is not finite".into()),

@@ -210,7 +210,7 @@ fn ply_vertex_index_and_other_integer_types_are_read() {
 fn malformed_obj_files_name_the_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: [(&str, &[u8], &str, &str); 8] = [
+    let cases: [(&str, &[u8], &str, &str); 9] = [
         (
             "number.obj",
             b"v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n",
@@ -247,6 +247,12 @@ fn malformed_obj_files_name_the_file_and_line() {
             b"v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n",
             ":3:",
             "not finite",
+        ),
+        (
+            "uv-nan.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 1 1\nf 1/1 2/2 3/3\n",
+            ":5:",
+            "texture coordinate is not finite",
         ),
         (
             "face.obj",
