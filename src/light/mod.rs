@@ -82,12 +82,12 @@ pub enum Light {
     },
 }
 
-/// The bounding sphere of a light before `Scene::build` has given it the scene's.
 /// The most a light may emit (power, radiance or intensity, per channel):
 /// far beyond any scene's, and far enough below f32's range that the light
 /// sample weights built on it stay finite.
 pub const MAX_EMISSION: f32 = 1e15;
 
+/// The bounding sphere of a light before `Scene::build` has given it the scene's.
 const NO_WORLD: Sphere = Sphere {
     centre: Vec3::ZERO,
     radius: 0.0,
