@@ -62,6 +62,10 @@ pub struct PlyData {
     pub quads: usize,
     /// Faces skipped under [`Polygons::TrianglesAndQuads`].
     pub skipped_faces: usize,
+    /// ASCII: the line where data follows the last element the header
+    /// declares (ignored, as pbrt-v4's reader ignores it; most likely the
+    /// header's counts are wrong).
+    pub trailing_line: Option<usize>,
 }
 
 /// The names PLY writers give a vertex's texture coordinates, in the order tried.
@@ -400,6 +404,18 @@ impl Reader<'_> {
 /// after the file.
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let data = read(path, bytes, Polygons::Fan)?;
+    if let (true, Some(line)) = (data.triangles.is_empty(), data.trailing_line) {
+        // "No faces" would mislead: the header's counts stop short of the data.
+        return Err(Error::Syntax {
+            path: path.to_path_buf(),
+            line,
+            message: format!(
+                "data beyond the {} vertices and the faces the header declares, and no faces among those: are the header's counts right?",
+                data.positions.len()
+            ),
+        });
+    }
+    let warnings = data.trailing_note().into_iter().collect();
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -417,7 +433,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         uvs: data.uvs,
         triangles: data.triangles,
         parts,
-        warnings: vec![],
+        warnings,
     })
 }
 
@@ -597,5 +613,24 @@ fn read_plain(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> 
             mesh.uvs = Some(uvs);
         }
     }
+    if header.format == Format::Ascii {
+        r.skip_space();
+        if r.pos < bytes.len() {
+            mesh.trailing_line = Some(r.line);
+        }
+    }
     Ok(mesh)
+}
+
+impl PlyData {
+    /// What the file's data beyond its declared elements means for the
+    /// reader, if there is any.
+    pub fn trailing_note(&self) -> Option<String> {
+        let counts = format!(
+            "beyond the {} vertices and the faces the header declares",
+            self.positions.len()
+        );
+        self.trailing_line
+            .map(|line| format!("line {line}: data {counts} is ignored (are the header's counts right?)"))
+    }
 }

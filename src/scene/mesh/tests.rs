@@ -334,6 +334,24 @@ fn malformed_ply_files_name_the_file_and_line_or_offset() {
     let noface = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                   end_header\n0 0 0\n1 0 0\n0 1 0\n";
     assert_error(&write(d, "noface.ply", noface.as_bytes()), "noface.ply", "no faces");
+    // A header that declares fewer vertices than the body holds: the extra
+    // vertex reads as an empty face, and the error points at what is left.
+    let short = head.replace("element vertex 3", "element vertex 2");
+    let more = format!("{short}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    assert_error(
+        &write(d, "more.ply", more.as_bytes()),
+        ":12:",
+        "are the header's counts right?",
+    );
+    // Data after a well-formed body is ignored, as pbrt-v4 ignores it, with a warning.
+    let extra = format!("{head}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n9 9 9\n");
+    let m = load_mesh(&write(d, "extra.ply", extra.as_bytes())).unwrap();
+    assert_eq!(m.triangles.len(), 1);
+    assert!(
+        m.warnings.len() == 1 && m.warnings[0].starts_with("line 14: data beyond the 3 vertices"),
+        "{:?}",
+        m.warnings
+    );
 
     // Binary: the header is 143 bytes, then 3 vertices of 12 bytes each.
     let bin_head = head.replace("ascii", "binary_little_endian");

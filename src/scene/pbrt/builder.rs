@@ -1319,6 +1319,9 @@ impl<'a> Builder<'a> {
                 ),
             );
         }
+        if let Some(note) = read.trailing_note() {
+            self.warn(loc, format!("plymesh \"{name}\": {note}"));
+        }
         if read.triangles.is_empty() {
             self.warn(loc, format!("plymesh \"{name}\": the mesh has no faces"));
         }
