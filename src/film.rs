@@ -381,6 +381,13 @@ impl Film {
         s / ((x1 - x0) * (y1 - y0)) as f32
     }
 
+    /// Maps every pixel through a colour matrix (the sensor's white
+    /// balance); the film is linear, so this is the same as mapping each
+    /// sample.
+    pub fn transform_colours(&mut self, m: glam::Mat3) {
+        self.pixels.iter_mut().for_each(|p| *p = m * *p);
+    }
+
     /// 8-bit sRGB after scaling by 2^exposure and clamping.
     pub fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
         let scale = exposure.exp2();

@@ -19,6 +19,7 @@ pub mod metrics;
 pub mod photon;
 pub mod sampling;
 pub mod scene;
+pub mod sensor;
 pub mod settings;
 pub mod state_file;
 pub mod texture;

@@ -201,6 +201,19 @@ pub fn render_observed(
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
     let tiles_total = tile_count(window.rect.width(), window.rect.height());
+    // The sensor's response is applied to finished films: sums, checkpoints
+    // and photon files stay as the light left them.
+    let balance = settings.white_balance.map(crate::sensor::white_balance);
+    let develop = |mut film: Film| {
+        if let Some(m) = balance {
+            film.transform_colours(m);
+        }
+        film
+    };
+    let on_pass = &|k: u32, film: &Film| match balance {
+        Some(_) => on_pass(k, &develop(film.clone())),
+        None => on_pass(k, film),
+    };
     let (film, stats, tiles_done, photons, passes) = with_threads(settings.threads, || -> Result<_> {
         Ok(match settings.integrator {
             IntegratorKind::Direct => {
@@ -227,7 +240,7 @@ pub fn render_observed(
         })
     })??;
     Ok(RenderOutput {
-        film,
+        film: develop(film),
         tiles_done,
         tiles_total,
         window,

@@ -247,6 +247,9 @@ pub struct RenderSettings {
     /// Largest RGB component a camera sample keeps (the sample is scaled
     /// down to it); `None`: no clamp. SPPM ignores it, as pbrt-v4 does.
     pub max_component: Option<f32>,
+    /// The colour temperature (kelvin) the film balances to white; `None`:
+    /// the film records colours as they are.
+    pub white_balance: Option<f32>,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
@@ -319,6 +322,9 @@ impl RenderSettings {
         }
         if let Some(m) = self.max_component {
             v.push(("max_component", Value::Real(m)));
+        }
+        if let Some(k) = self.white_balance {
+            v.push(("white_balance", Value::Real(k)));
         }
         if let Some(t) = self.threads {
             v.push(("threads", Value::Int(t as u64)));
@@ -689,6 +695,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         max_component: real("max_component"),
+        white_balance: real("white_balance"),
         photon: PhotonSettings {
             photons: int("photons").unwrap_or_default(),
             // SPPM converges to the answer only if photon paths are not cut

@@ -101,6 +101,19 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &["direct", "photon", "path"],
     },
     Spec {
+        name: "white_balance",
+        kind: Kind::Real {
+            min: crate::sensor::KELVIN_RANGE.0,
+            min_inclusive: true,
+            max: crate::sensor::KELVIN_RANGE.1,
+        },
+        default: DefaultValue::Unset("none"),
+        doc: "White balance in kelvin, as a camera's: light of a daylight illuminant of this colour temperature \
+              (a blackbody below 4000 K) comes out white (pbrt-v4's Film \"whitebalance\")",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
         name: "photons",
         kind: Kind::Count { min: 0, max: 1 << 40 },
         default: DefaultValue::Int(200_000),

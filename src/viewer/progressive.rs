@@ -207,6 +207,8 @@ pub struct Progressive {
     pass: Vec<PixelSum>,
     done: u32,
     target: u32,
+    /// The white balance the film is shown with.
+    balance: Option<glam::Mat3>,
     /// Rays of the completed passes since the last reset.
     pub stats: RayStats,
 }
@@ -222,6 +224,7 @@ impl Progressive {
             pass: vec![PixelSum::default(); width as usize * height as usize],
             done: 0,
             target: settings.ssaa * settings.ssaa,
+            balance: settings.white_balance.map(crate::sensor::white_balance),
             stats: RayStats::default(),
         }
     }
@@ -297,7 +300,11 @@ impl Progressive {
     /// The mean of the samples so far (black before the first pass); the
     /// same division as the offline render, so equal to it once complete.
     pub fn film(&self) -> Film {
-        Film::from_sums(self.width, self.height, &self.sums)
+        let mut film = Film::from_sums(self.width, self.height, &self.sums);
+        if let Some(m) = self.balance {
+            film.transform_colours(m);
+        }
+        film
     }
 }
 
@@ -348,6 +355,9 @@ pub fn low_res_pass(
         for x in 0..w {
             film.set(x, y, rows[(y / block) as usize][(x / block) as usize]);
         }
+    }
+    if let Some(k) = settings.white_balance {
+        film.transform_colours(crate::sensor::white_balance(k));
     }
     Some(film)
 }
@@ -410,6 +420,32 @@ mod tests {
         assert_eq!(p.samples(), 9);
         assert_eq!(p.film(), offline.film);
         assert_eq!(p.stats, offline.stats);
+    }
+
+    #[test]
+    fn white_balance_maps_every_pixel_of_the_offline_and_the_progressive_film() {
+        let scene = small_cornell();
+        let plain = integrator::render(&scene, &settings(), &|| {}).unwrap().film;
+        let s = RenderSettings {
+            white_balance: Some(3000.0),
+            ..settings()
+        };
+        let balanced = integrator::render(&scene, &s, &|| {}).unwrap().film;
+        let m = crate::sensor::white_balance(3000.0);
+        let mut warm = 0;
+        for (b, p) in balanced.pixels.iter().zip(&plain.pixels) {
+            assert!(
+                (*b - m * *p).abs().max_element() <= 1e-6 * p.max_element().max(1.0),
+                "{b} {p}"
+            );
+            warm += (b.z > p.z && b.x < p.x) as u32;
+        }
+        assert!(warm as usize > plain.pixels.len() / 2, "{warm}");
+        let view = view_integrator(&s);
+        let never = AtomicBool::new(false);
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
+        while p.run_pass(&scene, &s, view.estimator().as_ref(), &never) {}
+        assert_eq!(p.film(), balanced);
     }
 
     #[test]

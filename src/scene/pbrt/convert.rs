@@ -415,13 +415,6 @@ impl<'a> Conv<'a> {
                 format!("Film: iso {iso} must be positive"),
             ));
         }
-        if fp.get_string_or("sensor", "cie1931")? != "cie1931" || fp.get_float("whitebalance", 0.0)? != 0.0 {
-            self.problem(
-                Kind::Other,
-                &film_loc,
-                "Film: camera sensors and white balance are not supported",
-            );
-        }
         self.read.push(fp);
 
         let cam = &scene.camera;
@@ -751,6 +744,34 @@ impl<'a> Conv<'a> {
             if max < f32::MAX {
                 set(self, Some(&l), "max_component", Value::Real(max));
             }
+        }
+        // The film's sensor: pbrt-v4's CIE 1931 observer unless a camera is
+        // named, balanced to white at `whitebalance` kelvin (a named camera
+        // at 6500 K unless given).
+        let sensor = fp.get_string_or("sensor", "cie1931")?;
+        let mut kelvin = fp.get_float("whitebalance", 0.0)?;
+        let mut kelvin_loc = fp.loc_of("whitebalance").cloned();
+        if sensor != "cie1931" {
+            let at = fp
+                .loc_of("sensor")
+                .or(scene.film.loc.as_ref())
+                .cloned()
+                .unwrap_or_else(|| self.default_loc());
+            self.problem(
+                Kind::Other,
+                &at,
+                format!(
+                    "Film: camera sensor \"{sensor}\": measured sensor responses are not supported, only \"cie1931\", \
+                     which --lenient uses in its place"
+                ),
+            );
+            if kelvin == 0.0 {
+                kelvin = 6500.0;
+                kelvin_loc = Some(at);
+            }
+        }
+        if kelvin != 0.0 {
+            set(self, kelvin_loc.as_ref(), "white_balance", Value::Real(kelvin));
         }
         self.read.push(sp);
 
@@ -2968,6 +2989,42 @@ mod tests {
             let e = eta(material, name, &format!("\"texture {name}\" \"t\"")).unwrap_err();
             assert!(e.contains("textured"), "{e}");
         }
+    }
+
+    #[test]
+    fn film_white_balance_is_the_white_balance_setting_and_camera_sensors_are_refused() {
+        let c = ok("Film \"rgb\" \"float whitebalance\" [ 3200 ]\nWorldBegin\n");
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(3200.0)));
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        // pbrt-v4's default sensor neither balances nor is refused.
+        let d = ok("Film \"rgb\" \"string sensor\" \"cie1931\"\nWorldBegin\n")
+            .desc
+            .settings;
+        assert!(d.scene_file.get("white_balance").is_none() && d.preset.get("white_balance").is_none());
+        // A temperature outside the range is the file's error at its place.
+        let e = convert_text("Film \"rgb\"\n  \"float whitebalance\" [ -5 ]\nWorldBegin\n", true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("dir/main.pbrt:2: white_balance = -5: must be"), "{e}");
+        // A measured camera sensor is refused at its line; with --lenient the
+        // CIE observer stands in, balanced at pbrt-v4's 6500 K default.
+        let text = "Film \"rgb\"\n  \"string sensor\" \"canon_eos_100d\"\nWorldBegin\n";
+        let e = convert_text(text, false).unwrap_err().to_string();
+        assert!(
+            e.contains("dir/main.pbrt:2: Film: camera sensor \"canon_eos_100d\": measured"),
+            "{e}"
+        );
+        let c = convert_text(text, true).unwrap();
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(6500.0)));
+        let c = convert_text(
+            &text.replace("WorldBegin", "  \"float whitebalance\" 5000\nWorldBegin"),
+            true,
+        )
+        .unwrap();
+        let s = &c.desc.settings.scene_file;
+        assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(5000.0)));
     }
 
     #[test]
