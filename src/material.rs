@@ -172,6 +172,9 @@ pub enum Material {
         materials: Box<[Material; 2]>,
         amount: Texture,
     },
+    /// A material whose surface is displaced along its normal by a float
+    /// texture, for shading only (pbrt-v4's `displacement`: a bump map).
+    Bumped { base: Box<Material>, displacement: Texture },
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -185,6 +188,55 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     /// The surface's dp/du, for anisotropic roughness.
     pub dpdu: Vec3,
+    /// The differential geometry a bump map needs, when the material has
+    /// one (the scene computes it only then).
+    pub shading: Option<ShadingGeometry>,
+}
+
+/// pbrt-v4's shading geometry of a surface point: its shading normal (as
+/// pbrt-v4 orients it: a mesh's vertex normals decide), the partial
+/// derivatives of the point along the texture coordinates and those of the
+/// normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingGeometry {
+    pub n: Vec3,
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
+    pub dndu: Vec3,
+    pub dndv: Vec3,
+}
+
+/// The step along u and v of a bump map's finite differences: pbrt-v4's when
+/// a ray carries no differentials (it takes half the pixel's footprint
+/// otherwise, about as small where a texture is seen a texel a pixel).
+const BUMP_STEP: f32 = 0.0005;
+
+impl SurfacePoint {
+    /// The point with its shading normal and dp/du perturbed by the
+    /// displacement texture `d` as pbrt-v4's `BumpMap` does: the displaced
+    /// surface p + d(u, v) n differentiated by finite steps in u and v.
+    /// Without shading geometry the point is returned as it is.
+    pub fn bumped(&self, d: &Texture) -> SurfacePoint {
+        let Some(g) = self.shading else {
+            return *self;
+        };
+        let at = |uv: Vec2, p: Vec3| d.evaluate_scalar(&TexCoord { uv, p });
+        let h = BUMP_STEP;
+        let here = at(self.uv, self.p);
+        let along_u = at(self.uv + Vec2::new(h, 0.0), self.p + g.dpdu * h);
+        let along_v = at(self.uv + Vec2::new(0.0, h), self.p + g.dpdv * h);
+        let dpdu = g.dpdu + g.n * ((along_u - here) / h) + g.dndu * here;
+        let dpdv = g.dpdv + g.n * ((along_v - here) / h) + g.dndv * here;
+        let n = dpdu.cross(dpdv).normalize_or_zero();
+        if n == Vec3::ZERO || !n.is_finite() || !dpdu.is_finite() {
+            return *self;
+        }
+        SurfacePoint {
+            ns: if n.dot(self.ng) < 0.0 { -n } else { n },
+            dpdu,
+            ..*self
+        }
+    }
 }
 
 impl Material {
@@ -231,6 +283,7 @@ impl Material {
                 ..
             } => interface_roughness.is_smooth() && conductor_roughness.is_smooth(),
             Material::Mix { materials, .. } => materials.iter().all(Material::is_specular),
+            Material::Bumped { base, .. } => base.is_specular(),
             _ => false,
         }
     }
@@ -240,6 +293,7 @@ impl Material {
     pub fn is_caustic_caster(&self) -> bool {
         match self {
             Material::Mix { materials, .. } => materials.iter().any(Material::is_caustic_caster),
+            Material::Bumped { base, .. } => base.is_caustic_caster(),
             _ => matches!(
                 self,
                 Material::Conductor { .. }
@@ -248,6 +302,16 @@ impl Material {
                     | Material::CoatedDiffuse { .. }
                     | Material::CoatedConductor { .. }
             ),
+        }
+    }
+
+    /// Whether the material (or one it mixes) is bump mapped: its BSDF then
+    /// needs the surface point's `shading` geometry.
+    pub fn is_bumped(&self) -> bool {
+        match self {
+            Material::Bumped { .. } => true,
+            Material::Mix { materials, .. } => materials.iter().any(Material::is_bumped),
+            _ => false,
         }
     }
 
@@ -272,6 +336,9 @@ impl Material {
         let tc = TexCoord { uv: sp.uv, p: sp.p };
         if let Material::Mix { .. } = self {
             return self.chosen(&tc, wo).bsdf(sp, wo);
+        }
+        if let Material::Bumped { base, displacement } = self {
+            return base.bsdf(&sp.bumped(displacement), wo);
         }
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::diffuse(reflectance.evaluate(&tc)),
@@ -315,8 +382,8 @@ impl Material {
                 reflectance,
                 transmittance,
             } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
-            // Resolved to one of its materials above; a black surface if not.
-            Material::Mix { .. } => Bxdf::diffuse(Vec3::ZERO),
+            // Resolved above; a black surface if not.
+            Material::Mix { .. } | Material::Bumped { .. } => Bxdf::diffuse(Vec3::ZERO),
         };
         let ns = if sp.ng.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
         if matches!(
@@ -353,6 +420,7 @@ mod tests {
             ng: n,
             ns: n,
             dpdu: Vec3::X,
+            shading: None,
         }
     }
 
@@ -394,6 +462,67 @@ mod tests {
             amount: Texture::from(Vec3::splat(0.5)),
         };
         assert!(glass_or_mirror.is_specular() && glass_or_mirror.is_caustic_caster());
+    }
+
+    /// A displacement rising along u: 0 at u = 0.25, 1 at u = 0.75 (two
+    /// texels of a 2 x 1 image, bilinear), constant along v.
+    fn ramp(scale: f32) -> Texture {
+        let img = crate::texture::TexImage::from_pixels("ramp", 2, 1, vec![Vec3::ZERO, Vec3::ONE]);
+        let opts = crate::texture::ImageOptions {
+            scale,
+            ..Default::default()
+        };
+        Texture::Image(std::sync::Arc::new(crate::texture::ImageTexture::new(
+            std::sync::Arc::new(img),
+            &opts,
+        )))
+    }
+
+    #[test]
+    fn a_bump_map_tilts_the_shading_normal_as_the_displaced_surface_does() {
+        let flat = ShadingGeometry {
+            n: Vec3::Z,
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        };
+        let sp = SurfacePoint {
+            uv: Vec2::new(0.5, 0.3),
+            shading: Some(flat),
+            ..point(Vec3::Z)
+        };
+        // p + d n with d = s (2u - 0.5): dp/du = x + 2 s z, dp/dv = y, so the
+        // normal is (-2 s, 0, 1) normalised, whatever the step.
+        for s in [1.0, 0.1, 0.45] {
+            let b = sp.bumped(&ramp(s));
+            let want = Vec3::new(-2.0 * s, 0.0, 1.0).normalize();
+            assert!((b.ns - want).length() < 1e-4, "scale {s}: {} against {want}", b.ns);
+            assert!(b.dpdu.dot(b.ns).abs() < 1e-4 && b.ng == Vec3::Z);
+        }
+        // A curved surface moves by d along normals that turn with u (dn/du
+        // = x, a unit sphere's): dp/du = x + d x + 2 z, with d = 0.5 here.
+        let curved = SurfacePoint {
+            shading: Some(ShadingGeometry { dndu: Vec3::X, ..flat }),
+            ..sp
+        };
+        let b = curved.bumped(&ramp(1.0));
+        assert!((b.ns - Vec3::new(-0.8, 0.0, 0.6)).length() < 1e-4, "{}", b.ns);
+        // The BSDF is built in the bumped frame; the bump map is off without
+        // shading geometry, and a constant displacement of a plane changes
+        // nothing.
+        let m = Material::Bumped {
+            base: Box::new(Material::diffuse(0.5, 0.5, 0.5)),
+            displacement: ramp(1.0),
+        };
+        assert!(m.is_bumped());
+        let frame = m.bsdf(&sp, Vec3::Z).frame;
+        assert!((frame.z - Vec3::new(-2.0, 0.0, 1.0).normalize()).length() < 1e-4);
+        assert_eq!(m.bsdf(&SurfacePoint { shading: None, ..sp }, Vec3::Z).frame.z, Vec3::Z);
+        assert_eq!(sp.bumped(&Texture::from(Vec3::splat(0.2))).ns, Vec3::Z);
+        // Seen from below, the normal flips with the geometric one.
+        let below = m.bsdf(&sp, -Vec3::Z).frame.z;
+        assert!((below + Vec3::new(-2.0, 0.0, 1.0).normalize()).length() < 1e-4);
     }
 
     fn point_at(p: Vec3, n: Vec3) -> SurfacePoint {

@@ -90,7 +90,7 @@ pub fn walk_camera_path(
         }
         let m = scene.material(hit.material);
         l += beta * m.le();
-        let bsdf = m.bsdf(&hit.surface(), wo);
+        let bsdf = m.bsdf(&scene.surface(&hit), wo);
         let flags = bsdf.flags();
         if flags.is_empty() {
             break;
@@ -269,7 +269,7 @@ mod tests {
         let ray = Ray::new(Vec3::new(0.0, 0.0, -0.7), (p - Vec3::new(0.3, 0.0, -0.7)).normalize());
         let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
         let wo = -ray.d;
-        let bsdf = scene.material(hit.material).bsdf(&hit.surface(), wo);
+        let bsdf = scene.material(hit.material).bsdf(&scene.surface(&hit), wo);
         let v = DiffuseVertex {
             hit,
             wo,

@@ -99,7 +99,7 @@ impl RadianceEstimator for PathTracer {
             }
             let wo = -ray.d;
             depth += 1;
-            let bsdf = m.bsdf(&hit.surface(), wo);
+            let bsdf = m.bsdf(&scene.surface(&hit), wo);
             let flags = bsdf.flags();
             if flags.is_empty() {
                 break;

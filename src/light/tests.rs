@@ -646,7 +646,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         let n = 4000;
         let mut e = Vec3::ZERO;
         let wo = -ray.d;
-        let bsdf = scene.material(hit.material).bsdf(&hit.surface(), wo);
+        let bsdf = scene.material(hit.material).bsdf(&scene.surface(&hit), wo);
         let v = DiffuseVertex {
             hit,
             wo,

@@ -155,7 +155,7 @@ fn trace_chunk(
             // Towards where the photon came from (pbrt's wo on a light path).
             let wi = -ray.d;
             let m = scene.material(hit.material);
-            let bsdf = m.bsdf(&hit.surface(), wi);
+            let bsdf = m.bsdf(&scene.surface(&hit), wi);
             let flags = bsdf.flags();
             if flags.is_empty() {
                 break;

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
-use crate::material::SurfacePoint;
+use crate::material::{ShadingGeometry, SurfacePoint};
 use crate::math::{Ray, Vec2, Vec3};
 pub use crate::settings::SceneSettings;
 use mesh::MeshReport;
@@ -384,6 +384,7 @@ impl Hit {
             ng: self.ng,
             ns: self.ns,
             dpdu: self.dpdu,
+            shading: None,
         }
     }
 }
@@ -413,6 +414,67 @@ pub struct Hit {
 
 /// Texture coordinates of a triangle without its own: pbrt-v4's.
 const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
+
+/// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
+/// the texture coordinates; with vertex normals, pbrt-v4's shading frame
+/// (dp/du made perpendicular to the shading normal, dp/dv their cross
+/// product) and the normals' derivatives.
+fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<ShadingGeometry> {
+    let uv = t.uvs.unwrap_or(DEFAULT_UV);
+    let [p0, p1, p2] = t.vertices;
+    let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+    let (dp02, dp12) = (p0 - p2, p1 - p2);
+    let det = duv02.x * duv12.y - duv02.y * duv12.x;
+    let degenerate = det.abs() < 1e-9;
+    let (mut dpdu, mut dpdv) = (Vec3::ZERO, Vec3::ZERO);
+    if !degenerate {
+        dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
+        dpdv = (dp12 * duv02.x - dp02 * duv12.x) / det;
+    }
+    if degenerate || dpdu.cross(dpdv).length_squared() == 0.0 || !dpdu.is_finite() || !dpdv.is_finite() {
+        let ng = (p2 - p0).cross(p1 - p0).try_normalize()?;
+        (dpdu, dpdv) = crate::math::orthonormal_basis(ng);
+    }
+    let Some(normals) = t.normals else {
+        return Some(ShadingGeometry {
+            n: hit.ng,
+            dpdu,
+            dpdv,
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        });
+    };
+    // The vertex normals orient pbrt-v4's shading normal; ours keeps to
+    // the side of the winding.
+    let n = if (normals[0] + normals[1] + normals[2]).dot(hit.ng) < 0.0 {
+        -hit.ns
+    } else {
+        hit.ns
+    };
+    let (ss, ts) = match n.cross(dpdu) {
+        ts if ts.length_squared() > 0.0 => (ts.cross(n), ts),
+        _ => crate::math::orthonormal_basis(n),
+    };
+    let (dndu, dndv) = if !degenerate {
+        let (dn1, dn2) = (normals[0] - normals[2], normals[1] - normals[2]);
+        (
+            (dn1 * duv12.y - dn2 * duv02.y) / det,
+            (dn2 * duv02.x - dn1 * duv12.x) / det,
+        )
+    } else {
+        match (normals[2] - normals[0]).cross(normals[1] - normals[0]).try_normalize() {
+            Some(dn) => crate::math::orthonormal_basis(dn),
+            None => (Vec3::ZERO, Vec3::ZERO),
+        }
+    };
+    Some(ShadingGeometry {
+        n,
+        dpdu: ss,
+        dpdv: ts,
+        dndu,
+        dndv,
+    })
+}
 
 #[derive(Clone, Copy, Debug)]
 struct TriInfo {
@@ -826,6 +888,62 @@ impl Scene {
         }
     }
 
+    /// What the hit's material needs to build its BSDF: the hit's surface
+    /// point, with the shading geometry a bump map needs when the material
+    /// has one.
+    pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        let mut sp = hit.surface();
+        if self.materials[hit.material as usize].is_bumped() {
+            sp.shading = self.shading_geometry(hit);
+        }
+        sp
+    }
+
+    /// pbrt-v4's shading geometry at a hit on a triangle, sphere or disk
+    /// (`None` on emitters and where the parametrisation degenerates).
+    fn shading_geometry(&self, hit: &Hit) -> Option<ShadingGeometry> {
+        let tris = self.desc.triangles.len();
+        match hit.kind {
+            PrimKind::Triangle => triangle_shading(self.desc.triangles.get(hit.object as usize)?, hit),
+            PrimKind::Sphere => {
+                let s = &self.spheres.get((hit.object as usize).checked_sub(tris)?)?.sphere;
+                let q = (hit.p - s.centre) / s.radius;
+                let sin_theta = (q.x * q.x + q.y * q.y).sqrt();
+                if sin_theta < 1e-6 {
+                    return None;
+                }
+                // pbrt-v4's sphere: theta runs from pi at -z to 0 at +z.
+                let dpdv = Vec3::new(q.z * q.x / sin_theta, q.z * q.y / sin_theta, -sin_theta)
+                    * (-std::f32::consts::PI * s.radius);
+                Some(ShadingGeometry {
+                    n: hit.ng,
+                    dpdu: hit.dpdu,
+                    dpdv,
+                    dndu: hit.dpdu / s.radius,
+                    dndv: dpdv / s.radius,
+                })
+            }
+            PrimKind::Disk => {
+                let j = (hit.object as usize).checked_sub(tris + self.desc.spheres.len())?;
+                let d = &self.disks.get(j)?.disk;
+                let q = hit.p - d.centre;
+                let planar = q - d.normal * q.dot(d.normal);
+                let r = planar.length();
+                if r < 1e-6 * d.radius {
+                    return None;
+                }
+                Some(ShadingGeometry {
+                    n: hit.ng,
+                    dpdu: hit.dpdu,
+                    dpdv: planar * ((d.inner_radius - d.radius) / r),
+                    dndu: Vec3::ZERO,
+                    dndv: Vec3::ZERO,
+                })
+            }
+            PrimKind::Light => None,
+        }
+    }
+
     /// The hit record of triangle `slot` (BVH order) at barycentrics (u, v).
     fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
@@ -971,4 +1089,141 @@ fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject]) -> Result<BoxBvh> {
         )));
     }
     Ok(BoxBvh::build(&boxes))
+}
+
+#[cfg(test)]
+mod shading_tests {
+    use super::*;
+    use crate::texture::Texture;
+
+    fn scene_with(add: impl FnOnce(&mut SceneDesc)) -> Scene {
+        let mut d = SceneDesc::empty("bumps", builtin::cornell().camera);
+        let base = Box::new(Material::diffuse(0.5, 0.5, 0.5));
+        let flat = Texture::from(Vec3::ZERO);
+        d.material(
+            "bumped",
+            Material::Bumped {
+                base,
+                displacement: flat,
+            },
+        );
+        d.material("plain", Material::diffuse(0.5, 0.5, 0.5));
+        add(&mut d);
+        Scene::build(d).unwrap()
+    }
+
+    fn shading_at(scene: &Scene, o: Vec3, towards: Vec3) -> (Hit, ShadingGeometry) {
+        let h = scene
+            .intersect(&Ray::new(o, (towards - o).normalize()), 1e-4, f32::INFINITY)
+            .unwrap();
+        let g = scene
+            .surface(&h)
+            .shading
+            .expect("a bumped material gets shading geometry");
+        (h, g)
+    }
+
+    fn near(a: Vec3, b: Vec3, tol: f32) -> bool {
+        (a - b).length() <= tol * b.length().max(1.0)
+    }
+
+    #[test]
+    fn sphere_and_disk_derivatives_are_those_of_their_parametrisations() {
+        let (c, r) = (Vec3::new(1.0, 2.0, 3.0), 2.0);
+        let scene = scene_with(|d| {
+            d.spheres.push(SphereDesc {
+                sphere: Sphere { centre: c, radius: r },
+                material: 0,
+            });
+            d.disks
+                .push(DiskDesc::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, 2.0, 0.5, 0));
+        });
+        // pbrt-v4's sphere: phi = 2 pi u about z, theta = pi (1 - v) from +z.
+        let on_sphere = |uv: Vec2| {
+            let (phi, theta) = (uv.x * std::f32::consts::TAU, std::f32::consts::PI * (1.0 - uv.y));
+            c + Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()) * r
+        };
+        let (h, g) = shading_at(&scene, c + Vec3::new(5.0, 3.0, 2.0), c);
+        let e = 1e-3;
+        let dpdu = (on_sphere(h.uv + Vec2::new(e, 0.0)) - on_sphere(h.uv - Vec2::new(e, 0.0))) / (2.0 * e);
+        let dpdv = (on_sphere(h.uv + Vec2::new(0.0, e)) - on_sphere(h.uv - Vec2::new(0.0, e))) / (2.0 * e);
+        assert!(
+            near(g.dpdu, dpdu, 1e-2) && near(g.dpdv, dpdv, 1e-2),
+            "{g:?} {dpdu} {dpdv}"
+        );
+        // The unit normal of a sphere is (p - c) / r: it turns as p / r does.
+        assert!(near(g.dndu, dpdu / r, 1e-2) && near(g.dndv, dpdv / r, 1e-2));
+        assert!(near(g.n, (h.p - c) / r, 1e-4) && g.dpdu.cross(g.dpdv).dot(g.n) > 0.0);
+
+        let disk = &scene.disks[0].disk;
+        let (h, g) = shading_at(&scene, Vec3::new(0.7, -1.1, 0.0), Vec3::new(0.3, 1.2, -5.0));
+        let dpdu = (disk.point_at(h.uv + Vec2::new(e, 0.0)) - disk.point_at(h.uv - Vec2::new(e, 0.0))) / (2.0 * e);
+        let dpdv = (disk.point_at(h.uv + Vec2::new(0.0, e)) - disk.point_at(h.uv - Vec2::new(0.0, e))) / (2.0 * e);
+        assert!(
+            near(g.dpdu, dpdu, 1e-2) && near(g.dpdv, dpdv, 1e-2),
+            "{g:?} {dpdu} {dpdv}"
+        );
+        assert_eq!((g.n, g.dndu, g.dndv), (Vec3::Z, Vec3::ZERO, Vec3::ZERO));
+    }
+
+    #[test]
+    fn triangle_derivatives_follow_the_texture_coordinates_and_vertex_normals() {
+        let vertices = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.5),
+        ];
+        let uvs = [Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.3), Vec2::new(0.2, 0.7)];
+        let normals = [
+            Vec3::new(0.1, -0.4, 1.0),
+            Vec3::new(-0.2, -0.5, 1.0),
+            Vec3::new(0.0, -0.3, 0.9),
+        ];
+        let scene = scene_with(|d| {
+            for (i, (normals, material)) in [(None, 0), (Some(normals), 0), (None, 1)].into_iter().enumerate() {
+                let shift = Vec3::new(10.0 * i as f32, 0.0, 0.0);
+                d.triangles.push(TriangleDesc {
+                    vertices: vertices.map(|v| v + shift),
+                    normals,
+                    uvs: Some(uvs),
+                    material,
+                });
+            }
+        });
+        let inside = (vertices[0] + vertices[1] + vertices[2]) / 3.0;
+        let from = Vec3::new(0.3, 0.2, 4.0);
+        // p is affine in (u, v): each edge is dp/du du + dp/dv dv.
+        let (h, g) = shading_at(&scene, from, inside);
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            let duv = uvs[b] - uvs[a];
+            assert!(near(g.dpdu * duv.x + g.dpdv * duv.y, vertices[b] - vertices[a], 1e-4));
+        }
+        assert_eq!(g.n, h.ng);
+        // With vertex normals: pbrt-v4's frame about the shading normal, and
+        // the (unnormalised) normals affine in (u, v) as the points are.
+        let shift = Vec3::new(10.0, 0.0, 0.0);
+        let (h, g) = shading_at(&scene, from + shift, inside + shift);
+        assert_eq!(g.n, h.ns);
+        let perpendicular = |a: Vec3, b: Vec3| a.dot(b).abs() <= 1e-5 * a.length() * b.length();
+        assert!(
+            perpendicular(g.dpdu, g.n) && perpendicular(g.dpdv, g.n) && perpendicular(g.dpdu, g.dpdv),
+            "{g:?}"
+        );
+        assert!(g.dpdu.cross(g.dpdv).dot(g.n) > 0.0 && g.dpdu.dot(h.dpdu) > 0.0);
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            let duv = uvs[b] - uvs[a];
+            assert!(near(g.dndu * duv.x + g.dndv * duv.y, normals[b] - normals[a], 1e-4));
+        }
+        // A material without a bump map is not given any.
+        let shift = Vec3::new(20.0, 0.0, 0.0);
+        let h = scene
+            .intersect(
+                &Ray::new(from + shift, (inside - from).normalize()),
+                1e-4,
+                f32::INFINITY,
+            )
+            .unwrap();
+        assert_eq!(h.material, 1);
+        assert!(scene.surface(&h).shading.is_none());
+    }
 }

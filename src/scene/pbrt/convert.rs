@@ -1165,10 +1165,7 @@ impl<'a> Conv<'a> {
                     }
                 }
             }
-            for (n, what) in [
-                ("displacement", "bump mapping (\"displacement\")"),
-                ("normalmap", "a normal map"),
-            ] {
+            for (n, what) in [("normalmap", "a normal map")] {
                 if let Some(param) = part.params.get(n) {
                     let label = match &part.name {
                         Some(n) => format!("material \"{n}\" (type \"{}\")", part.ty),
@@ -1443,8 +1440,40 @@ fn convert_material(
     convert_nested(scene, ty, p, loc, 0)
 }
 
-/// `convert_material` of a material `depth` mixes deep.
+/// `convert_material` of a material `depth` mixes deep, with its bump map.
 fn convert_nested(
+    scene: &PbrtScene,
+    ty: &str,
+    p: &Params,
+    loc: &Loc,
+    depth: u32,
+) -> Result<std::result::Result<Material, String>> {
+    let base = match convert_surface(scene, ty, p, loc, depth)? {
+        Ok(m) => m,
+        Err(why) => return Ok(Err(why)),
+    };
+    let displacement = match p.get_float_or_texture("displacement")? {
+        None => return Ok(Ok(base)),
+        Some(FloatOrTexture::Value(v)) if v.is_finite() => Texture::from(Vec3::splat(v)),
+        Some(FloatOrTexture::Value(v)) => {
+            return Err(located(
+                place(p, "displacement", loc),
+                format!("\"displacement\" {v} must be finite"),
+            ))
+        }
+        Some(FloatOrTexture::Texture(name)) => match float_texture(scene, p, "displacement", &name, loc)? {
+            Ok(t) => t,
+            Err(why) => return Ok(Err(why)),
+        },
+    };
+    Ok(Ok(Material::Bumped {
+        base: Box::new(base),
+        displacement,
+    }))
+}
+
+/// A material's scattering, `depth` mixes deep.
+fn convert_surface(
     scene: &PbrtScene,
     ty: &str,
     p: &Params,
