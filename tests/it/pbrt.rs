@@ -680,3 +680,84 @@ fn a_films_crop_window_renders_the_pixels_of_the_same_crop_of_the_frame() {
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(!out.exists());
 }
+
+/// A plane bump-mapped by stripes along u, lit from the side by a distant
+/// light, path traced and with the direct integrator; the same plane flat.
+fn striped_plane(dir: &Path, bumped: bool, integrator: &str) -> Film {
+    // Displacement 0.5 + 0.5 sin(4 pi u), scaled by 0.4 (an image of 512 x 2).
+    let (w, k) = (512u32, 2.0f32);
+    let mut stripes = Film::new(w, 2);
+    for y in 0..2 {
+        for x in 0..w {
+            let u = (x as f32 + 0.5) / w as f32;
+            stripes.set(x, y, Vec3::splat(0.5 + 0.5 * (std::f32::consts::TAU * k * u).sin()));
+        }
+    }
+    raytracer::image_io::write_image(&stripes, &dir.join("stripes.pfm"), 0.0).unwrap();
+    let bump = if bumped {
+        "\"texture displacement\" \"stripes\""
+    } else {
+        ""
+    };
+    let scene = dir.join(format!("striped-{bumped}-{integrator}.pbrt"));
+    std::fs::write(
+        &scene,
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 30 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 32 ]\n\
+             PixelFilter \"box\"\nIntegrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+             LightSource \"distant\" \"point3 from\" [ -1 0 -1 ] \"point3 to\" [ 0 0 0 ] \"rgb L\" [ 2 2 2 ]\n\
+             Texture \"stripes\" \"float\" \"imagemap\" \"string filename\" \"stripes.pfm\" \"float scale\" 0.4\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ] {bump}\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -2 -2 0  2 -2 0  2 2 0  -2 2 0 ] \
+             \"point2 uv\" [ 0 0 1 0 1 1 0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join(format!("striped-{bumped}-{integrator}.pfm"));
+    render_to(&scene, &["--spp", "16", "--integrator", integrator], &out)
+}
+
+#[test]
+fn a_bump_map_shades_a_plane_as_its_displaced_surface_would() {
+    let dir = tempfile::tempdir().unwrap();
+    for integrator in ["path", "direct"] {
+        let flat = striped_plane(dir.path(), false, integrator);
+        let bumped = striped_plane(dir.path(), true, integrator);
+        // The flat plane is lit evenly: L rho / pi cos 45 degrees.
+        let even = 2.0 * 0.5 / std::f32::consts::PI * std::f32::consts::FRAC_1_SQRT_2;
+        assert!(
+            flat.pixels.iter().all(|p| (p.y - even).abs() < 1e-3 * even),
+            "{integrator}"
+        );
+        // The plane spans x in [-2, 2] (u from 0 to 1) and the image's
+        // columns x = (c + 0.5 - 20) 2 tan(15 deg) 5 / 32. Displaced by d(u)
+        // along +z (away from the camera), its normal seen from the camera
+        // is (d', 0, -4) / |.| with d' = dd/du, so the light from (-1, 0, -1)
+        // meets it at (4 - d') / (sqrt 2 |.|): the ratio to the flat plane is
+        // (4 - d') / sqrt(d'^2 + 16), averaged here over each pixel.
+        let pixel = 2.0 * 5.0 * 15f32.to_radians().tan() / 32.0;
+        let ratio = |x: f32| {
+            let u = (x + 2.0) / 4.0;
+            let slope = 0.4 * 0.5 * std::f32::consts::TAU * 2.0 * (std::f32::consts::TAU * 2.0 * u).cos();
+            (4.0 - slope) / (slope * slope + 16.0).sqrt()
+        };
+        let (mut lo, mut hi) = (f32::MAX, 0.0f32);
+        for c in 0..40 {
+            let x0 = (c as f32 - 20.0) * pixel;
+            let want = (0..64)
+                .map(|i| ratio(x0 + (i as f32 + 0.5) / 64.0 * pixel))
+                .sum::<f32>()
+                / 64.0;
+            for r in 0..32 {
+                let got = bumped.get(c, r).y / flat.get(c, r).y;
+                assert!(
+                    (got - want).abs() < 0.03,
+                    "{integrator}: column {c}, row {r}: {got} against {want}"
+                );
+                (lo, hi) = (lo.min(got), hi.max(got));
+            }
+        }
+        assert!(lo < 0.5 && hi > 1.3, "{integrator}: the stripes show: {lo} to {hi}");
+    }
+}
