@@ -1177,9 +1177,17 @@ impl<'a> Conv<'a> {
                 }
             }
         }
-        let converted = match convert_material(scene, &m.ty, &m.params, &loc)? {
+        let mut approximated = vec![];
+        let converted = match convert_material(scene, &m.ty, &m.params, &loc, &mut approximated)? {
             Ok(mat) => {
                 self.read.push(&m.params);
+                for (at, what) in approximated {
+                    let label = match &m.name {
+                        Some(n) => format!("material \"{n}\""),
+                        None => format!("material of type \"{}\"", m.ty),
+                    };
+                    self.problem(Kind::Other, &at, format!("{label}: {what}"));
+                }
                 mat
             }
             Err(why) => {
@@ -1430,14 +1438,17 @@ fn reflects(m: &super::ir::Material) -> bool {
 /// Materials a `mix` may nest (a cycle of named materials would not end).
 const MAX_MIX_DEPTH: u32 = 16;
 
-/// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`).
+/// A pbrt material as ours, or why it cannot be (`Ok(Err(why))`). What it
+/// renders only approximately (a dispersive index) is added to `approximated`
+/// with its place: an unsupported feature that `--lenient` keeps.
 fn convert_material(
     scene: &PbrtScene,
     ty: &str,
     p: &Params,
     loc: &Loc,
+    approximated: &mut Vec<(Loc, String)>,
 ) -> Result<std::result::Result<Material, String>> {
-    convert_nested(scene, ty, p, loc, 0)
+    convert_nested(scene, ty, p, loc, 0, approximated)
 }
 
 /// `convert_material` of a material `depth` mixes deep, with its bump map.
@@ -1447,8 +1458,9 @@ fn convert_nested(
     p: &Params,
     loc: &Loc,
     depth: u32,
+    approximated: &mut Vec<(Loc, String)>,
 ) -> Result<std::result::Result<Material, String>> {
-    let base = match convert_surface(scene, ty, p, loc, depth)? {
+    let base = match convert_surface(scene, ty, p, loc, depth, approximated)? {
         Ok(m) => m,
         Err(why) => return Ok(Err(why)),
     };
@@ -1479,6 +1491,7 @@ fn convert_surface(
     p: &Params,
     loc: &Loc,
     depth: u32,
+    approximated: &mut Vec<(Loc, String)>,
 ) -> Result<std::result::Result<Material, String>> {
     match ty {
         "mix" => {
@@ -1505,7 +1518,7 @@ fn convert_surface(
                     return Ok(Err(format!("a mix with the \"{}\" material \"{name}\"", m.ty)));
                 }
                 let m_loc = m.loc.clone().unwrap_or_else(|| loc.clone());
-                match convert_nested(scene, &m.ty, &m.params, &m_loc, depth + 1)? {
+                match convert_nested(scene, &m.ty, &m.params, &m_loc, depth + 1, approximated)? {
                     Ok(m) => parts.push(m),
                     Err(why) => return Ok(Err(format!("mix: material \"{name}\": {why}"))),
                 }
@@ -1560,7 +1573,7 @@ fn convert_surface(
             Ok(Ok(Material::diffuse(a.x, a.y, a.z)))
         }
         "dielectric" => {
-            let eta = match constant_eta(p, "eta")? {
+            let eta = match constant_eta(p, "eta", loc, approximated)? {
                 Ok(eta) => eta,
                 Err(why) => return Ok(Err(why)),
             };
@@ -1649,7 +1662,7 @@ fn convert_surface(
                 Ok(f) => f,
                 Err(why) => return Ok(Err(why)),
             };
-            let eta = match constant_eta(p, "interface.eta")? {
+            let eta = match constant_eta(p, "interface.eta", loc, approximated)? {
                 Ok(eta) => eta,
                 Err(why) => return Ok(Err(why)),
             };
@@ -1912,24 +1925,55 @@ fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Re
 }
 
 /// An index of refraction that pbrt-v4 takes as a float or a spectrum (never
-/// a texture; only its hair material does): 1.5 when absent. A spectrum must
-/// be constant, since one index serves all three colour channels.
-fn constant_eta(p: &Params, name: &str) -> Result<std::result::Result<f32, String>> {
-    Ok(match p.get(name) {
-        None => Ok(1.5),
-        Some(e) if e.ty == super::ParamType::Float => Ok(p.get_float(name, 1.5)?),
-        Some(e) if e.ty == super::ParamType::Texture => Err(format!(
-            "a textured \"{name}\" is not supported (pbrt-v4 takes a float or a spectrum)"
-        )),
-        Some(_) => match p.get_spectrum(name)? {
-            Some(SpectrumValue::Sampled(s)) if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() => {
-                Ok(s.value[0])
+/// a texture; only its hair material does): 1.5 when absent. One index
+/// serves all three colour channels: a spectrum that varies (dispersion) is
+/// taken at 550 nm, near the eye's peak sensitivity, and noted in
+/// `approximated`.
+fn constant_eta(
+    p: &Params,
+    name: &str,
+    loc: &Loc,
+    approximated: &mut Vec<(Loc, String)>,
+) -> Result<std::result::Result<f32, String>> {
+    const LAMBDA: f32 = 550.0;
+    let spectrum = match p.get(name) {
+        None => return Ok(Ok(1.5)),
+        Some(e) if e.ty == super::ParamType::Float => return Ok(Ok(p.get_float(name, 1.5)?)),
+        Some(e) if e.ty == super::ParamType::Texture => {
+            return Ok(Err(format!(
+                "a textured \"{name}\" is not supported (pbrt-v4 takes a float or a spectrum)"
+            )))
+        }
+        Some(_) => p.get_spectrum(name)?,
+    };
+    let eta = match &spectrum {
+        Some(SpectrumValue::Sampled(s)) if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() => {
+            return Ok(Ok(s.value[0]))
+        }
+        Some(SpectrumValue::Sampled(s)) => s.eval(LAMBDA),
+        Some(SpectrumValue::Named(n)) => match super::spectrum::glass_eta_550(n) {
+            Some(eta) => eta,
+            None => {
+                return Ok(Err(format!(
+                    "the spectrum \"{n}\" as \"{name}\" is not supported (only pbrt-v4's glass spectra)"
+                )))
             }
-            _ => Err(format!(
-                "an \"{name}\" that varies with wavelength (dispersion) is not supported"
-            )),
         },
-    })
+        _ => return Ok(Err(format!("\"{name}\" given as this spectrum is not supported"))),
+    };
+    if !(eta.is_finite() && eta > 0.0) {
+        return Ok(Err(format!(
+            "an \"{name}\" that varies with wavelength (dispersion) is not supported"
+        )));
+    }
+    approximated.push((
+        place(p, name, loc).clone(),
+        format!(
+            "an \"{name}\" that varies with wavelength (dispersion) is not supported (--lenient uses {eta:.4}, its value \
+             at {LAMBDA} nm)"
+        ),
+    ));
+    Ok(Ok(eta))
 }
 
 /// A metal's Fresnel terms: `reflectance`, or `prefix` + `eta` and `k`
@@ -3018,6 +3062,41 @@ mod tests {
             let e = eta(material, name, &format!("\"texture {name}\" \"t\"")).unwrap_err();
             assert!(e.contains("textured"), "{e}");
         }
+        // With --lenient a dispersive glass stays glass, at its index at
+        // 550 nm (BK7: 1.5185 there, 1.5168 at 587.6 nm as Schott lists it;
+        // a sampled spectrum interpolated), with one warning.
+        for (value, want) in [
+            ("\"spectrum eta\" \"glass-BK7\"", 1.51854),
+            ("\"spectrum eta\" \"glass-F11\"", 1.79112),
+            ("\"spectrum eta\" [ 500 1.6 600 1.5 ]", 1.55),
+        ] {
+            let text = format!("WorldBegin\nMaterial \"dielectric\"\n  {value}\n{}", quad(0.0));
+            let e = convert_text(&text, false).unwrap_err().to_string();
+            assert!(
+                e.starts_with("dir/main.pbrt:3: material of type \"dielectric\": an \"eta\" that varies"),
+                "{e}"
+            );
+            let c = convert_text(&text, true).unwrap();
+            let Material::Dielectric { eta, .. } = c.desc.materials[0].1 else {
+                panic!("{:?}", c.desc.materials)
+            };
+            assert!((eta - want).abs() < 1e-5, "{value}: {eta}");
+            assert!(
+                c.warnings.iter().any(|w| w.contains("1 unsupported features ignored")),
+                "{:?}",
+                c.warnings
+            );
+        }
+        // A named spectrum that is no glass is refused as a material.
+        let text = format!(
+            "WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" \"metal-Cu-eta\"\n{}",
+            quad(0.0)
+        );
+        let e = convert_text(&text, false).unwrap_err().to_string();
+        assert!(
+            e.contains("the spectrum \"metal-Cu-eta\" as \"eta\" is not supported"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -70,6 +70,22 @@ pub const NAMED_SPECTRA: &[&str] = &[
     "illum-acesD60",
 ];
 
+/// The index of refraction at 550 nm of pbrt-v4's named glass spectra
+/// (interpolated in its tables, which are Schott's: BK7's is 1.5168 at the
+/// sodium d line, 587.6 nm, as the catalogue says).
+pub fn glass_eta_550(name: &str) -> Option<f32> {
+    Some(match name {
+        "glass-BK7" => 1.518_54,
+        "glass-BAF10" => 1.673_05,
+        "glass-FK51A" => 1.487_80,
+        "glass-LASF9" => 1.855_81,
+        "glass-F5" => 1.677_09,
+        "glass-F10" => 1.733_57,
+        "glass-F11" => 1.791_12,
+        _ => return None,
+    })
+}
+
 pub fn is_named_spectrum(name: &str) -> bool {
     NAMED_SPECTRA.contains(&name)
 }
