@@ -1464,24 +1464,41 @@ fn convert_nested(
         Ok(m) => m,
         Err(why) => return Ok(Err(why)),
     };
-    let displacement = match p.get_float_or_texture("displacement")? {
-        None => return Ok(Ok(base)),
-        Some(FloatOrTexture::Value(v)) if v.is_finite() => Texture::from(Vec3::splat(v)),
-        Some(FloatOrTexture::Value(v)) => {
-            return Err(located(
-                place(p, "displacement", loc),
-                format!("\"displacement\" {v} must be finite"),
-            ))
-        }
-        Some(FloatOrTexture::Texture(name)) => match float_texture(scene, p, "displacement", &name, loc)? {
-            Ok(t) => t,
-            Err(why) => return Ok(Err(why)),
-        },
+    let displacement = match float_or_texture(scene, p, "displacement", "", loc)? {
+        Ok(Some(t)) => t,
+        Ok(None) => return Ok(Ok(base)),
+        Err(why) => return Ok(Err(why)),
     };
     Ok(Ok(Material::Bumped {
         base: Box::new(base),
         displacement,
     }))
+}
+
+/// A float parameter that may be given by a texture (a mix's `amount`, a
+/// bump map's `displacement`): `None` when absent. A number that is not
+/// finite is the file's error at its place (`label` prefixes the message).
+fn float_or_texture(
+    scene: &PbrtScene,
+    p: &Params,
+    name: &str,
+    label: &str,
+    loc: &Loc,
+) -> Result<std::result::Result<Option<Texture>, String>> {
+    Ok(Ok(Some(match p.get_float_or_texture(name)? {
+        None => return Ok(Ok(None)),
+        Some(FloatOrTexture::Value(v)) if v.is_finite() => Texture::from(Vec3::splat(v)),
+        Some(FloatOrTexture::Value(v)) => {
+            return Err(located(
+                place(p, name, loc),
+                format!("{label}\"{name}\" {v} must be finite"),
+            ))
+        }
+        Some(FloatOrTexture::Texture(t)) => match float_texture(scene, p, name, &t, loc)? {
+            Ok(t) => t,
+            Err(why) => return Ok(Err(why)),
+        },
+    })))
 }
 
 /// A material's scattering, `depth` mixes deep.
@@ -1523,19 +1540,9 @@ fn convert_surface(
                     Err(why) => return Ok(Err(format!("mix: material \"{name}\": {why}"))),
                 }
             }
-            let amount = match p.get_float_or_texture("amount")? {
-                None => Texture::from(Vec3::splat(0.5)),
-                Some(FloatOrTexture::Value(v)) if v.is_finite() => Texture::from(Vec3::splat(v)),
-                Some(FloatOrTexture::Value(v)) => {
-                    return Err(located(
-                        place(p, "amount", loc),
-                        format!("mix: \"amount\" {v} must be finite"),
-                    ))
-                }
-                Some(FloatOrTexture::Texture(name)) => match float_texture(scene, p, "amount", &name, loc)? {
-                    Ok(t) => t,
-                    Err(why) => return Ok(Err(why)),
-                },
+            let amount = match float_or_texture(scene, p, "amount", "mix: ", loc)? {
+                Ok(t) => t.unwrap_or_else(|| Texture::from(Vec3::splat(0.5))),
+                Err(why) => return Ok(Err(why)),
             };
             match <[Material; 2]>::try_from(parts) {
                 Ok(materials) => Ok(Ok(Material::Mix {
