@@ -27,6 +27,8 @@ struct Keys<'a> {
     span: std::ops::Range<usize>,
     /// "material 'x'" or "texture 'x'".
     what: String,
+    /// Keys that every type takes (a material's `displacement`).
+    shared: &'static [&'static str],
 }
 
 impl Keys<'_> {
@@ -44,7 +46,7 @@ impl Keys<'_> {
     /// Refuses every key not in `allowed` (besides `type`).
     fn only(&self, kind: &str, allowed: &[&str]) -> Result<()> {
         for key in self.table.keys() {
-            if key != "type" && !allowed.contains(&key.as_str()) {
+            if key != "type" && !allowed.contains(&key.as_str()) && !self.shared.contains(&key.as_str()) {
                 let known = if allowed.is_empty() {
                     "none".to_string()
                 } else {
@@ -186,6 +188,7 @@ impl Resolver<'_> {
             table: spec.get_ref(),
             span: spec.span(),
             what: format!("texture '{name}'"),
+            shared: &[],
         };
         let kind = match k.string("type")? {
             Some(t) => t,
@@ -321,6 +324,7 @@ pub(super) fn materials(
             table: spec.get_ref(),
             span: spec.span(),
             what: format!("material '{name}'"),
+            shared: &["displacement"],
         };
         out.insert(name.clone(), material(&k, textures)?);
     }
@@ -340,6 +344,9 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 .error(span, format!("{}: unknown texture '{n}' (defined: {known})", k.what))
         })
     };
+    // A bump map, over any type: the surface displaced along its normal by
+    // this float texture (pbrt-v4's `displacement`), for shading only.
+    let displacement = k.param("displacement", &mut lookup)?;
     // A reflectance-like parameter: [0, 1] everywhere the texture can reach.
     let mut albedo = |key: &str, default: f32| -> Result<Texture> {
         let t = k
@@ -432,7 +439,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             let (eta, kk) = named_metal("Cu").expect("copper is a named metal");
             Ok(ConductorFresnel::Ior { eta, k: kk })
         };
-    Ok(match kind {
+    let base = match kind {
         "diffuse" => {
             k.only(kind, &["reflectance", "albedo"])?;
             if k.has("albedo") && k.has("reflectance") {
@@ -553,5 +560,12 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 ),
             ))
         }
+    };
+    Ok(match displacement {
+        Some(displacement) => Material::Bumped {
+            base: Box::new(base),
+            displacement,
+        },
+        None => base,
     })
 }

@@ -341,6 +341,60 @@ fn mirror_and_glass_materials_are_read_and_checked() {
 }
 
 #[test]
+fn any_material_may_be_bump_mapped_by_a_displacement() {
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [textures.bumps]
+        type = "checkerboard"
+        tex1 = 0.02
+        tex2 = 0
+        [materials.tiles]
+        displacement = "bumps"
+        [materials.metal]
+        type = "conductor"
+        roughness = 0.1
+        displacement = 0.5
+        [materials.plain]
+        type = "mirror"
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    let get = |n: &str| {
+        d.materials
+            .iter()
+            .find(|(k, _)| k == n)
+            .map(|(_, m)| m.clone())
+            .unwrap()
+    };
+    let Material::Bumped { base, displacement } = get("tiles") else {
+        panic!("{:?}", get("tiles"))
+    };
+    assert_eq!(*base, Material::diffuse(0.5, 0.5, 0.5));
+    assert!(
+        matches!(displacement, crate::texture::Texture::Checkerboard { .. }),
+        "{displacement:?}"
+    );
+    let Material::Bumped { base, displacement } = get("metal") else {
+        panic!("{:?}", get("metal"))
+    };
+    assert!(matches!(*base, Material::Conductor { .. }) && displacement.as_constant() == Some(Vec3::splat(0.5)));
+    assert!(!get("plain").is_bumped());
+    // A displacement that is no number, colour or texture is refused at its line.
+    let bad = text.replace("displacement = 0.5", "displacement = \"nothing\"");
+    let e = parse_str(&bad).unwrap_err().to_string();
+    assert!(
+        e.starts_with("test.toml:15:") && e.contains("unknown texture 'nothing'"),
+        "{e}"
+    );
+    // Textures do not take one.
+    let bad = text.replace("tex2 = 0", "tex2 = 0\ndisplacement = 1");
+    let e = parse_str(&bad).unwrap_err().to_string();
+    assert!(e.contains("`displacement` does not apply"), "{e}");
+}
+
+#[test]
 fn coated_conductor_materials_are_read_and_checked() {
     let text = format!(
         "{CAMERA}[materials.rims]\ntype = \"coatedconductor\"\nroughness = 0.1\nmetal = \"Al\"\n\
