@@ -1,7 +1,8 @@
 //! Textures: values that vary over a surface, looked up at a shading point's
 //! texture coordinates (pbrt-v4 chapter 10). A texture here is RGB-valued; a
-//! scalar parameter (a roughness, a mix amount) reads the mean of the
-//! channels, as pbrt-v4's float lookup of an RGB image does.
+//! scalar parameter (a roughness, a mix amount, an alpha mask) reads the mean
+//! of the channels, as pbrt-v4's float lookup of an RGB image does, or an
+//! image's alpha channel where it has one.
 //!
 //! Textures form a small tree (scale and mix hold other textures), cloned
 //! cheaply: the leaves that hold data share it (an image texture's pixels are
@@ -74,9 +75,7 @@ impl Texture {
                 u_scale,
                 v_scale,
             } => {
-                let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
-                // Parity of the square; rem_euclid keeps negative coordinates alternating too.
-                if (su + sv).rem_euclid(2.0) == 0.0 {
+                if checker_parity_even(tc, *u_scale, *v_scale) {
                     even.evaluate(tc)
                 } else {
                     odd.evaluate(tc)
@@ -91,14 +90,38 @@ impl Texture {
         }
     }
 
-    /// The value of a scalar texture: the mean of the channels (pbrt-v4's
-    /// `MIPMap::Bilerp<Float>` of an RGB image), exactly the value of a grey one.
+    /// The value of a scalar texture, as pbrt-v4's float textures compute it:
+    /// a colour is the mean of its channels (exactly the value of a grey
+    /// one), an image its alpha channel where it has one
+    /// ([`ImageTexture::evaluate_scalar`]), and scale, mix and checkerboard
+    /// combine their parts' scalar values.
     pub fn evaluate_scalar(&self, tc: &TexCoord) -> f32 {
-        let v = self.evaluate(tc);
-        if v.x == v.y && v.y == v.z {
-            v.x
-        } else {
-            (v.x + v.y + v.z) / 3.0
+        match self {
+            Texture::Constant(v) => {
+                if v.x == v.y && v.y == v.z {
+                    v.x
+                } else {
+                    (v.x + v.y + v.z) / 3.0
+                }
+            }
+            Texture::Checkerboard {
+                even,
+                odd,
+                u_scale,
+                v_scale,
+            } => {
+                if checker_parity_even(tc, *u_scale, *v_scale) {
+                    even.evaluate_scalar(tc)
+                } else {
+                    odd.evaluate_scalar(tc)
+                }
+            }
+            Texture::Scale { tex, scale } => tex.evaluate_scalar(tc) * scale.evaluate_scalar(tc),
+            Texture::Mix { a, b, amount } => {
+                let t = amount.evaluate_scalar(tc);
+                a.evaluate_scalar(tc) * (1.0 - t) + b.evaluate_scalar(tc) * t
+            }
+            Texture::Image(img) => img.evaluate_scalar(tc.uv),
         }
     }
 
@@ -121,6 +144,14 @@ impl Texture {
             Texture::Image(img) => img.max_value(),
         }
     }
+}
+
+/// Whether `tc` lies in an even square of a checkerboard of `u_scale` x
+/// `v_scale` squares per unit of (u, v).
+fn checker_parity_even(tc: &TexCoord, u_scale: f32, v_scale: f32) -> bool {
+    let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
+    // Parity of the square; rem_euclid keeps negative coordinates alternating too.
+    (su + sv).rem_euclid(2.0) == 0.0
 }
 
 impl Texture {

@@ -114,6 +114,10 @@ pub struct TexImage {
     /// Per-channel largest and smallest pixel values.
     pub max: Vec3,
     pub min: Vec3,
+    /// The alpha channel, decoded as the colour channels are, when the file
+    /// has one that is not 1 everywhere: pbrt-v4 keeps such a channel, and a
+    /// float lookup of the image reads it (an `alpha` cut-out's mask).
+    pub alpha: Option<Vec<f32>>,
 }
 
 impl std::fmt::Debug for TexImage {
@@ -166,11 +170,13 @@ impl TexImage {
             encoding,
             max,
             min,
+            alpha: None,
         }
     }
 
-    /// The texel at integer coordinates after wrapping; `None` outside with `Black`.
-    fn texel(&self, x: i64, y: i64, wrap: WrapMode) -> Option<Vec3> {
+    /// The index of the texel at integer coordinates after wrapping; `None`
+    /// outside with `Black`.
+    fn texel_index(&self, x: i64, y: i64, wrap: WrapMode) -> Option<usize> {
         let (w, h) = (self.width as i64, self.height as i64);
         let (x, y) = match wrap {
             WrapMode::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
@@ -182,22 +188,29 @@ impl TexImage {
                 (x, y)
             }
         };
-        Some(self.pixels[(y * w + x) as usize])
+        Some((y * w + x) as usize)
     }
 
     /// Bilinear lookup at image coordinates `st` in [0, 1]^2 (t down from the
     /// top row), as pbrt-v4's `Image::Bilerp`.
     pub fn bilerp(&self, st: Vec2, wrap: WrapMode) -> Vec3 {
+        self.bilerp_with(st, wrap, |i| self.pixels[i])
+    }
+
+    fn bilerp_with<T>(&self, st: Vec2, wrap: WrapMode, texel: impl Fn(usize) -> T) -> T
+    where
+        T: Default + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
         // Far outside, f32 -> i64 saturates; repeat's rem_euclid still works.
         let x = st.x as f64 * self.width as f64 - 0.5;
         let y = st.y as f64 * self.height as f64 - 0.5;
         if !(x.is_finite() && y.is_finite()) {
-            return Vec3::ZERO;
+            return T::default();
         }
         let (xf, yf) = (x.floor(), y.floor());
         let (dx, dy) = ((x - xf) as f32, (y - yf) as f32);
         let (xi, yi) = (xf as i64, yf as i64);
-        let t = |x, y| self.texel(x, y, wrap).unwrap_or(Vec3::ZERO);
+        let t = |x, y| self.texel_index(x, y, wrap).map_or_else(T::default, &texel);
         t(xi, yi) * ((1.0 - dx) * (1.0 - dy))
             + t(xi + 1, yi) * (dx * (1.0 - dy))
             + t(xi, yi + 1) * ((1.0 - dx) * dy)
@@ -303,6 +316,31 @@ impl ImageTexture {
             (Vec3::ONE - v).max(Vec3::ZERO)
         } else {
             v.max(Vec3::ZERO)
+        }
+    }
+
+    /// The value of a float lookup at `uv`: the alpha channel where the image
+    /// has one (pbrt-v4's `MIPMap::Bilerp<Float>` of a four-channel image),
+    /// else the mean of the colour channels (of three), exactly the value of
+    /// a grey image.
+    pub fn evaluate_scalar(&self, uv: Vec2) -> f32 {
+        let Some(alpha) = &self.image.alpha else {
+            let v = self.evaluate(uv);
+            return if v.x == v.y && v.y == v.z {
+                v.x
+            } else {
+                (v.x + v.y + v.z) / 3.0
+            };
+        };
+        let st = self.mapping.map(uv);
+        let a = self
+            .image
+            .bilerp_with(Vec2::new(st.x, 1.0 - st.y), self.wrap, |i| alpha[i])
+            * self.scale;
+        if self.invert {
+            (1.0 - a).max(0.0)
+        } else {
+            a.max(0.0)
         }
     }
 
@@ -457,6 +495,9 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
     }
     use ::image::DynamicImage as D;
     let integer = !matches!(img, D::ImageRgb32F(_) | D::ImageRgba32F(_));
+    // pbrt-v4 keeps the alpha of colour images (not of grey ones, which it
+    // reads as grey alone) unless it is 1 everywhere.
+    let rgba = (img.color().has_alpha() && img.color().has_color()).then(|| img.to_rgba32f());
     let rgb = img.to_rgb32f();
     let enc = if integer { encoding } else { Encoding::Linear };
     // 8-bit images go through a table; 16-bit ones are decoded per value.
@@ -470,17 +511,16 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
         .pixels()
         .map(|p| Vec3::new(lin(p.0[0]), lin(p.0[1]), lin(p.0[2])))
         .collect();
+    // Decoded as the colour is: pbrt-v4 applies an 8-bit image's encoding to
+    // each of its channels, alpha included.
+    let alpha = rgba
+        .filter(|im| im.pixels().any(|p| p.0[3] != 1.0))
+        .map(|im| im.pixels().map(|p| lin(p.0[3])).collect());
     h.bytes(&[enc.key().0]);
     h.bytes(&enc.key().1.to_le_bytes());
-    Ok(TexImage::finish(
-        path.to_path_buf(),
-        width,
-        height,
-        pixels,
-        h.0,
-        integer,
-        enc,
-    ))
+    let mut image = TexImage::finish(path.to_path_buf(), width, height, pixels, h.0, integer, enc);
+    image.alpha = alpha;
+    Ok(image)
 }
 
 #[cfg(test)]
@@ -614,6 +654,51 @@ mod tests {
             let t = ImageTexture::open(&p, &ImageOptions::default()).unwrap();
             assert_eq!(t.max_value(), Vec3::new(5.0, 12.5, 0.125));
         }
+    }
+
+    #[test]
+    fn a_float_lookup_reads_the_alpha_channel_where_an_image_has_one() {
+        let dir = tempfile::tempdir().unwrap();
+        // 2 x 1: red, opaque; blue, alpha 128 (0.2158605 once sRGB-decoded,
+        // as pbrt-v4 decodes every channel of an 8-bit image).
+        let px: [u8; 8] = [255, 0, 0, 255, 0, 0, 255, 128];
+        let png = dir.path().join("rgba.png");
+        ::image::save_buffer(&png, &px, 2, 1, ::image::ColorType::Rgba8).unwrap();
+        let opts = ImageOptions {
+            wrap: WrapMode::Clamp,
+            ..Default::default()
+        };
+        let t = ImageTexture::open(&png, &opts).unwrap();
+        let (left, right) = (Vec2::new(0.0, 0.5), Vec2::new(1.0, 0.5));
+        assert_eq!(t.evaluate(left), Vec3::X);
+        assert_eq!(t.evaluate(right), Vec3::Z);
+        assert_eq!(t.evaluate_scalar(left), 1.0);
+        assert!((t.evaluate_scalar(right) - 0.2158605).abs() < 1e-6);
+        // Halfway between the texel centres, half of each.
+        assert!((t.evaluate_scalar(Vec2::new(0.5, 0.5)) - 0.5 * (1.0 + 0.2158605)).abs() < 1e-6);
+        let linear = ImageTexture::open(
+            &png,
+            &ImageOptions {
+                encoding: Encoding::Linear,
+                invert: true,
+                ..opts
+            },
+        )
+        .unwrap();
+        assert!((linear.evaluate_scalar(right) - (1.0 - 128.0 / 255.0)).abs() < 1e-6);
+
+        // Alpha 1 everywhere is no alpha (pbrt-v4 drops it): the mean of the colour.
+        let opaque: [u8; 8] = [255, 0, 0, 255, 0, 0, 255, 255];
+        let png = dir.path().join("opaque.png");
+        ::image::save_buffer(&png, &opaque, 2, 1, ::image::ColorType::Rgba8).unwrap();
+        let t = ImageTexture::open(&png, &opts).unwrap();
+        assert!(t.image.alpha.is_none());
+        assert!((t.evaluate_scalar(left) - 1.0 / 3.0).abs() < 1e-7);
+        // A grey image with alpha is read as grey alone, as pbrt-v4 reads it.
+        let png = dir.path().join("grey-alpha.png");
+        ::image::save_buffer(&png, &[255, 0, 0, 0], 2, 1, ::image::ColorType::La8).unwrap();
+        let t = ImageTexture::open(&png, &opts).unwrap();
+        assert_eq!((t.evaluate_scalar(left), t.evaluate_scalar(right)), (1.0, 0.0));
     }
 
     #[test]
