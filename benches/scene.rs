@@ -74,6 +74,7 @@ fn with_spheres(n: usize) -> SceneDesc {
     for i in 0..n {
         let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 1.9 - Vec3::splat(0.95);
         d.spheres.push(SphereDesc {
+            axes: None,
             sphere: Sphere {
                 centre: c,
                 radius: 0.005 + 0.025 * r.next_f32(),

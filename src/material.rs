@@ -9,7 +9,7 @@
 
 use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
-use crate::sampling::mix64;
+use crate::sampling::hash_unit;
 use crate::texture::{TexCoord, Texture};
 use std::sync::Arc;
 
@@ -403,9 +403,7 @@ impl Material {
 
 /// A uniform number in [0, 1) from the bits of a point and a direction.
 fn mix_choice(p: Vec3, wo: Vec3) -> f32 {
-    let bits = |a: f32, b: f32| (a.to_bits() as u64) | ((b.to_bits() as u64) << 32);
-    let h = mix64(bits(p.x, p.y) ^ mix64(bits(p.z, wo.x) ^ mix64(bits(wo.y, wo.z))));
-    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    hash_unit(&[p.x, p.y, p.z, wo.x, wo.y, wo.z])
 }
 
 #[cfg(test)]

@@ -19,6 +19,18 @@ pub fn mix64(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
+/// A uniform number in [0, 1) from the bits of some floats: the same bits,
+/// the same number. For decisions that must follow the geometry rather than
+/// a sample stream (which material of a mix, whether an alpha cut-out lets a
+/// ray through), as pbrt-v4's `HashFloat`.
+pub fn hash_unit(v: &[f32]) -> f32 {
+    let h = v.chunks(2).rev().fold(None, |acc: Option<u64>, pair| {
+        let bits = pair[0].to_bits() as u64 | (pair.get(1).map_or(0, |b| b.to_bits()) as u64) << 32;
+        Some(mix64(acc.map_or(bits, |a| bits ^ a)))
+    });
+    (h.unwrap_or(0) >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+}
+
 /// PCG32 (O'Neill 2014): small state, good statistics, cheap to key.
 #[derive(Clone, Debug)]
 pub struct Rng {

@@ -102,6 +102,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.vec3(s.sphere.centre);
         h.f32(s.sphere.radius);
         h.u32(s.material);
+        // Hashed only when given, so that a sphere without keeps its fingerprint.
+        if let Some(a) = s.axes {
+            a.to_cols_array().iter().for_each(|&v| h.f32(v));
+        }
     }
     // Disks came later: a scene without them keeps the fingerprint it had.
     if !desc.disks.is_empty() {
@@ -197,6 +201,12 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 }
             }
         }
+    }
+    // Cut-outs came later still: hashed only when there are some. The Debug
+    // form names an image texture's file by its content hash.
+    if !desc.cutouts.is_empty() {
+        h.bytes(b"cutouts");
+        h.bytes(format!("{:?}", desc.cutouts).as_bytes());
     }
     if camera {
         let c = &desc.camera;

@@ -55,6 +55,7 @@ pub fn place_and_build(mesh: &Mesh) {
         spheres: vec![],
         disks: vec![],
         lights: vec![],
+        cutouts: vec![],
         settings: SceneSettings::default(),
     };
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));

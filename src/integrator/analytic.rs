@@ -33,6 +33,7 @@ pub fn closed_sphere(material: Material, light: Option<(f32, f32)>, size: u32) -
     let mut d = empty(inside_camera(size));
     let m = d.material("wall", material);
     d.spheres.push(SphereDesc {
+        axes: None,
         sphere: Sphere {
             centre: Vec3::ZERO,
             radius: 1.0,
@@ -93,6 +94,7 @@ pub fn furnace_with_balls(wall: Material, balls: &[(Vec3, f32, Material)], size:
     let mut d = empty(inside_camera(size));
     let m = d.material("wall", wall);
     d.spheres.push(SphereDesc {
+        axes: None,
         sphere: Sphere {
             centre: Vec3::ZERO,
             radius: 1.0,
@@ -103,6 +105,7 @@ pub fn furnace_with_balls(wall: Material, balls: &[(Vec3, f32, Material)], size:
         let (centre, radius) = (*centre, *radius);
         let m = d.material(&format!("ball{i}"), material.clone());
         d.spheres.push(SphereDesc {
+            axes: None,
             sphere: Sphere { centre, radius },
             material: m,
         });

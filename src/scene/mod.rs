@@ -11,12 +11,15 @@ pub mod transform;
 use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::geometry::triangle::TriHit;
 use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::material::{ShadingGeometry, SurfacePoint};
 use crate::math::{Ray, Vec2, Vec3};
+use crate::sampling::hash_unit;
 pub use crate::settings::SceneSettings;
+use crate::texture::{TexCoord, Texture};
 use mesh::MeshReport;
 use std::path::{Path, PathBuf};
 
@@ -233,10 +236,35 @@ pub struct TriangleDesc {
     pub material: u32,
 }
 
+/// Shapes cut out by an alpha texture (pbrt-v4's `alpha` shape parameter):
+/// where the texture's scalar value `a` at a ray's hit is below 1, the hit
+/// counts with probability `a` (never where `a` is 0), decided by a hash of
+/// the ray and the primitive, as pbrt-v4 decides it; a ray not stopped goes
+/// on to whatever lies behind. Shadow rays, photons and camera rays alike.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cutout {
+    pub alpha: Texture,
+    pub shapes: CutShapes,
+}
+
+/// The shapes of a description a [`Cutout`] applies to.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CutShapes {
+    /// `triangles[range]`: a mesh's.
+    Triangles(std::ops::Range<usize>),
+    Sphere(usize),
+    Disk(usize),
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct SphereDesc {
     pub sphere: Sphere,
     pub material: u32,
+    /// World directions of the sphere's own x, y and z axes (the columns;
+    /// orthonormal, a reflection where the determinant is negative), about
+    /// which its texture coordinates run: pbrt-v4's sphere turned by its
+    /// transformation. `None`: the world's axes.
+    pub axes: Option<glam::Mat3>,
 }
 
 /// A disk or annulus (pbrt-v4's `disk` shape) in world space. A ray meets
@@ -306,6 +334,8 @@ pub struct SceneDesc {
     pub spheres: Vec<SphereDesc>,
     pub disks: Vec<DiskDesc>,
     pub lights: Vec<Light>,
+    /// Shapes cut out by alpha textures.
+    pub cutouts: Vec<Cutout>,
     /// The render settings the scene recommends: its file's and its preset's.
     pub settings: SceneSettings,
 }
@@ -321,6 +351,7 @@ impl SceneDesc {
             spheres: vec![],
             disks: vec![],
             lights: vec![],
+            cutouts: vec![],
             settings: SceneSettings::default(),
         }
     }
@@ -483,13 +514,32 @@ struct TriInfo {
     normal: Vec3,
     /// The triangle light it is, if any.
     light: Option<u32>,
+    /// Its cut-out's index in `Scene::alphas`, or `SOLID`.
+    alpha: u32,
 }
+
+/// `TriInfo::alpha` of a triangle that is not cut out.
+const SOLID: u32 = u32::MAX;
 
 #[derive(Clone, Debug)]
 struct SphereObject {
     sphere: Sphere,
     material: u32,
     light: Option<u32>,
+    alpha: Option<u32>,
+    /// `SphereDesc::axes`, the identity for the world's.
+    axes: glam::Mat3,
+}
+
+impl SphereObject {
+    /// pbrt-v4's parametrisation about the sphere's own z axis: the texture
+    /// coordinates and dp/du at the point of unit normal `n`.
+    fn uv_dpdu(&self, n: Vec3) -> (Vec2, Vec3) {
+        // The axes are orthonormal: their transpose takes world to object.
+        let q = self.axes.transpose() * n;
+        let dpdu = Vec3::new(-q.y, q.x, 0.0) * (std::f32::consts::TAU * self.sphere.radius);
+        (sphere_uv(q), self.axes * dpdu)
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -497,6 +547,67 @@ struct DiskObject {
     disk: Disk,
     material: u32,
     light: Option<u32>,
+    alpha: Option<u32>,
+}
+
+/// pbrt-v4's sphere parametrisation about the z axis: the texture
+/// coordinates of the point whose unit normal is `n`.
+fn sphere_uv(n: Vec3) -> Vec2 {
+    let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
+    Vec2::new(
+        phi / std::f32::consts::TAU,
+        1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
+}
+
+/// Which cut-out, as an index into the alpha textures, each shape of a
+/// description has.
+struct CutIndex {
+    /// Per triangle (`SOLID`: none); empty when no triangle is cut out.
+    triangles: Vec<u32>,
+    spheres: Vec<Option<u32>>,
+    disks: Vec<Option<u32>>,
+}
+
+/// The description's cut-outs: their alpha textures and each shape's. A
+/// shape named by two cut-outs takes the later.
+fn cutout_indices(desc: &SceneDesc) -> Result<(Vec<Texture>, CutIndex)> {
+    let mut cut = CutIndex {
+        triangles: vec![],
+        spheres: vec![None; desc.spheres.len()],
+        disks: vec![None; desc.disks.len()],
+    };
+    let mut alphas = vec![];
+    for (k, c) in desc.cutouts.iter().enumerate() {
+        let i = alphas.len() as u32;
+        let out_of_range = |what: &str, n: usize| Error::Scene(format!("cut-out {k} names {what} of {n}"));
+        match &c.shapes {
+            CutShapes::Triangles(r) => {
+                if r.start > r.end || r.end > desc.triangles.len() {
+                    return Err(out_of_range(
+                        &format!("triangles {}..{}", r.start, r.end),
+                        desc.triangles.len(),
+                    ));
+                }
+                if cut.triangles.is_empty() {
+                    cut.triangles = vec![SOLID; desc.triangles.len()];
+                }
+                cut.triangles[r.clone()].fill(i);
+            }
+            &CutShapes::Sphere(j) => {
+                *cut.spheres
+                    .get_mut(j)
+                    .ok_or_else(|| out_of_range(&format!("sphere {j}"), desc.spheres.len()))? = Some(i);
+            }
+            &CutShapes::Disk(j) => {
+                *cut.disks
+                    .get_mut(j)
+                    .ok_or_else(|| out_of_range(&format!("disk {j}"), desc.disks.len()))? = Some(i);
+            }
+        }
+        alphas.push(c.alpha.clone());
+    }
+    Ok((alphas, cut))
 }
 
 /// The primitive a closest-hit query found.
@@ -538,6 +649,8 @@ pub struct Scene {
     /// The BVH over spheres and disks: id i < spheres.len() is sphere i,
     /// the rest are disks.
     shapes: BoxBvh,
+    /// The cut-outs' alpha textures.
+    alphas: Vec<Texture>,
     /// Triangles dropped for zero area or non-finite coordinates.
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
@@ -554,6 +667,7 @@ impl Scene {
         let mut normals = Vec::with_capacity(desc.triangles.len());
         let mut uvs = Vec::with_capacity(desc.triangles.len());
         let mut dropped = 0;
+        let (alphas, cut) = cutout_indices(&desc)?;
         for (i, t) in desc.triangles.iter().enumerate() {
             if t.material >= nmat {
                 return Err(Error::Scene(format!(
@@ -575,6 +689,7 @@ impl Scene {
                 object: i as u32,
                 normal: n.normalize(),
                 light: None,
+                alpha: cut.triangles.get(i).copied().unwrap_or(SOLID),
             });
             normals.push(
                 t.normals
@@ -586,10 +701,13 @@ impl Scene {
         let mut spheres: Vec<SphereObject> = desc
             .spheres
             .iter()
-            .map(|s| SphereObject {
+            .enumerate()
+            .map(|(i, s)| SphereObject {
                 sphere: s.sphere,
                 material: s.material,
                 light: None,
+                alpha: cut.spheres.get(i).copied().flatten(),
+                axes: s.axes.unwrap_or(glam::Mat3::IDENTITY),
             })
             .collect();
         for s in &spheres {
@@ -622,6 +740,7 @@ impl Scene {
                     disk,
                     material: d.material,
                     light: None,
+                    alpha: cut.disks.get(i).copied().flatten(),
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -639,6 +758,8 @@ impl Scene {
                         sphere: *sphere,
                         material: black,
                         light: Some(i as u32),
+                        alpha: None,
+                        axes: glam::Mat3::IDENTITY,
                     });
                 }
                 Light::Triangle { vertices: v, .. } => {
@@ -653,6 +774,7 @@ impl Scene {
                         object: (desc.triangles.len() + desc.spheres.len() + desc.disks.len() + i) as u32,
                         normal: n.normalize(),
                         light: Some(i as u32),
+                        alpha: SOLID,
                     });
                     normals.push(None);
                     uvs.push(None);
@@ -661,6 +783,7 @@ impl Scene {
                     disk: *disk,
                     material: black,
                     light: Some(i as u32),
+                    alpha: None,
                 }),
                 // Point, spot and distant lights have no surface; infinite
                 // lights are seen by the rays that escape (`infinite_lights`).
@@ -704,6 +827,7 @@ impl Scene {
             spheres,
             disks,
             shapes,
+            alphas,
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
@@ -798,7 +922,13 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut best_t = t_max;
         let mut best = None;
-        if let Some((slot, h)) = self.bvh.intersect(ray, t_min, t_max) {
+        let triangle = if self.alphas.is_empty() {
+            self.bvh.intersect(ray, t_min, t_max)
+        } else {
+            self.bvh
+                .intersect_where(ray, t_min, t_max, |slot, h| self.triangle_solid(slot, h, ray))
+        };
+        if let Some((slot, h)) = triangle {
             best_t = h.t;
             best = Some(Found::Triangle(slot as usize, h.u, h.v));
         }
@@ -817,13 +947,7 @@ impl Scene {
         let before = self.desc.triangles.len() + self.desc.spheres.len() + self.desc.disks.len();
         if let Some(s) = self.spheres.get(idx) {
             let n = (p - s.sphere.centre) / s.sphere.radius;
-            // pbrt-v4's sphere parametrisation about the z axis.
-            let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
-            let uv = Vec2::new(
-                phi / std::f32::consts::TAU,
-                1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-            );
-            let dpdu = Vec3::new(-n.y, n.x, 0.0) * (std::f32::consts::TAU * s.sphere.radius);
+            let (uv, dpdu) = s.uv_dpdu(n);
             return Some(Hit {
                 t: best_t,
                 p,
@@ -868,14 +992,78 @@ impl Scene {
         })
     }
 
-    /// Shape `id` of `shapes` (a sphere, then a disk): its hit in (t_min, t_max).
+    /// Shape `id` of `shapes` (a sphere, then a disk): its hit in (t_min,
+    /// t_max), passing through where it is cut out.
     #[inline(always)]
     fn shape_hit(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         match self.spheres.get(id as usize) {
-            Some(s) => s.sphere.intersect(ray, t_min, t_max),
-            None => self.disks[id as usize - self.spheres.len()]
-                .disk
-                .intersect(ray, t_min, t_max),
+            Some(s) => {
+                let t = s.sphere.intersect(ray, t_min, t_max)?;
+                let Some(a) = s.alpha else {
+                    return Some(t);
+                };
+                let solid = |t: f32, side: u32| {
+                    let p = ray.at(t);
+                    let (uv, _) = s.uv_dpdu((p - s.sphere.centre) / s.sphere.radius);
+                    self.solid(a, uv, p, ray, [id, 1 + side])
+                };
+                if solid(t, 0) {
+                    return Some(t);
+                }
+                // Through the near side, the ray may still meet the far one.
+                let far = s.sphere.intersect(ray, t, t_max)?;
+                solid(far, 1).then_some(far)
+            }
+            None => {
+                let d = &self.disks[id as usize - self.spheres.len()];
+                let t = d.disk.intersect(ray, t_min, t_max)?;
+                let Some(a) = d.alpha else {
+                    return Some(t);
+                };
+                let p = ray.at(t);
+                self.solid(a, d.disk.uv_dpdu(p).0, p, ray, [id, 3]).then_some(t)
+            }
+        }
+    }
+
+    /// Whether a hit on triangle `slot` counts: it is not cut out there.
+    fn triangle_solid(&self, slot: u32, h: &TriHit, ray: &Ray) -> bool {
+        let a = self.info[slot as usize].alpha;
+        a == SOLID
+            || self.solid(
+                a,
+                self.triangle_uv(slot as usize, h.u, h.v),
+                ray.at(h.t),
+                ray,
+                [slot, 0],
+            )
+    }
+
+    /// pbrt-v4's stochastic alpha test: whether `ray`'s hit at `p` (texture
+    /// coordinates `uv`) on a primitive (`prim`: its index and kind, so that
+    /// two cut-out surfaces along one ray decide independently) under
+    /// cut-out `alpha` counts.
+    fn solid(&self, alpha: u32, uv: Vec2, p: Vec3, ray: &Ray, prim: [u32; 2]) -> bool {
+        let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord { uv, p });
+        if a >= 1.0 {
+            return true;
+        }
+        // Not there at all at 0, and where the texture gives NaN.
+        if a.is_nan() || a <= 0.0 {
+            return false;
+        }
+        let (o, d) = (ray.o, ray.d);
+        let [i, kind] = prim.map(f32::from_bits);
+        hash_unit(&[o.x, o.y, o.z, d.x, d.y, d.z, i, kind]) <= a
+    }
+
+    /// Whether a triangle (not cut out where the ray meets it) blocks the ray.
+    fn triangles_block(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        if self.alphas.is_empty() {
+            self.bvh.occluded(ray, t_min, t_max)
+        } else {
+            self.bvh
+                .occluded_where(ray, t_min, t_max, |slot, h| self.triangle_solid(slot, h, ray))
         }
     }
 
@@ -906,14 +1094,16 @@ impl Scene {
         match hit.kind {
             PrimKind::Triangle => triangle_shading(self.desc.triangles.get(hit.object as usize)?, hit),
             PrimKind::Sphere => {
-                let s = &self.spheres.get((hit.object as usize).checked_sub(tris)?)?.sphere;
-                let q = (hit.p - s.centre) / s.radius;
+                let object = self.spheres.get((hit.object as usize).checked_sub(tris)?)?;
+                let s = &object.sphere;
+                let q = object.axes.transpose() * ((hit.p - s.centre) / s.radius);
                 let sin_theta = (q.x * q.x + q.y * q.y).sqrt();
                 if sin_theta < 1e-6 {
                     return None;
                 }
                 // pbrt-v4's sphere: theta runs from pi at -z to 0 at +z.
-                let dpdv = Vec3::new(q.z * q.x / sin_theta, q.z * q.y / sin_theta, -sin_theta)
+                let dpdv = object.axes
+                    * Vec3::new(q.z * q.x / sin_theta, q.z * q.y / sin_theta, -sin_theta)
                     * (-std::f32::consts::PI * s.radius);
                 Some(ShadingGeometry {
                     n: hit.ng,
@@ -1009,7 +1199,7 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.shapes
             .occluded(ray, t_min, t_max, |id| self.shape_hit(id, ray, t_min, t_max).is_some())
-            || self.bvh.occluded(ray, t_min, t_max)
+            || self.triangles_block(ray, t_min, t_max)
     }
 
     /// Whether anything but light `light`'s own sphere (or disk) blocks the
@@ -1020,7 +1210,7 @@ impl Scene {
     pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
         self.shapes.occluded(ray, t_min, t_max, |id| {
             self.shape_light(id) != Some(light) && self.shape_hit(id, ray, t_min, t_max).is_some()
-        }) || self.bvh.occluded(ray, t_min, t_max)
+        }) || self.triangles_block(ray, t_min, t_max)
     }
 
     pub fn material(&self, id: u32) -> &Material {
@@ -1094,7 +1284,6 @@ fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject]) -> Result<BoxBvh> {
 #[cfg(test)]
 mod shading_tests {
     use super::*;
-    use crate::texture::Texture;
 
     fn scene_with(add: impl FnOnce(&mut SceneDesc)) -> Scene {
         let mut d = SceneDesc::empty("bumps", builtin::cornell().camera);
@@ -1132,6 +1321,7 @@ mod shading_tests {
         let (c, r) = (Vec3::new(1.0, 2.0, 3.0), 2.0);
         let scene = scene_with(|d| {
             d.spheres.push(SphereDesc {
+                axes: None,
                 sphere: Sphere { centre: c, radius: r },
                 material: 0,
             });
@@ -1225,5 +1415,135 @@ mod shading_tests {
             .unwrap();
         assert_eq!(h.material, 1);
         assert!(scene.surface(&h).shading.is_none());
+    }
+}
+
+#[cfg(test)]
+mod cutout_tests {
+    use super::*;
+    use std::sync::Arc;
+
+    /// A unit quad at z = 0 (texture coordinates its x and y) cut out by
+    /// `alpha`, a large solid quad at z = -1 behind it, and the shapes `add`
+    /// puts in.
+    fn scene_with(alpha: Texture, add: impl FnOnce(&mut SceneDesc)) -> Scene {
+        let mut d = SceneDesc::empty("cut-outs", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        let quad = |z: f32, size: f32| {
+            let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec2::new(x, y));
+            let v = c.map(|c| ((c - Vec2::splat(0.5)) * size + Vec2::splat(0.5)).extend(z));
+            [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
+                vertices: t.map(|i| v[i]),
+                normals: None,
+                uvs: Some(t.map(|i| c[i])),
+                material: m,
+            })
+        };
+        d.triangles.extend(quad(0.0, 1.0));
+        d.triangles.extend(quad(-1.0, 10.0));
+        d.cutouts.push(Cutout {
+            alpha,
+            shapes: CutShapes::Triangles(0..2),
+        });
+        add(&mut d);
+        Scene::build(d).unwrap()
+    }
+
+    fn down_at(x: f32, y: f32) -> Ray {
+        Ray::new(Vec3::new(x, y, 1.0), -Vec3::Z)
+    }
+
+    fn checker(u_scale: f32, v_scale: f32) -> Texture {
+        Texture::Checkerboard {
+            even: Arc::new(Texture::from(Vec3::ONE)),
+            odd: Arc::new(Texture::from(Vec3::ZERO)),
+            u_scale,
+            v_scale,
+        }
+    }
+
+    #[test]
+    fn rays_pass_where_the_alpha_is_zero_and_stop_where_it_is_one() {
+        let scene = scene_with(checker(2.0, 2.0), |_| {});
+        for i in 0..20 {
+            for j in 0..20 {
+                let (x, y) = ((i as f32 + 0.5) / 20.0, (j as f32 + 0.5) / 20.0);
+                let solid = ((2.0 * x).floor() + (2.0 * y).floor()) % 2.0 == 0.0;
+                let ray = down_at(x, y);
+                let z = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap().p.z;
+                assert_eq!(z.round(), if solid { 0.0 } else { -1.0 }, "({x}, {y})");
+                // Shadow rays see what camera rays see; the back quad is beyond 1.5.
+                assert_eq!(scene.occluded(&ray, 0.0, 1.5), solid, "({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn an_alpha_between_zero_and_one_stops_that_share_of_rays_the_same_ones_each_time() {
+        let a = 0.3;
+        let scene = scene_with(Texture::from(Vec3::splat(a)), |_| {});
+        let n = 100;
+        let mut stopped = 0;
+        for i in 0..n {
+            for j in 0..n {
+                let ray = down_at((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let z = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap().p.z;
+                stopped += (z > -0.5) as usize;
+                assert_eq!(scene.intersect(&ray, 0.0, f32::INFINITY).unwrap().p.z, z);
+                assert_eq!(scene.occluded(&ray, 0.0, 1.5), z > -0.5);
+            }
+        }
+        // Binomial: the standard deviation of the share is 0.0046.
+        let share = stopped as f32 / (n * n) as f32;
+        assert!((share - a).abs() < 0.025, "{share}");
+    }
+
+    #[test]
+    fn a_sphere_cut_out_on_its_near_side_is_hit_on_its_far_side() {
+        // Solid for u < 1/2 (y > 0), cut out for y < 0; and a disk that is not there.
+        let scene = scene_with(Texture::from(Vec3::ONE), |d| {
+            d.spheres.push(SphereDesc {
+                axes: None,
+                sphere: Sphere {
+                    centre: Vec3::new(5.0, 0.0, 0.0),
+                    radius: 1.0,
+                },
+                material: 0,
+            });
+            d.disks
+                .push(DiskDesc::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::Y, 1.0, 0.0, 0));
+            d.cutouts.push(Cutout {
+                alpha: checker(2.0, 1.0),
+                shapes: CutShapes::Sphere(0),
+            });
+            d.cutouts.push(Cutout {
+                alpha: Texture::from(Vec3::ZERO),
+                shapes: CutShapes::Disk(0),
+            });
+        });
+        let from_below = Ray::new(Vec3::new(5.0, -5.0, 0.0), Vec3::Y);
+        let h = scene.intersect(&from_below, 0.0, f32::INFINITY).unwrap();
+        assert!((h.p.y - 1.0).abs() < 1e-4, "{}", h.p);
+        let from_above = Ray::new(Vec3::new(5.0, 5.0, 0.0), -Vec3::Y);
+        let h = scene.intersect(&from_above, 0.0, f32::INFINITY).unwrap();
+        assert!((h.p.y - 1.0).abs() < 1e-4, "{}", h.p);
+        // Inside the lower half going down: nothing but the cut-out side.
+        assert!(scene
+            .intersect(&Ray::new(Vec3::new(5.0, -0.5, 0.0), -Vec3::Y), 0.0, f32::INFINITY)
+            .is_none());
+        let through_disk = Ray::new(Vec3::new(-5.0, 5.0, 0.0), -Vec3::Y);
+        assert!(scene.intersect(&through_disk, 0.0, f32::INFINITY).is_none());
+        assert!(!scene.occluded(&through_disk, 0.0, f32::INFINITY));
+    }
+
+    #[test]
+    fn a_cutout_naming_shapes_that_are_not_there_is_an_error() {
+        let mut d = SceneDesc::empty("bad", builtin::cornell().camera);
+        d.cutouts.push(Cutout {
+            alpha: Texture::from(Vec3::ZERO),
+            shapes: CutShapes::Triangles(0..3),
+        });
+        let e = Scene::build(d).err().unwrap().to_string();
+        assert!(e.contains("cut-out 0 names triangles 0..3 of 0"), "{e}");
     }
 }

@@ -66,6 +66,7 @@ fn glossy_room(size: u32) -> Scene {
     );
     for (x, r, m) in [(-0.45, 0.3, copper), (0.45, 0.3, coated)] {
         d.spheres.push(SphereDesc {
+            axes: None,
             sphere: raytracer::geometry::Sphere {
                 centre: Vec3::new(x, 1.0 - r, -0.2),
                 radius: r,

@@ -761,3 +761,59 @@ fn a_bump_map_shades_a_plane_as_its_displaced_surface_would() {
         assert!(lo < 0.5 && hi > 1.3, "{integrator}: the stripes show: {lo} to {hi}");
     }
 }
+
+/// A lit wall seen through a black screen cut out by `alpha` (a shape
+/// parameter), the light shining from behind the camera, direct light only.
+fn wall_behind_screen(dir: &Path, name: &str, alpha: &str) -> Film {
+    // 64 x 1, alpha 0 on the left half (u < 1/2), 1 on the right.
+    let mask: Vec<u8> = (0..64u8)
+        .flat_map(|x| [255, 255, 255, if x < 32 { 0 } else { 255 }])
+        .collect();
+    image::save_buffer(dir.join("mask.png"), &mask, 64, 1, image::ColorType::Rgba8).unwrap();
+    let scene = dir.join(format!("{name}.pbrt"));
+    std::fs::write(
+        &scene,
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 30 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 32 ]\n\
+             PixelFilter \"box\"\nIntegrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+             LightSource \"distant\" \"point3 from\" [ 0 0 -1 ] \"point3 to\" [ 0 0 0 ] \"rgb L\" [ 2 2 2 ]\n\
+             Texture \"mask\" \"float\" \"imagemap\" \"string filename\" \"mask.png\"\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -4 -4 0  4 -4 0  4 4 0  -4 4 0 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -3 -3 -1  3 -3 -1  3 3 -1  -3 3 -1 ] \
+             \"point2 uv\" [ 0 0 1 0 1 1 0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ] {alpha}\n"
+        ),
+    )
+    .unwrap();
+    render_to(&scene, &["--spp", "16"], &dir.join(format!("{name}.pfm")))
+}
+
+#[test]
+fn an_alpha_cut_out_lets_light_and_sight_through_in_proportion() {
+    let dir = tempfile::tempdir().unwrap();
+    let lit = 2.0 * 0.5 / std::f32::consts::PI;
+    let open = wall_behind_screen(dir.path(), "open", "\"float alpha\" 0");
+    assert!(open.pixels.iter().all(|p| (p.y - lit).abs() < 1e-3 * lit));
+    let closed = wall_behind_screen(dir.path(), "closed", "");
+    assert!(closed.pixels.iter().all(|p| p.y == 0.0));
+    // Alpha 1/2: half the camera rays reach the wall, and half the light
+    // does; the black screen adds nothing. (1 - 1/2)^2 of the light on average.
+    let half = wall_behind_screen(dir.path(), "half", "\"float alpha\" 0.5");
+    let mean = half.pixels.iter().map(|p| p.y).sum::<f32>() / half.pixels.len() as f32;
+    assert!((mean / lit - 0.25).abs() < 0.015, "{}", mean / lit);
+    // An image's alpha channel: cut out on the left half of the screen
+    // (u < 1/2, world x < 0: the picture's left), solid on the right.
+    let masked = wall_behind_screen(dir.path(), "masked", "\"texture alpha\" \"mask\"");
+    for r in 0..32 {
+        for c in (0..16).chain(24..40) {
+            let want = if c < 20 { lit } else { 0.0 };
+            assert!(
+                (masked.get(c, r).y - want).abs() < 1e-3,
+                "({c}, {r}): {}",
+                masked.get(c, r).y
+            );
+        }
+    }
+}

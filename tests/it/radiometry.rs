@@ -35,6 +35,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         spheres: vec![],
         disks: vec![],
         lights: vec![light],
+        cutouts: vec![],
         settings: SceneSettings::default(),
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));

@@ -57,6 +57,7 @@ fn random_scene(spheres: usize, disks: usize, lights: usize, seed: u64) -> Scene
     }
     for i in 0..spheres {
         d.spheres.push(SphereDesc {
+            axes: None,
             sphere: Sphere {
                 centre: point(&mut r, 2.0),
                 radius: 0.01 + 0.07 * r.next_f32(),
@@ -250,6 +251,7 @@ fn a_few_shapes_are_tested_in_order_without_a_tree() {
     d.triangles.clear();
     for m in 0..2 {
         d.spheres.push(SphereDesc {
+            axes: None,
             sphere: Sphere {
                 centre: Vec3::ZERO,
                 radius: 1.0,

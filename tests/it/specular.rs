@@ -49,6 +49,7 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
             position: Vec3::new(1.5, 0.0, 2.0),
             power: Vec3::splat(power),
         }],
+        cutouts: vec![],
         settings: SceneSettings::default(),
     };
     let mirror = d.material("mirror", Material::mirror(Vec3::ONE));
@@ -109,6 +110,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
             },
             power: Vec3::splat(power),
         }],
+        cutouts: vec![],
         settings: SceneSettings::default(),
     };
     let reflectance = Vec3::new(0.5, 0.8, 1.0);

@@ -2,7 +2,7 @@
 //! the build and the traversal must agree with.
 
 use super::*;
-use crate::geometry::triangle::Triangle;
+use crate::geometry::triangle::{TriHit, Triangle};
 use crate::math::Ray;
 use crate::sampling::Rng;
 
@@ -160,5 +160,53 @@ fn four_triangles_far_apart_get_a_leaf_each() {
         bvh.intersect(&ray, 0.0, f32::INFINITY)
             .map(|(s, _)| bvh.order[s as usize]),
         Some(3)
+    );
+}
+
+/// The closest hit a filter accepts, by a loop over all triangles.
+fn brute_where(tris: &[Triangle], ray: &Ray, accept: impl Fn(u32, &TriHit) -> bool) -> Option<(u32, f32)> {
+    let mut best: Option<(u32, f32)> = None;
+    for (i, t) in tris.iter().enumerate() {
+        if let Some(h) = t.intersect_mt(ray, 0.0, best.map_or(f32::INFINITY, |b| b.1)) {
+            if accept(i as u32, &h) {
+                best = Some((i as u32, h.t));
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn filtered_queries_find_the_closest_accepted_hit() {
+    let tris = random_tris(3000, 21);
+    let bvh = Bvh::build(&tris);
+    // Rejects by the input triangle (two in three) and by where the ray
+    // meets it (half of each triangle), as an alpha texture would.
+    let keep = |i: u32, h: &TriHit| i.is_multiple_of(3) || h.u > 0.5;
+    let mut r = Rng::new(8, 1);
+    let (mut hits, mut skipped) = (0, 0);
+    for _ in 0..5000 {
+        let o = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 6.0 - Vec3::splat(3.0);
+        let ray = Ray::new(o, crate::sampling::uniform_sphere(r.next_2d()));
+        let want = brute_where(&tris, &ray, keep);
+        let got = bvh
+            .intersect_where(&ray, 0.0, f32::INFINITY, |s, h| keep(bvh.order[s as usize], h))
+            .map(|(s, h)| (bvh.order[s as usize], h.t));
+        assert_eq!(got, want);
+        let blocked = bvh.occluded_where(&ray, 0.0, f32::INFINITY, |s, h| keep(bvh.order[s as usize], h));
+        assert_eq!(blocked, want.is_some());
+        hits += want.is_some() as usize;
+        skipped += (brute(&tris, &ray).map(|b| b.0) != want.map(|w| w.0)) as usize;
+    }
+    // Both outcomes occur often: the filter decides, not the geometry alone.
+    assert!(
+        hits > 300 && skipped > 300,
+        "{hits} hits, {skipped} rays passed a rejected hit"
+    );
+    // Accepting everything is the unfiltered query.
+    let ray = Ray::new(Vec3::new(-3.0, 0.1, 0.2), Vec3::X);
+    assert_eq!(
+        bvh.intersect_where(&ray, 0.0, f32::INFINITY, |_, _| true),
+        bvh.intersect(&ray, 0.0, f32::INFINITY)
     );
 }

@@ -30,55 +30,114 @@ use glam::{BVec4A, Vec4};
 /// a BVH holds fewer than 2^32 triangles).
 pub(super) const STACK: usize = (NODE_WIDTH - 1) * (SAH_DEPTH + 32) + 1;
 
+/// Which of the triangles a ray meets count as hits: all of them, or those
+/// a test accepts (a surface cut out by an alpha texture lets rays through).
+/// Monomorphised, so that the query without a test pays nothing for it.
+trait Accept {
+    const ALL: bool;
+    fn accept(&self, slot: u32, hit: &TriHit) -> bool;
+}
+
+/// Every hit counts.
+struct All;
+
+impl Accept for All {
+    const ALL: bool = true;
+    #[inline(always)]
+    fn accept(&self, _: u32, _: &TriHit) -> bool {
+        true
+    }
+}
+
+/// The hits `.0` accepts, given the triangle's slot and the hit.
+struct Where<F>(F);
+
+impl<F: Fn(u32, &TriHit) -> bool> Accept for Where<F> {
+    const ALL: bool = false;
+    #[inline(always)]
+    fn accept(&self, slot: u32, hit: &TriHit) -> bool {
+        (self.0)(slot, hit)
+    }
+}
+
 impl Bvh {
     /// Closest hit in (t_min, t_max): the slot of the triangle and the hit.
     /// Where the CPU has AVX, nodes test their eight boxes at once; the
     /// result is the same bit for bit.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
+        self.closest_dispatch(ray, t_min, t_max, &All)
+    }
+
+    /// The closest hit in (t_min, t_max) that `accept` accepts (given the
+    /// triangle's slot and the hit): what a loop over all triangles keeping
+    /// the nearest accepted hit finds. Hits are offered in no particular
+    /// order, some that a nearer accepted hit hides among them.
+    pub fn intersect_where(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        accept: impl Fn(u32, &TriHit) -> bool,
+    ) -> Option<(u32, TriHit)> {
+        self.closest_dispatch(ray, t_min, t_max, &Where(accept))
+    }
+
+    #[inline(always)]
+    fn closest_dispatch<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX.
-            return unsafe { self.intersect_avx(ray, t_min, t_max) };
+            return unsafe { self.intersect_avx(ray, t_min, t_max, accept) };
         }
-        self.closest::<Sse>(ray, t_min, t_max)
+        self.closest::<Sse, A>(ray, t_min, t_max, accept)
     }
 
     /// [`Bvh::intersect`] with nodes tested four boxes at a time (SSE2, every
     /// x86-64 CPU's), whatever the CPU: for checking that both agree.
     pub fn intersect_baseline(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
-        self.closest::<Sse>(ray, t_min, t_max)
+        self.closest::<Sse, All>(ray, t_min, t_max, &All)
     }
 
     /// Whether any triangle blocks the ray in (t_min, t_max); AVX as in
     /// [`Bvh::intersect`].
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.any_hit_dispatch(ray, t_min, t_max, &All)
+    }
+
+    /// Whether a hit in (t_min, t_max) that `accept` accepts blocks the ray.
+    pub fn occluded_where(&self, ray: &Ray, t_min: f32, t_max: f32, accept: impl Fn(u32, &TriHit) -> bool) -> bool {
+        self.any_hit_dispatch(ray, t_min, t_max, &Where(accept))
+    }
+
+    #[inline(always)]
+    fn any_hit_dispatch<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> bool {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX.
-            return unsafe { self.occluded_avx(ray, t_min, t_max) };
+            return unsafe { self.occluded_avx(ray, t_min, t_max, accept) };
         }
-        self.any_hit::<Sse>(ray, t_min, t_max)
+        self.any_hit::<Sse, A>(ray, t_min, t_max, accept)
     }
 
     /// [`Bvh::occluded`] without AVX, as [`Bvh::intersect_baseline`].
     pub fn occluded_baseline(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.any_hit::<Sse>(ray, t_min, t_max)
+        self.any_hit::<Sse, All>(ray, t_min, t_max, &All)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    fn intersect_avx(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
-        self.closest::<Avx>(ray, t_min, t_max)
+    fn intersect_avx<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
+        self.closest::<Avx, A>(ray, t_min, t_max, accept)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    fn occluded_avx(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.any_hit::<Avx>(ray, t_min, t_max)
+    fn occluded_avx<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> bool {
+        self.any_hit::<Avx, A>(ray, t_min, t_max, accept)
     }
 
     #[inline(always)]
-    fn closest<B: BoxTest>(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
+    fn closest<B: BoxTest, A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
         let r = TraversalRay::new(ray, t_min);
         let mut t_max = t_max;
         let mut best: Option<(u32, TriHit)> = None;
@@ -131,7 +190,12 @@ impl Bvh {
                 }
             } else {
                 for p in self.leaf_packets(cur) {
-                    if let Some((slot, h)) = r.hit_triangles(p, t_max) {
+                    if A::ALL {
+                        if let Some((slot, h)) = r.hit_triangles(p, t_max) {
+                            t_max = h.t;
+                            best = Some((slot, h));
+                        }
+                    } else if let Some((slot, h)) = r.hit_accepted_triangles(p, t_max, accept) {
                         t_max = h.t;
                         best = Some((slot, h));
                     }
@@ -151,7 +215,7 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn any_hit<B: BoxTest>(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    fn any_hit<B: BoxTest, A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> bool {
         let r = TraversalRay::new(ray, t_min);
         let mut stack: ArrayVec<u32, STACK> = ArrayVec::new();
         let mut cur = 0u32;
@@ -166,11 +230,19 @@ impl Bvh {
                     mask &= mask - 1;
                     if c & LEAF == 0 {
                         stack.push(c);
-                    } else if self.leaf_packets(c).iter().any(|p| r.hits_any_triangle(p, t_max)) {
+                    } else if self
+                        .leaf_packets(c)
+                        .iter()
+                        .any(|p| r.hits_any_triangle(p, t_max, accept))
+                    {
                         return true;
                     }
                 }
-            } else if self.leaf_packets(cur).iter().any(|p| r.hits_any_triangle(p, t_max)) {
+            } else if self
+                .leaf_packets(cur)
+                .iter()
+                .any(|p| r.hits_any_triangle(p, t_max, accept))
+            {
                 return true;
             }
             match stack.pop() {
@@ -392,8 +464,54 @@ impl TraversalRay {
         ))
     }
 
+    /// The nearest hit among a packet's triangles that `accept` accepts,
+    /// if any is closer than t_max. Lanes are offered in slot order and a
+    /// tie keeps the first, as in `hit_triangles`.
     #[inline(always)]
-    fn hits_any_triangle(&self, p: &Tri4, t_max: f32) -> bool {
-        self.test_packet(p, t_max).0.any()
+    fn hit_accepted_triangles<A: Accept>(&self, p: &Tri4, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
+        let (ok, t, u, v) = self.test_packet(p, t_max);
+        let mut mask = ok.bitmask();
+        if mask == 0 {
+            return None;
+        }
+        let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+        let mut t_max = t_max;
+        let mut best = None;
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let h = TriHit {
+                t: t[lane],
+                u: u[lane],
+                v: v[lane],
+            };
+            if h.t < t_max && accept.accept(p.slot[lane], &h) {
+                t_max = h.t;
+                best = Some((p.slot[lane], h));
+            }
+        }
+        best
+    }
+
+    #[inline(always)]
+    fn hits_any_triangle<A: Accept>(&self, p: &Tri4, t_max: f32, accept: &A) -> bool {
+        let (ok, t, u, v) = self.test_packet(p, t_max);
+        if A::ALL {
+            return ok.any();
+        }
+        let mut mask = ok.bitmask();
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let h = TriHit {
+                t: t.to_array()[lane],
+                u: u.to_array()[lane],
+                v: v.to_array()[lane],
+            };
+            if accept.accept(p.slot[lane], &h) {
+                return true;
+            }
+        }
+        false
     }
 }

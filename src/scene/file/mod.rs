@@ -10,7 +10,7 @@
 
 use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::transform::{Fit, Transform};
-use super::{CameraDesc, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use super::{CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::camera::ThinLens;
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
@@ -18,8 +18,10 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Vec2, Vec3};
 use crate::settings::{self, Kind, Origin, SceneSettings, Value};
+use crate::texture::Texture;
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Arc;
 use toml::Spanned;
 use types::*;
 
@@ -104,7 +106,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
     }
 
-    let meshes = shapes(&src, &file.shapes, &materials, opts, files, &mut desc)?;
+    let meshes = shapes(&src, &file.shapes, (&materials, &textures), opts, files, &mut desc)?;
     // Materials no shape uses still belong to the scene, after the used ones.
     for (name, m) in &materials {
         desc.material(name, m.clone());
@@ -173,7 +175,7 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
 fn shapes(
     src: &Source,
     specs: &[Spanned<ShapeSpec>],
-    materials: &BTreeMap<String, Material>,
+    (materials, textures): (&BTreeMap<String, Material>, &BTreeMap<String, Arc<Texture>>),
     opts: &LoadOptions,
     files: &dyn FileSource,
     desc: &mut SceneDesc,
@@ -221,6 +223,18 @@ fn shapes(
             None if s.kind == ShapeKind::Mesh => None,
             None => return Err(need("material")),
         };
+        let alpha = match s.alpha.as_ref().map(|a| (a.get_ref(), a.span())) {
+            None => None,
+            Some((AlphaSpec::Value(a), _)) if a.0 >= 1.0 => None,
+            Some((AlphaSpec::Value(a), _)) => Some(Texture::from(Vec3::splat(a.0))),
+            Some((AlphaSpec::Texture(name), at)) => match textures.get(name) {
+                Some(t) => Some(Texture::clone(t)),
+                None => {
+                    return Err(src.error(at, format!("{kind} shape: unknown texture '{name}' for `alpha`")));
+                }
+            },
+        };
+        let (first_triangle, sphere, disk) = (desc.triangles.len(), desc.spheres.len(), desc.disks.len());
         let uvs = match &s.uvs {
             None => None,
             Some(uv) => {
@@ -279,6 +293,7 @@ fn shapes(
                     return Err(err(format!("radius {radius} must be > 0")));
                 }
                 desc.spheres.push(SphereDesc {
+                    axes: None,
                     sphere: Sphere { centre, radius },
                     material: mat.unwrap_or(0),
                 });
@@ -322,6 +337,14 @@ fn shapes(
                 mesh.add_to_scene(desc, &transform, mat, smooth)?;
                 meshes.push(report);
             }
+        }
+        if let Some(alpha) = alpha {
+            let shapes = match s.kind {
+                ShapeKind::Sphere => CutShapes::Sphere(sphere),
+                ShapeKind::Disk => CutShapes::Disk(disk),
+                _ => CutShapes::Triangles(first_triangle..desc.triangles.len()),
+            };
+            desc.cutouts.push(Cutout { alpha, shapes });
         }
     }
     Ok(meshes)

@@ -395,6 +395,64 @@ fn any_material_may_be_bump_mapped_by_a_displacement() {
 }
 
 #[test]
+fn any_shape_may_be_cut_out_by_an_alpha() {
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [textures.leaf]
+        type = "checkerboard"
+        tex1 = 1
+        tex2 = 0
+        [materials.grey]
+        [[shapes]]
+        type = "quad"
+        material = "grey"
+        vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+        [[shapes]]
+        type = "quad"
+        material = "grey"
+        vertices = [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+        alpha = "leaf"
+        [[shapes]]
+        type = "sphere"
+        material = "grey"
+        centre = [0, 0, 3]
+        radius = 1
+        alpha = 0.25
+        [[shapes]]
+        type = "box"
+        material = "grey"
+        min = [0, 0, 0]
+        max = [1, 1, 1]
+        alpha = 1
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    let leaf = match &d.cutouts[0].alpha {
+        crate::texture::Texture::Checkerboard { .. } => true,
+        other => panic!("{other:?}"),
+    };
+    assert!(leaf);
+    assert_eq!(d.cutouts[0].shapes, crate::scene::CutShapes::Triangles(2..4));
+    assert_eq!(d.cutouts[1].shapes, crate::scene::CutShapes::Sphere(0));
+    assert_eq!(d.cutouts[1].alpha.as_constant(), Some(Vec3::splat(0.25)));
+    // An alpha of 1 cuts nothing out.
+    assert_eq!(d.cutouts.len(), 2);
+    let e = parse_str(&text.replace("alpha = \"leaf\"", "alpha = \"stem\""))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:19:") && e.contains("unknown texture 'stem' for `alpha`"),
+        "{e}"
+    );
+    let e = parse_str(&text.replace("alpha = 0.25", "alpha = [1, 2]"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("a number or the name of a texture"), "{e}");
+}
+
+#[test]
 fn coated_conductor_materials_are_read_and_checked() {
     let text = format!(
         "{CAMERA}[materials.rims]\ntype = \"coatedconductor\"\nroughness = 0.1\nmetal = \"Al\"\n\

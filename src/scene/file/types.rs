@@ -161,6 +161,14 @@ pub(super) struct FitSpec {
     pub(super) bottom_centre: Vec3Spec,
 }
 
+/// A shape's `alpha`: a number or the name of a texture.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged, expecting = "a number or the name of a texture")]
+pub(super) enum AlphaSpec {
+    Value(Num),
+    Texture(String),
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ShapeSpec {
@@ -183,11 +191,13 @@ pub(super) struct ShapeSpec {
     pub(super) translate: Option<Vec3Spec>,
     pub(super) fit: Option<FitSpec>,
     pub(super) smooth: Option<bool>,
+    /// Cuts the shape out where below 1 (pbrt-v4's `alpha`).
+    pub(super) alpha: Option<Spanned<AlphaSpec>>,
 }
 
 impl ShapeSpec {
     /// The optional keys that are present, by name.
-    pub(super) fn given(&self) -> [(&'static str, bool); 16] {
+    pub(super) fn given(&self) -> [(&'static str, bool); 17] {
         [
             ("uvs", self.uvs.is_some()),
             ("material", self.material.is_some()),
@@ -205,6 +215,7 @@ impl ShapeSpec {
             ("translate", self.translate.is_some()),
             ("fit", self.fit.is_some()),
             ("smooth", self.smooth.is_some()),
+            ("alpha", self.alpha.is_some()),
         ]
     }
 }
@@ -224,12 +235,21 @@ impl ShapeKind {
     /// Keys each shape type reads besides `type`.
     pub(super) fn keys(self) -> &'static [&'static str] {
         match self {
-            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs"],
-            ShapeKind::Quad => &["material", "vertices", "uvs"],
-            ShapeKind::Box => &["material", "min", "max"],
-            ShapeKind::Sphere => &["material", "centre", "radius"],
-            ShapeKind::Disk => &["material", "centre", "normal", "radius", "inner_radius"],
-            ShapeKind::Mesh => &["material", "path", "scale", "rotate", "translate", "fit", "smooth"],
+            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha"],
+            ShapeKind::Quad => &["material", "vertices", "uvs", "alpha"],
+            ShapeKind::Box => &["material", "min", "max", "alpha"],
+            ShapeKind::Sphere => &["material", "centre", "radius", "alpha"],
+            ShapeKind::Disk => &["material", "centre", "normal", "radius", "inner_radius", "alpha"],
+            ShapeKind::Mesh => &[
+                "material",
+                "path",
+                "scale",
+                "rotate",
+                "translate",
+                "fit",
+                "smooth",
+                "alpha",
+            ],
         }
     }
 }

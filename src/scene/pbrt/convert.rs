@@ -46,7 +46,7 @@ use crate::math::Vec3;
 use crate::scene::mesh::MeshReport;
 use crate::scene::DiskDesc;
 use crate::scene::FilmCrop;
-use crate::scene::{CameraDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use crate::scene::{CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -1231,19 +1231,17 @@ impl<'a> Conv<'a> {
                 }
                 _ => {}
             }
-            match p.get_float_or_texture("alpha")? {
-                Some(FloatOrTexture::Value(a)) if a >= 1.0 => {}
-                None => {}
-                Some(_) => {
-                    self.problem(
-                        Kind::Shape,
-                        place(p, "alpha", &shape.loc),
-                        "\"alpha\" cut-outs are not supported",
-                    );
+            // pbrt-v4 cuts a shape out where its alpha is below 1; a number
+            // of 1 or more leaves it whole.
+            let mut alpha = match float_or_texture(scene, p, "alpha", "", &shape.loc)? {
+                Ok(Some(t)) if t.as_constant().is_some_and(|a| a.x >= 1.0) => None,
+                Ok(alpha) => alpha,
+                Err(why) => {
+                    self.problem(Kind::Shape, place(p, "alpha", &shape.loc), format!("\"alpha\": {why}"));
                     self.skip_shape(shape);
                     continue;
                 }
-            }
+            };
             // pbrt-v4's "interface" and "none" materials make no surface: the
             // shape only bounds a medium, and without media it is not there.
             if let Some(m) = scene.materials.get(shape.material) {
@@ -1264,6 +1262,15 @@ impl<'a> Conv<'a> {
                 Some(i) => self.emission(i)?,
                 None => None,
             };
+            if emission.is_some() && alpha.is_some() {
+                // pbrt-v4 would also mask the light's emission and its samples.
+                self.problem(
+                    Kind::Light,
+                    place(p, "alpha", &shape.loc),
+                    "an \"alpha\" cut-out on an area light is not supported",
+                );
+                alpha = None;
+            }
             if let (Some(_), Some(m)) = (emission, scene.materials.get(shape.material)) {
                 if reflects(m) {
                     self.black_emitters += 1;
@@ -1306,6 +1313,7 @@ impl<'a> Conv<'a> {
                         }
                     } else {
                         let material = self.material(desc, shape.material)?;
+                        let first = desc.triangles.len();
                         for t in &mesh.triangles {
                             desc.triangles.push(TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
@@ -1313,6 +1321,10 @@ impl<'a> Conv<'a> {
                                 uvs: mesh.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize])),
                                 material,
                             });
+                        }
+                        if let Some(alpha) = alpha {
+                            let shapes = CutShapes::Triangles(first..desc.triangles.len());
+                            desc.cutouts.push(Cutout { alpha, shapes });
                         }
                     }
                 }
@@ -1349,7 +1361,18 @@ impl<'a> Conv<'a> {
                         self.push_light(desc, light, &shape.loc)?;
                     } else {
                         let material = self.material(desc, shape.material)?;
-                        desc.spheres.push(SphereDesc { sphere, material });
+                        if let Some(alpha) = alpha {
+                            let shapes = CutShapes::Sphere(desc.spheres.len());
+                            desc.cutouts.push(Cutout { alpha, shapes });
+                        }
+                        // Its texture coordinates turn with it (and mirror).
+                        let axes = glam::Mat3::from_cols(
+                            m.transform_vector3(Vec3::X) / scale,
+                            m.transform_vector3(Vec3::Y) / scale,
+                            m.transform_vector3(Vec3::Z) / scale,
+                        );
+                        let axes = (axes != glam::Mat3::IDENTITY).then_some(axes);
+                        desc.spheres.push(SphereDesc { sphere, material, axes });
                     }
                 }
                 Geometry::Disk(d) => {
@@ -1396,6 +1419,10 @@ impl<'a> Conv<'a> {
                         let material = self.material(desc, shape.material)?;
                         let mut disk = DiskDesc::new(centre, normal, radius, inner_radius, material);
                         disk.axes = Some(axes);
+                        if let Some(alpha) = alpha {
+                            let shapes = CutShapes::Disk(desc.disks.len());
+                            desc.cutouts.push(Cutout { alpha, shapes });
+                        }
                         desc.disks.push(disk);
                     }
                 }
@@ -2110,7 +2137,7 @@ fn float_texture(
     if scene.texture(name, TextureKind::Float).is_none() && scene.texture(name, TextureKind::Spectrum).is_some() {
         return Err(located(
             at,
-            format!("\"{param}\": texture \"{name}\" is a spectrum texture; a roughness needs a float texture"),
+            format!("\"{param}\": texture \"{name}\" is a spectrum texture, not a float texture"),
         ));
     }
     texture(scene, name, TextureKind::Float, at, 0)
@@ -2203,6 +2230,12 @@ fn reflect(desc: &mut SceneDesc) {
     }
     for s in &mut desc.spheres {
         s.sphere.centre = point(s.sphere.centre);
+        let a = s.axes.unwrap_or(glam::Mat3::IDENTITY);
+        s.axes = Some(glam::Mat3::from_cols(
+            vector(a.x_axis),
+            vector(a.y_axis),
+            vector(a.z_axis),
+        ));
     }
     for d in &mut desc.disks {
         d.centre = point(d.centre);
@@ -2285,6 +2318,87 @@ mod tests {
             quad(0.5),
             quad(-1.5)
         ))
+    }
+
+    #[test]
+    fn alpha_cuts_a_shape_out_as_pbrt_does() {
+        // The red quad at x in [0.5, 1.5] in front (z = -1) of a green quad
+        // covering both halves of the picture.
+        let scene = |alpha: &str| {
+            ok(&format!(
+                "Scale -1 1 1\nLookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+                 Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+                 Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 1 \
+                 \"float tex1\" 1 \"float tex2\" 0\n\
+                 MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
+                 MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
+                 NamedMaterial \"green\"\nShape \"trianglemesh\" \"point3 P\" [ -3 -2 0  3 -2 0  3 2 0  -3 2 0 ] \
+                 \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+                 NamedMaterial \"red\"\nShape \"trianglemesh\" \"point3 P\" [ 0.5 -0.5 -1  1.5 -0.5 -1  1.5 0.5 -1  0.5 0.5 -1 ] \
+                 \"integer indices\" [ 0 1 2 0 2 3 ] \"point2 uv\" [ 0 0  1 0  1 1  0 1 ] {alpha}\n"
+            ))
+        };
+        // Pixel columns where the quad's world x is 0.69 and 1.31 (world +x
+        // is the picture's left: `Scale -1 1 1`).
+        let (left, right) = (15.0, 11.0);
+        let solid = scene("");
+        assert!(solid.desc.cutouts.is_empty());
+        assert_eq!(seen(&solid, left, 10.0).as_deref(), Some("red"));
+        // An alpha of 1 or more is no cut-out at all, pbrt-v4's rule.
+        assert!(scene("\"float alpha\" 1").desc.cutouts.is_empty());
+        let gone = scene("\"float alpha\" 0");
+        assert_eq!(gone.desc.cutouts.len(), 1);
+        assert_eq!(seen(&gone, left, 10.0).as_deref(), Some("green"));
+        assert_eq!(seen(&gone, right, 10.0).as_deref(), Some("green"));
+        // Solid for u < 1/2, which is world x < 1.
+        let half = scene("\"texture alpha\" \"half\"");
+        assert_eq!(seen(&half, left, 10.0).as_deref(), Some("red"));
+        assert_eq!(seen(&half, right, 10.0).as_deref(), Some("green"));
+    }
+
+    #[test]
+    fn a_spheres_texture_coordinates_turn_and_mirror_with_it() {
+        // pbrt's picture of this camera is mirrored: the scene is reflected
+        // across x = 0, and the texture coordinates must stay where pbrt's are.
+        let uv_at = |pre: &str, pbrt_point: Vec3| {
+            let c = ok(&format!(
+                "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n{pre}Shape \"sphere\"\n"
+            ));
+            assert!(c.mirrored);
+            let scene = Scene::build(c.desc.clone()).unwrap();
+            let ours = pbrt_point * Vec3::new(-1.0, 1.0, 1.0);
+            let ray = crate::math::Ray::new(ours * 3.0, -ours);
+            let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).unwrap();
+            assert!((hit.p - ours).length() < 1e-4);
+            hit.uv
+        };
+        let close = |a: crate::math::Vec2, b: [f32; 2]| (a.x - b[0]).abs() < 1e-4 && (a.y - b[1]).abs() < 1e-4;
+        // pbrt-v4: u = phi / 2 pi about the object's z axis, v = 1 at +z.
+        let uv = uv_at("", Vec3::new(0.6, 0.8, 0.0));
+        assert!(close(uv, [0.8f32.atan2(0.6) / std::f32::consts::TAU, 0.5]), "{uv}");
+        // Turned so that the object's +z is the world's +y: the pole on top.
+        let uv = uv_at("Rotate -90 1 0 0\n", Vec3::Y);
+        assert!((uv.y - 1.0).abs() < 1e-4, "{uv}");
+        let uv = uv_at("Rotate -90 1 0 0\n", Vec3::new(0.6, 0.0, -0.8));
+        assert!(close(uv, [0.8f32.atan2(0.6) / std::f32::consts::TAU, 0.5]), "{uv}");
+    }
+
+    #[test]
+    fn alpha_on_an_area_light_or_naming_no_float_texture_is_refused_at_its_place() {
+        let light = "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\"\n\
+                     Shape \"sphere\" \"float alpha\" 0.5\nAttributeEnd\n";
+        let e = convert_text(light, false).unwrap_err().to_string();
+        assert!(
+            e.contains("main.pbrt:4: an \"alpha\" cut-out on an area light is not supported"),
+            "{e}"
+        );
+        // Leniently, the light shines whole.
+        let c = convert_text(light, true).unwrap();
+        assert!(c.desc.cutouts.is_empty() && c.desc.lights.len() == 1);
+        let e = convert_text("WorldBegin\nShape \"sphere\" \"texture alpha\" \"nothing\"\n", false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("main.pbrt:2") && e.contains("nothing"), "{e}");
     }
 
     #[test]
@@ -2858,7 +2972,7 @@ mod tests {
             ),
             (
                 text.replace("\"float\" \"checkerboard\"", "\"spectrum\" \"checkerboard\""),
-                "dir/main.pbrt:6: \"roughness\": texture \"check\" is a spectrum texture; a roughness needs a float texture",
+                "dir/main.pbrt:6: \"roughness\": texture \"check\" is a spectrum texture, not a float texture",
             ),
         ] {
             let e = convert_text(&t, false).unwrap_err().to_string();
