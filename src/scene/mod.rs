@@ -932,10 +932,16 @@ impl Scene {
             best_t = h.t;
             best = Some(Found::Triangle(slot as usize, h.u, h.v));
         }
-        if let Some((id, t)) = self
-            .shapes
-            .intersect(ray, t_min, best_t, |id, t_max| self.shape_hit(id, ray, t_min, t_max))
-        {
+        let shape = if self.alphas.is_empty() {
+            self.shapes.intersect(ray, t_min, best_t, |id, t_max| {
+                self.shape_hit::<false>(id, ray, t_min, t_max)
+            })
+        } else {
+            self.shapes.intersect(ray, t_min, best_t, |id, t_max| {
+                self.shape_hit::<true>(id, ray, t_min, t_max)
+            })
+        };
+        if let Some((id, t)) = shape {
             best_t = t;
             best = Some(Found::Shape(id));
         }
@@ -993,37 +999,48 @@ impl Scene {
     }
 
     /// Shape `id` of `shapes` (a sphere, then a disk): its hit in (t_min,
-    /// t_max), passing through where it is cut out.
+    /// t_max), passing through where it is cut out if `CUT` (when the scene
+    /// has cut-outs: without, the test is the plain one it always was).
     #[inline(always)]
-    fn shape_hit(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    fn shape_hit<const CUT: bool>(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         match self.spheres.get(id as usize) {
             Some(s) => {
                 let t = s.sphere.intersect(ray, t_min, t_max)?;
-                let Some(a) = s.alpha else {
-                    return Some(t);
-                };
-                let solid = |t: f32, side: u32| {
-                    let p = ray.at(t);
-                    let (uv, _) = s.uv_dpdu((p - s.sphere.centre) / s.sphere.radius);
-                    self.solid(a, uv, p, ray, [id, 1 + side])
-                };
-                if solid(t, 0) {
-                    return Some(t);
+                match s.alpha {
+                    Some(a) if CUT => self.cut_sphere_hit(s, a, id, ray, t, t_max),
+                    _ => Some(t),
                 }
-                // Through the near side, the ray may still meet the far one.
-                let far = s.sphere.intersect(ray, t, t_max)?;
-                solid(far, 1).then_some(far)
             }
             None => {
                 let d = &self.disks[id as usize - self.spheres.len()];
                 let t = d.disk.intersect(ray, t_min, t_max)?;
-                let Some(a) = d.alpha else {
-                    return Some(t);
-                };
-                let p = ray.at(t);
-                self.solid(a, d.disk.uv_dpdu(p).0, p, ray, [id, 3]).then_some(t)
+                match d.alpha {
+                    None => Some(t),
+                    Some(_) if !CUT => Some(t),
+                    Some(a) => {
+                        let p = ray.at(t);
+                        self.solid(a, d.disk.uv_dpdu(p).0, p, ray, [id, 3]).then_some(t)
+                    }
+                }
             }
         }
+    }
+
+    /// The hit on sphere `s` (shape `id`, under cut-out `alpha`) whose near
+    /// side the ray meets at `t`: there, or through it on the far side, or
+    /// none. Kept out of line: the uncut spheres' test stays small.
+    #[inline(never)]
+    fn cut_sphere_hit(&self, s: &SphereObject, alpha: u32, id: u32, ray: &Ray, t: f32, t_max: f32) -> Option<f32> {
+        let solid = |t: f32, side: u32| {
+            let p = ray.at(t);
+            let (uv, _) = s.uv_dpdu((p - s.sphere.centre) / s.sphere.radius);
+            self.solid(alpha, uv, p, ray, [id, 1 + side])
+        };
+        if solid(t, 0) {
+            return Some(t);
+        }
+        let far = s.sphere.intersect(ray, t, t_max)?;
+        solid(far, 1).then_some(far)
     }
 
     /// Whether a hit on triangle `slot` counts: it is not cut out there.
@@ -1043,6 +1060,7 @@ impl Scene {
     /// coordinates `uv`) on a primitive (`prim`: its index and kind, so that
     /// two cut-out surfaces along one ray decide independently) under
     /// cut-out `alpha` counts.
+    #[inline(never)]
     fn solid(&self, alpha: u32, uv: Vec2, p: Vec3, ray: &Ray, prim: [u32; 2]) -> bool {
         let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord { uv, p });
         if a >= 1.0 {
@@ -1197,9 +1215,7 @@ impl Scene {
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.shapes
-            .occluded(ray, t_min, t_max, |id| self.shape_hit(id, ray, t_min, t_max).is_some())
-            || self.triangles_block(ray, t_min, t_max)
+        self.shapes_block(ray, t_min, t_max, None) || self.triangles_block(ray, t_min, t_max)
     }
 
     /// Whether anything but light `light`'s own sphere (or disk) blocks the
@@ -1208,9 +1224,22 @@ impl Scene {
     /// point's distance is ill-conditioned (a tangent ray), and a relative
     /// epsilon on `t_max` then lets the light shadow itself.
     pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
-        self.shapes.occluded(ray, t_min, t_max, |id| {
-            self.shape_light(id) != Some(light) && self.shape_hit(id, ray, t_min, t_max).is_some()
-        }) || self.triangles_block(ray, t_min, t_max)
+        self.shapes_block(ray, t_min, t_max, Some(light)) || self.triangles_block(ray, t_min, t_max)
+    }
+
+    /// Whether a sphere or disk (other than light `but`'s) blocks the ray.
+    #[inline(always)]
+    fn shapes_block(&self, ray: &Ray, t_min: f32, t_max: f32, but: Option<u32>) -> bool {
+        let other = |id: u32| but.is_none() || self.shape_light(id) != but;
+        if self.alphas.is_empty() {
+            self.shapes.occluded(ray, t_min, t_max, |id| {
+                other(id) && self.shape_hit::<false>(id, ray, t_min, t_max).is_some()
+            })
+        } else {
+            self.shapes.occluded(ray, t_min, t_max, |id| {
+                other(id) && self.shape_hit::<true>(id, ray, t_min, t_max).is_some()
+            })
+        }
     }
 
     pub fn material(&self, id: u32) -> &Material {
