@@ -10,7 +10,7 @@
 use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
-use crate::texture::{TexCoord, Texture};
+use crate::texture::{TexCoord, TexImage, Texture, WrapMode};
 use std::sync::Arc;
 
 /// Microfacet roughness as pbrt-v4's materials take it: `uroughness` and
@@ -175,6 +175,16 @@ pub enum Material {
     /// A material whose surface is displaced along its normal by a float
     /// texture, for shading only (pbrt-v4's `displacement`: a bump map).
     Bumped { base: Box<Material>, displacement: Texture },
+    /// A material whose shading normal an image gives (pbrt-v4's
+    /// `normalmap`): each texel's linear RGB, times 2 minus 1, is the normal
+    /// in the frame of dp/du, n x dp/du and the normal n (dp/du x n when
+    /// `mirrored`: the scene was reflected, which turns the frame's
+    /// handedness), looked up at (u, 1 - v) with the image repeating.
+    NormalMapped {
+        base: Box<Material>,
+        map: Arc<TexImage>,
+        mirrored: bool,
+    },
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -239,6 +249,35 @@ impl SurfacePoint {
     }
 }
 
+impl SurfacePoint {
+    /// The point with the shading normal and dp/du of the normal map `map`,
+    /// as pbrt-v4's `NormalMap` gives them: the map's normal in the frame of
+    /// dp/du and the shading normal (left-handed if `mirrored`), dp/du made
+    /// perpendicular to it (its length kept), dp/dv their cross product.
+    /// Without shading geometry the point is returned as it is.
+    pub fn normal_mapped(&self, map: &TexImage, mirrored: bool) -> SurfacePoint {
+        let Some(g) = self.shading else {
+            return *self;
+        };
+        let texel = map.bilerp(Vec2::new(self.uv.x, 1.0 - self.uv.y), WrapMode::Repeat);
+        let local = (texel * 2.0 - Vec3::ONE).normalize_or_zero();
+        let x = g.dpdu.normalize_or_zero();
+        let y = if mirrored { x.cross(g.n) } else { g.n.cross(x) };
+        let ns = x * local.x + y * local.y + g.n * local.z;
+        let dpdu = (g.dpdu - ns * g.dpdu.dot(ns)).normalize_or_zero() * g.dpdu.length();
+        let dpdv = ns.cross(dpdu).normalize_or_zero() * g.dpdv.length();
+        let n = dpdu.cross(dpdv).normalize_or_zero();
+        if local == Vec3::ZERO || n == Vec3::ZERO || !n.is_finite() {
+            return *self;
+        }
+        SurfacePoint {
+            ns: if n.dot(self.ng) < 0.0 { -n } else { n },
+            dpdu,
+            ..*self
+        }
+    }
+}
+
 impl Material {
     pub fn diffuse(r: f32, g: f32, b: f32) -> Self {
         Material::Diffuse {
@@ -283,7 +322,7 @@ impl Material {
                 ..
             } => interface_roughness.is_smooth() && conductor_roughness.is_smooth(),
             Material::Mix { materials, .. } => materials.iter().all(Material::is_specular),
-            Material::Bumped { base, .. } => base.is_specular(),
+            Material::Bumped { base, .. } | Material::NormalMapped { base, .. } => base.is_specular(),
             _ => false,
         }
     }
@@ -293,7 +332,7 @@ impl Material {
     pub fn is_caustic_caster(&self) -> bool {
         match self {
             Material::Mix { materials, .. } => materials.iter().any(Material::is_caustic_caster),
-            Material::Bumped { base, .. } => base.is_caustic_caster(),
+            Material::Bumped { base, .. } | Material::NormalMapped { base, .. } => base.is_caustic_caster(),
             _ => matches!(
                 self,
                 Material::Conductor { .. }
@@ -305,11 +344,26 @@ impl Material {
         }
     }
 
-    /// Whether the material (or one it mixes) is bump mapped: its BSDF then
-    /// needs the surface point's `shading` geometry.
+    /// The material as it shades a reflected scene: normal maps turn their
+    /// frames' handedness (a bump map's normal follows from the reflected
+    /// surface itself).
+    pub fn reflect(&mut self) {
+        match self {
+            Material::NormalMapped { base, mirrored, .. } => {
+                *mirrored = !*mirrored;
+                base.reflect();
+            }
+            Material::Bumped { base, .. } => base.reflect(),
+            Material::Mix { materials, .. } => materials.iter_mut().for_each(Material::reflect),
+            _ => {}
+        }
+    }
+
+    /// Whether the material (or one it mixes) is bump or normal mapped: its
+    /// BSDF then needs the surface point's `shading` geometry.
     pub fn is_bumped(&self) -> bool {
         match self {
-            Material::Bumped { .. } => true,
+            Material::Bumped { .. } | Material::NormalMapped { .. } => true,
             Material::Mix { materials, .. } => materials.iter().any(Material::is_bumped),
             _ => false,
         }
@@ -339,6 +393,9 @@ impl Material {
         }
         if let Material::Bumped { base, displacement } = self {
             return base.bsdf(&sp.bumped(displacement), wo);
+        }
+        if let Material::NormalMapped { base, map, mirrored } = self {
+            return base.bsdf(&sp.normal_mapped(map, *mirrored), wo);
         }
         let bxdf = match self {
             Material::Diffuse { reflectance } => Bxdf::diffuse(reflectance.evaluate(&tc)),
@@ -383,7 +440,7 @@ impl Material {
                 transmittance,
             } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
             // Resolved above; a black surface if not.
-            Material::Mix { .. } | Material::Bumped { .. } => Bxdf::diffuse(Vec3::ZERO),
+            Material::Mix { .. } | Material::Bumped { .. } | Material::NormalMapped { .. } => Bxdf::diffuse(Vec3::ZERO),
         };
         let ns = if sp.ng.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
         if matches!(
@@ -521,6 +578,66 @@ mod tests {
         // Seen from below, the normal flips with the geometric one.
         let below = m.bsdf(&sp, -Vec3::Z).frame.z;
         assert!((below + Vec3::new(-2.0, 0.0, 1.0).normalize()).length() < 1e-4);
+    }
+
+    #[test]
+    fn a_normal_map_gives_the_shading_normal_in_the_frame_of_dpdu_and_the_normal() {
+        // A surface whose dp/du runs along y and dp/dv along -x (normal z):
+        // the map's x is the world's y, its y the world's -x.
+        let g = ShadingGeometry {
+            n: Vec3::Z,
+            dpdu: Vec3::Y * 2.0,
+            dpdv: -Vec3::X * 3.0,
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        };
+        let sp = SurfacePoint {
+            uv: Vec2::new(0.25, 0.75),
+            shading: Some(g),
+            ..point(Vec3::Z)
+        };
+        // Left texel (0.6, 0.5, 0.9): the local normal (0.2, 0, 0.8); right
+        // texel (0.5, 0.7, 0.9): (0, 0.4, 0.8). The image repeats.
+        let map = crate::texture::TexImage::from_pixels(
+            "normals",
+            2,
+            1,
+            vec![Vec3::new(0.6, 0.5, 0.9), Vec3::new(0.5, 0.7, 0.9)],
+        );
+        let left = sp.normal_mapped(&map, false);
+        let want = Vec3::new(0.0, 0.2, 0.8).normalize();
+        assert!((left.ns - want).length() < 1e-5, "{} against {want}", left.ns);
+        // dp/du keeps its length, perpendicular to the new normal.
+        assert!(left.dpdu.dot(left.ns).abs() < 1e-5 && (left.dpdu.length() - 2.0).abs() < 1e-5);
+        let right = SurfacePoint {
+            uv: Vec2::new(1.75, -0.25),
+            ..sp
+        }
+        .normal_mapped(&map, false);
+        let want = Vec3::new(-0.4, 0.0, 0.8).normalize();
+        assert!((right.ns - want).length() < 1e-5, "{} against {want}", right.ns);
+        // In a reflected scene the map's y is dp/du x n: here +x.
+        let mirrored = SurfacePoint {
+            uv: Vec2::new(1.75, -0.25),
+            ..sp
+        }
+        .normal_mapped(&map, true);
+        let want = Vec3::new(0.4, 0.0, 0.8).normalize();
+        assert!((mirrored.ns - want).length() < 1e-5, "{} against {want}", mirrored.ns);
+        // A flat map changes nothing; nor does any map without shading geometry.
+        let flat = crate::texture::TexImage::from_pixels("flat", 1, 1, vec![Vec3::new(0.5, 0.5, 1.0)]);
+        assert!((sp.normal_mapped(&flat, false).ns - Vec3::Z).length() < 1e-6);
+        assert_eq!(
+            SurfacePoint { shading: None, ..sp }.normal_mapped(&map, false).ns,
+            Vec3::Z
+        );
+        let m = Material::NormalMapped {
+            base: Box::new(Material::diffuse(0.5, 0.5, 0.5)),
+            map: std::sync::Arc::new(map),
+            mirrored: false,
+        };
+        assert!(m.is_bumped());
+        assert!((m.bsdf(&sp, Vec3::Z).frame.z - Vec3::new(0.0, 0.2, 0.8).normalize()).length() < 1e-5);
     }
 
     fn point_at(p: Vec3, n: Vec3) -> SurfacePoint {

@@ -120,6 +120,14 @@ pub struct TexImage {
     pub alpha: Option<Vec<f32>>,
 }
 
+/// Two images are equal when their files' bytes and encodings are: the hash
+/// says so (pixels made in code hash their values).
+impl PartialEq for TexImage {
+    fn eq(&self, o: &Self) -> bool {
+        self.hash == o.hash && self.width == o.width && self.height == o.height
+    }
+}
+
 impl std::fmt::Debug for TexImage {
     // Not the pixels: scene fingerprints hash a material's Debug form. Nor
     // the folder: the same scene read from another folder or machine (a

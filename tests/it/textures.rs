@@ -304,3 +304,55 @@ fn bad_materials_and_textures_are_one_line_errors_at_their_line() {
         assert!(!e.contains('\n'), "'{e}' is not one line");
     }
 }
+
+#[test]
+fn a_normal_map_beside_the_scene_tilts_the_shading_normal_of_any_material() {
+    let dir = tempfile::tempdir().unwrap();
+    // One texel (255, 128, 128): the normal tilted all the way along +dp/du.
+    image::save_buffer(dir.path().join("n.png"), &[255, 128, 128], 1, 1, image::ColorType::Rgb8).unwrap();
+    let text = format!(
+        "{CAMERA}\n[materials.tilted]\nnormal_map = \"n.png\"\n\
+         [materials.shiny]\ntype = \"conductor\"\nroughness = 0.2\nnormal_map = \"n.png\"\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"tilted\"\n\
+         vertices = [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]]\nuvs = [[0, 0], [1, 0], [1, 1], [0, 1]]\n"
+    );
+    let loaded = load(&write_scene(dir.path(), &text), &LoadOptions::default()).unwrap();
+    let get = |n: &str| loaded.desc.materials.iter().find(|(k, _)| k == n).unwrap().1.clone();
+    let Material::NormalMapped { base, map, .. } = get("shiny") else {
+        panic!("{:?}", get("shiny"))
+    };
+    assert!(matches!(*base, Material::Conductor { .. }));
+    // Read as linear values, not decoded as sRGB.
+    assert_eq!(map.pixels[0], Vec3::new(1.0, 128.0 / 255.0, 128.0 / 255.0));
+    // Seen by a ray, the quad's shading normal leans along dp/du (+x) as far
+    // as the map says: (2 x 1 - 1, 2 x 128/255 - 1, 2 x 128/255 - 1) normalised.
+    let scene = Scene::build(loaded.desc.clone()).unwrap();
+    let hit = scene
+        .intersect(&Ray::new(Vec3::new(0.2, -1.0, 0.3), Vec3::Y), 0.0, f32::INFINITY)
+        .unwrap();
+    let m = scene.material(hit.material);
+    let frame = m.bsdf(&scene.surface(&hit), -Vec3::Y).frame;
+    let e = 2.0 * 128.0 / 255.0 - 1.0;
+    let n = hit.ng * e + Vec3::new(1.0, 0.0, 0.0) + hit.ng.cross(Vec3::X) * e;
+    assert!(
+        (frame.z - n.normalize()).length() < 1e-4,
+        "{} against {}",
+        frame.z,
+        n.normalize()
+    );
+    // Errors at the key's line: a missing file, and a displacement as well.
+    for (extra, what) in [
+        ("[materials.bad]\nnormal_map = \"none.png\"\n", "image file"),
+        (
+            "[materials.bad]\nnormal_map = \"n.png\"\ndisplacement = 0.1\n",
+            "not both",
+        ),
+    ] {
+        let path = write_scene(dir.path(), &format!("{text}{extra}"));
+        let e = load(&path, &LoadOptions::default()).unwrap_err().to_string();
+        assert!(
+            e.contains("scene.toml:") && e.contains("normal_map") && e.contains(what),
+            "{e}"
+        );
+    }
+}

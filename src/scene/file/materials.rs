@@ -270,12 +270,9 @@ impl Resolver<'_> {
                     },
                 };
                 let path = dir.join(file);
-                let image = files.read_image(&path, encoding).map_err(|e| match e {
-                    crate::error::Error::Io { path, source } if source.kind() == std::io::ErrorKind::NotFound => {
-                        k.err(Some("file"), format!("image file {} not found", path.display()))
-                    }
-                    e => k.err(Some("file"), format!("cannot read the image: {e}")),
-                })?;
+                let image = files
+                    .read_image(&path, encoding)
+                    .map_err(|e| image_error(&k, "file", e))?;
                 Texture::Image(Arc::new(ImageTexture::new(image, &opts)))
             }
             other => {
@@ -312,10 +309,23 @@ pub(super) fn textures(
 const ROUGHNESS_KEYS: [&str; 4] = ["roughness", "uroughness", "vroughness", "remap_roughness"];
 
 /// The `[materials.NAME]` tables; colour parameters may name `textures`.
+/// An image that could not be read, as the error at `key`.
+fn image_error(k: &Keys, key: &str, e: crate::error::Error) -> crate::error::Error {
+    match e {
+        crate::error::Error::Io { path, source } if source.kind() == std::io::ErrorKind::NotFound => {
+            k.err(Some(key), format!("`{key}`: image file {} not found", path.display()))
+        }
+        e => k.err(Some(key), format!("`{key}`: cannot read the image: {e}")),
+    }
+}
+
+/// The `[materials.NAME]` tables; normal maps' image paths relative to `dir`.
 pub(super) fn materials(
     src: &Source,
     specs: &BTreeMap<String, Spanned<Table>>,
     textures: &BTreeMap<String, Arc<Texture>>,
+    dir: &Path,
+    files: &dyn FileSource,
 ) -> Result<BTreeMap<String, Material>> {
     let mut out = BTreeMap::new();
     for (name, spec) in specs {
@@ -324,9 +334,28 @@ pub(super) fn materials(
             table: spec.get_ref(),
             span: spec.span(),
             what: format!("material '{name}'"),
-            shared: &["displacement"],
+            shared: &["displacement", "normal_map"],
         };
-        out.insert(name.clone(), material(&k, textures)?);
+        let mut m = material(&k, textures)?;
+        // A normal map, over any type: an image of normals in the surface's
+        // (dp/du, n x dp/du, n) frame, read as linear RGB (pbrt-v4's `normalmap`).
+        if let Some(file) = k.string("normal_map")? {
+            if k.has("displacement") {
+                return Err(k.err(
+                    Some("normal_map"),
+                    "give `normal_map` or `displacement`, not both".into(),
+                ));
+            }
+            let map = files
+                .read_image(&dir.join(file), Encoding::Linear)
+                .map_err(|e| image_error(&k, "normal_map", e))?;
+            m = Material::NormalMapped {
+                base: Box::new(m),
+                map,
+                mirrored: false,
+            };
+        }
+        out.insert(name.clone(), m);
     }
     Ok(out)
 }

@@ -98,7 +98,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     // order of first use.
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let textures = materials::textures(&src, &file.textures, &dir, files)?;
-    let materials = materials::materials(&src, &file.materials, &textures)?;
+    let materials = materials::materials(&src, &file.materials, &textures, &dir, files)?;
     for l in &file.lights {
         for light in light(&src, l)? {
             light.check(1.0).map_err(|m| src.error(l.span(), m))?;

@@ -1148,35 +1148,6 @@ impl<'a> Conv<'a> {
             (None, Some(l)) => format!("{} ({})", m.ty, l.file_line()),
             (None, None) => "default".into(),
         };
-        // Bump and normal maps only perturb the shading normal: a lenient
-        // render keeps the material and drops them (pbrt-v4's look, flatter).
-        // A mix's materials included: the one chosen at a point brings its own.
-        let mut with_parts = vec![m];
-        let mut i = 0;
-        while i < with_parts.len() && with_parts.len() <= MAX_MIX_DEPTH as usize * 2 {
-            let part = with_parts[i];
-            i += 1;
-            if part.ty == "mix" {
-                for name in part.params.get_strings("materials") {
-                    if let Some(p) = scene.named_materials.get(name).and_then(|&j| scene.materials.get(j)) {
-                        if !with_parts.iter().any(|q| std::ptr::eq(*q, p)) {
-                            with_parts.push(p);
-                        }
-                    }
-                }
-            }
-            for (n, what) in [("normalmap", "a normal map")] {
-                if let Some(param) = part.params.get(n) {
-                    let label = match &part.name {
-                        Some(n) => format!("material \"{n}\" (type \"{}\")", part.ty),
-                        None => format!("material of type \"{}\"", part.ty),
-                    };
-                    let at = param.loc.clone();
-                    part.params.mark_used(n, param.ty);
-                    self.problem(Kind::Other, &at, format!("{label}: {what} is not supported"));
-                }
-            }
-        }
         let mut approximated = vec![];
         let converted = match convert_material(scene, &m.ty, &m.params, &loc, &mut approximated)? {
             Ok(mat) => {
@@ -1478,7 +1449,8 @@ fn convert_material(
     convert_nested(scene, ty, p, loc, 0, approximated)
 }
 
-/// `convert_material` of a material `depth` mixes deep, with its bump map.
+/// `convert_material` of a material `depth` mixes deep, with its normal or
+/// bump map (the normal map wins where both are given, as in pbrt-v4).
 fn convert_nested(
     scene: &PbrtScene,
     ty: &str,
@@ -1491,6 +1463,22 @@ fn convert_nested(
         Ok(m) => m,
         Err(why) => return Ok(Err(why)),
     };
+    if let Some(file) = p.get_string("normalmap")? {
+        // Read as linear RGB, whatever the file, as pbrt-v4 reads it.
+        let at = place(p, "normalmap", loc).clone();
+        let Some(path) = scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(PbrtError::at(&at, format!("normal map \"{file}\" not found")).into());
+        };
+        let map = crate::texture::load_image(&path, crate::texture::Encoding::Linear)
+            .map_err(|e| located(&at, format!("normal map: {e}")))?;
+        p.mark_used("displacement", super::ParamType::Float);
+        p.mark_used("displacement", super::ParamType::Texture);
+        return Ok(Ok(Material::NormalMapped {
+            base: Box::new(base),
+            map,
+            mirrored: false,
+        }));
+    }
     let displacement = match float_or_texture(scene, p, "displacement", "", loc)? {
         Ok(Some(t)) => t,
         Ok(None) => return Ok(Ok(base)),
@@ -2227,6 +2215,9 @@ fn reflect(desc: &mut SceneDesc) {
         if let Some([a, b, c]) = t.uvs {
             t.uvs = Some([a, c, b]);
         }
+    }
+    for (_, m) in &mut desc.materials {
+        m.reflect();
     }
     for s in &mut desc.spheres {
         s.sphere.centre = point(s.sphere.centre);

@@ -1417,7 +1417,7 @@ fn interface_and_none_materials_make_no_surface() {
 }
 
 #[test]
-fn bump_maps_wrap_their_material_and_normal_maps_are_refused_or_with_lenient_dropped() {
+fn bump_maps_wrap_their_material_even_in_a_mix() {
     use crate::material::Material;
     let text = "WorldBegin\nTexture \"b\" \"float\" \"constant\" \"float value\" 0.1\n\
                 MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"texture displacement\" \"b\"\n\
@@ -1444,23 +1444,44 @@ fn bump_maps_wrap_their_material_and_normal_maps_are_refused_or_with_lenient_dro
         matches!(materials[0], Material::Diffuse { .. }) && materials[1].is_bumped(),
         "{m:?}"
     );
-    // Normal maps are not supported: refused at their place; with --lenient
-    // the material stays, without its normal map.
+    // A normal map that is not there is an error at its place.
     let text = "WorldBegin\nMakeNamedMaterial \"gold\" \"string type\" \"conductor\"\n\
                 \"string normalmap\" \"n.png\"\nNamedMaterial \"gold\"\nShape \"sphere\"\n";
     let e = converted(text, Files::default(), false).unwrap_err();
     assert!(
-        e.starts_with("scene/main.pbrt:3: material \"gold\" (type \"conductor\"): a normal map is not supported"),
+        e.starts_with("scene/main.pbrt:3: normal map \"n.png\" not found"),
         "{e}"
     );
-    let c = converted(text, Files::default(), true).unwrap();
-    assert!(matches!(material(&c, "gold"), Material::Conductor { .. }));
-    assert!(
-        c.warnings.iter().any(|w| w.contains("1 unsupported features ignored")),
-        "{:?}",
-        c.warnings
-    );
-    assert!(!c.warnings.iter().any(|w| w.contains("not used")), "{:?}", c.warnings);
+}
+
+#[test]
+fn a_normal_map_wraps_its_material_read_as_linear_rgb() {
+    use crate::material::Material;
+    let dir = tempfile::tempdir().unwrap();
+    // One texel, (128, 64, 255): linear, as pbrt-v4 reads every normal map.
+    ::image::save_buffer(
+        dir.path().join("n.png"),
+        &[128, 64, 255],
+        1,
+        1,
+        ::image::ColorType::Rgb8,
+    )
+    .unwrap();
+    let file = dir.path().join("main.pbrt");
+    std::fs::write(
+        &file,
+        "WorldBegin\nMakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"string normalmap\" \"n.png\" \
+         \"float displacement\" 0.5\nNamedMaterial \"gold\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let loaded = crate::scene::load(file.to_str().unwrap(), &Default::default()).unwrap();
+    let m = &loaded.desc.materials.iter().find(|(n, _)| n == "gold").unwrap().1;
+    // The normal map wins over the displacement, as in pbrt-v4.
+    let Material::NormalMapped { base, map, .. } = m else {
+        panic!("{m:?}")
+    };
+    assert!(matches!(**base, Material::Conductor { .. }), "{base:?}");
+    assert_eq!(map.pixels[0], Vec3::new(128.0, 64.0, 255.0) / 255.0);
 }
 
 #[test]
