@@ -112,10 +112,12 @@ pub struct RenderArgs {
     /// Output image; the extension picks the format: .png (8-bit sRGB), .exr or .pfm (linear radiance).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
-    /// Image width in pixels [default: the scene's: 512 for cornell and cornell-bunny, 600 for cornell-final].
+    /// Image width in pixels; given alone, the height follows the scene's aspect ratio [default: the scene's: 512
+    /// for cornell and cornell-bunny, 600 for cornell-final].
     #[arg(long)]
     pub width: Option<u32>,
-    /// Image height in pixels [default: the scene's: 512 for cornell and cornell-bunny, 600 for cornell-final].
+    /// Image height in pixels; given alone, the width follows the scene's aspect ratio [default: the scene's: 512
+    /// for cornell and cornell-bunny, 600 for cornell-final].
     #[arg(long)]
     pub height: Option<u32>,
     /// Radius of the sphere light, overriding the scene's; 0 makes it a point light (hard shadows) [default: the
@@ -297,7 +299,21 @@ pub fn prepare(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
 pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSettings)> {
     let mut loaded = load_scene(&args.scene)?;
     let (w, h) = (loaded.desc.camera.width, loaded.desc.camera.height);
-    loaded.set_resolution(args.width.unwrap_or(w), args.height.unwrap_or(h));
+    // One side given: the other keeps the scene's aspect ratio, so that a
+    // smaller render of a 1280 x 720 file is the same picture at 320 x 180.
+    let follow = |side: u32, new: u32, old: u32| -> u32 {
+        if old == 0 {
+            return side;
+        }
+        let scaled = (side as u64 * new as u64 + old as u64 / 2) / old as u64;
+        scaled.clamp(1, u32::MAX as u64) as u32
+    };
+    let (width, height) = match (args.width, args.height) {
+        (Some(nw), None) => (nw, follow(h, nw, w)),
+        (None, Some(nh)) => (follow(w, nh, h), nh),
+        (nw, nh) => (nw.unwrap_or(w), nh.unwrap_or(h)),
+    };
+    loaded.set_resolution(width, height);
     let file_crop = loaded.crop_rect();
     let desc = &mut loaded.desc;
     let (w, h) = (desc.camera.width, desc.camera.height);

@@ -418,6 +418,30 @@ fn width_and_height_options_frame_a_pbrt_scene_as_pbrt_would() {
     }
 }
 
+#[test]
+fn width_or_height_alone_keeps_the_scenes_aspect_ratio() {
+    let dir = tempfile::tempdir().unwrap();
+    // The file's film is 1280 x 720.
+    let path = framing_scene(dir.path(), 1.25);
+    for (size, want) in [(["--width", "64"], (64, 36)), (["--height", "45"], (80, 45))] {
+        let out = dir.path().join("out.pfm");
+        let mut args = vec![
+            "--scene",
+            path.to_str().unwrap(),
+            "--spp",
+            "1",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(size);
+        let o = raytracer(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = read_image(&out).unwrap();
+        assert_eq!((img.width, img.height), want, "{size:?}");
+    }
+}
+
 /// Renders, with direct light only, a few pixels around the origin of a
 /// diffuse floor (reflectance 0.5, the plane y = 0) under a disk light of
 /// radius 0.5 at height 1 whose pbrt normal points down; `light` holds the
