@@ -67,27 +67,7 @@ impl Texture {
     }
 
     fn evaluate_varying(&self, tc: &TexCoord) -> Vec3 {
-        match self {
-            Texture::Constant(v) => *v,
-            Texture::Checkerboard {
-                even,
-                odd,
-                u_scale,
-                v_scale,
-            } => {
-                if checker_parity_even(tc, *u_scale, *v_scale) {
-                    even.evaluate(tc)
-                } else {
-                    odd.evaluate(tc)
-                }
-            }
-            Texture::Scale { tex, scale } => tex.evaluate(tc) * scale.evaluate(tc),
-            Texture::Mix { a, b, amount } => {
-                let t = amount.evaluate_scalar(tc);
-                a.evaluate(tc) * (1.0 - t) + b.evaluate(tc) * t
-            }
-            Texture::Image(img) => img.evaluate(tc.uv),
-        }
+        self.eval(tc)
     }
 
     /// The value of a scalar texture, as pbrt-v4's float textures compute it:
@@ -96,32 +76,34 @@ impl Texture {
     /// ([`ImageTexture::evaluate_scalar`]), and scale, mix and checkerboard
     /// combine their parts' scalar values.
     pub fn evaluate_scalar(&self, tc: &TexCoord) -> f32 {
+        self.eval(tc)
+    }
+
+    /// The texture's value as a colour or as a number: the tree is walked
+    /// alike, the leaves give one or the other.
+    fn eval<V: TexValue>(&self, tc: &TexCoord) -> V {
         match self {
-            Texture::Constant(v) => {
-                if v.x == v.y && v.y == v.z {
-                    v.x
-                } else {
-                    (v.x + v.y + v.z) / 3.0
-                }
-            }
+            Texture::Constant(v) => V::constant(*v),
             Texture::Checkerboard {
                 even,
                 odd,
                 u_scale,
                 v_scale,
             } => {
-                if checker_parity_even(tc, *u_scale, *v_scale) {
-                    even.evaluate_scalar(tc)
+                let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
+                // Parity of the square; rem_euclid keeps negative coordinates alternating too.
+                if (su + sv).rem_euclid(2.0) == 0.0 {
+                    even.eval(tc)
                 } else {
-                    odd.evaluate_scalar(tc)
+                    odd.eval(tc)
                 }
             }
-            Texture::Scale { tex, scale } => tex.evaluate_scalar(tc) * scale.evaluate_scalar(tc),
+            Texture::Scale { tex, scale } => tex.eval::<V>(tc) * scale.eval::<V>(tc),
             Texture::Mix { a, b, amount } => {
-                let t = amount.evaluate_scalar(tc);
-                a.evaluate_scalar(tc) * (1.0 - t) + b.evaluate_scalar(tc) * t
+                let t: f32 = amount.eval(tc);
+                a.eval::<V>(tc) * (1.0 - t) + b.eval::<V>(tc) * t
             }
-            Texture::Image(img) => img.evaluate_scalar(tc.uv),
+            Texture::Image(img) => V::image(img, tc.uv),
         }
     }
 
@@ -146,12 +128,35 @@ impl Texture {
     }
 }
 
-/// Whether `tc` lies in an even square of a checkerboard of `u_scale` x
-/// `v_scale` squares per unit of (u, v).
-fn checker_parity_even(tc: &TexCoord, u_scale: f32, v_scale: f32) -> bool {
-    let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
-    // Parity of the square; rem_euclid keeps negative coordinates alternating too.
-    (su + sv).rem_euclid(2.0) == 0.0
+/// What a texture evaluates to: a colour, or a number (a float texture's).
+trait TexValue:
+    Copy + std::ops::Mul<Output = Self> + std::ops::Mul<f32, Output = Self> + std::ops::Add<Output = Self>
+{
+    fn constant(v: Vec3) -> Self;
+    fn image(img: &ImageTexture, uv: Vec2) -> Self;
+}
+
+impl TexValue for Vec3 {
+    fn constant(v: Vec3) -> Self {
+        v
+    }
+    fn image(img: &ImageTexture, uv: Vec2) -> Self {
+        img.evaluate(uv)
+    }
+}
+
+impl TexValue for f32 {
+    /// The mean of the channels, exactly the value of a grey colour.
+    fn constant(v: Vec3) -> Self {
+        if v.x == v.y && v.y == v.z {
+            v.x
+        } else {
+            (v.x + v.y + v.z) / 3.0
+        }
+    }
+    fn image(img: &ImageTexture, uv: Vec2) -> Self {
+        img.evaluate_scalar(uv)
+    }
 }
 
 impl Texture {
