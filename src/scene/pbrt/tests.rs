@@ -1449,7 +1449,7 @@ fn bump_maps_wrap_their_material_even_in_a_mix() {
                 \"string normalmap\" \"n.png\"\nNamedMaterial \"gold\"\nShape \"sphere\"\n";
     let e = converted(text, Files::default(), false).unwrap_err();
     assert!(
-        e.starts_with("scene/main.pbrt:3: normal map \"n.png\" not found"),
+        e.starts_with("scene/main.pbrt:3: column 1: normal map \"n.png\" not found"),
         "{e}"
     );
 }
