@@ -247,6 +247,27 @@ Shape "plymesh" "string filename" "mesh.ply"
     "property float z\nproperty float u\nproperty float v\nelement face 1\n"
     "property list uchar int vertex_indices\nproperty int face_indices\nend_header\n"
     "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2 0\n")
+put("pbrt", "cutouts.pbrt", """LookAt 0 1 -4  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 16 ] "integer yresolution" [ 12 ]
+WorldBegin
+LightSource "distant" "point3 from" [ 1 4 -3 ] "point3 to" [ 0 0 0 ] "rgb L" [ 3 3 3 ]
+Texture "stripes" "float" "checkerboard" "float uscale" [ 8 ] "float vscale" [ 1 ]
+    "float tex1" [ 1 ] "float tex2" [ 0 ]
+Material "diffuse" "rgb reflectance" [ 0.6 0.6 0.6 ] "texture displacement" "stripes"
+Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ] "point2 uv" [ 0 0 1 0 1 1 0 1 ]
+    "integer indices" [ 0 1 2 0 2 3 ] "texture alpha" "stripes"
+AttributeBegin
+Translate 0.5 0.5 0
+Rotate 30 0 1 0
+Shape "sphere" "float radius" [ 0.5 ] "texture alpha" "stripes"
+AttributeEnd
+Shape "disk" "float radius" [ 0.3 ] "float alpha" [ 0.5 ]
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 2 2 2 ]
+Shape "sphere" "float radius" [ 0.1 ] "float alpha" [ 0.25 ]
+AttributeEnd
+""")
 put("pbrt", "mix-spectrum-file.pbrt", """Option "seed" 3
 LookAt 0 0 -4  0 0 0  0 1 0
 Camera "perspective" "float fov" [ 40 ] "float shutterclose" [ 0.5 ]

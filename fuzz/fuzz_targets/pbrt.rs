@@ -1,8 +1,8 @@
 //! pbrt-v4 scene files through the library's pbrt reader
 //! (`scene::pbrt::parse_bytes`), the converter (`pbrt::convert::convert`,
 //! lenient, so that unsupported features are skipped rather than ending the
-//! run early), the film's crop at a few sizes, and into a built scene (BVH
-//! included).
+//! run early), the film's crop at a few sizes, into a built scene (BVH
+//! included), and a few camera rays into that: hits, shadow tests, BSDFs.
 //!
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
@@ -60,6 +60,19 @@ fuzz_target!(|data: &[u8]| {
                 let _ = crop.rect(w, h);
             }
         }
-        let _ = Scene::build(converted.desc);
+        let Ok(scene) = Scene::build(converted.desc) else {
+            return;
+        };
+        // A few camera rays into it: hits (through cut-outs), shadow tests
+        // and the BSDF at each hit (bump and normal maps included).
+        let c = &scene.camera;
+        let (w, h) = (c.width as f32, c.height as f32);
+        for (x, y) in [(0.5, 0.5), (w * 0.5, h * 0.5), (w - 0.5, h - 0.5), (w * 0.25, h * 0.75)] {
+            let ray = c.generate_ray(x, y);
+            if let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
+                let _ = scene.occluded(&ray, 0.0, hit.t);
+                let _ = scene.material(hit.material).bsdf(&scene.surface(&hit), -ray.d);
+            }
+        }
     }
 });
