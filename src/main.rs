@@ -358,6 +358,21 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         scene.desc.spheres.len(),
         scene.desc.disks.len()
     );
+    if !scene.desc.cutouts.is_empty() {
+        use raytracer::scene::CutShapes;
+        let (mut tris, mut spheres, mut disks) = (0, 0, 0);
+        for c in &scene.desc.cutouts {
+            match &c.shapes {
+                CutShapes::Triangles(r) => tris += r.len(),
+                CutShapes::Sphere(_) => spheres += 1,
+                CutShapes::Disk(_) => disks += 1,
+            }
+        }
+        println!(
+            "cut out by alpha textures: {} shapes ({tris} triangles, {spheres} spheres, {disks} disks)",
+            scene.desc.cutouts.len()
+        );
+    }
     // Lights by kind, in the order kinds first appear.
     let mut kinds: Vec<(&str, usize)> = vec![];
     for l in &scene.lights {

@@ -830,6 +830,12 @@ fn an_alpha_cut_out_lets_light_and_sight_through_in_proportion() {
     // An image's alpha channel: cut out on the left half of the screen
     // (u < 1/2, world x < 0: the picture's left), solid on the right.
     let masked = wall_behind_screen(dir.path(), "masked", "\"texture alpha\" \"mask\"");
+    let info = raytracer(&["info", "--scene", dir.path().join("masked.pbrt").to_str().unwrap()]);
+    let info = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        info.contains("cut out by alpha textures: 1 shapes (2 triangles, 0 spheres, 0 disks)"),
+        "{info}"
+    );
     for r in 0..32 {
         for c in (0..16).chain(24..40) {
             let want = if c < 20 { lit } else { 0.0 };
