@@ -237,6 +237,14 @@ impl SurfacePoint {
         let along_v = at(self.uv + Vec2::new(0.0, h), self.p + g.dpdv * h);
         let dpdu = g.dpdu + g.n * ((along_u - here) / h) + g.dndu * here;
         let dpdv = g.dpdv + g.n * ((along_v - here) / h) + g.dndv * here;
+        self.shaded_by(dpdu, dpdv)
+    }
+
+    /// The point shaded by the surface whose derivatives are `dpdu` and
+    /// `dpdv` (pbrt-v4's `SetShadingGeometry` after a bump or normal map):
+    /// the shading normal their cross product, on the geometric normal's
+    /// side. Where they degenerate the point is returned as it is.
+    fn shaded_by(&self, dpdu: Vec3, dpdv: Vec3) -> SurfacePoint {
         let n = dpdu.cross(dpdv).normalize_or_zero();
         if n == Vec3::ZERO || !n.is_finite() || !dpdu.is_finite() {
             return *self;
@@ -247,9 +255,7 @@ impl SurfacePoint {
             ..*self
         }
     }
-}
 
-impl SurfacePoint {
     /// The point with the shading normal and dp/du of the normal map `map`,
     /// as pbrt-v4's `NormalMap` gives them: the map's normal in the frame of
     /// dp/du and the shading normal (left-handed if `mirrored`), dp/du made
@@ -261,20 +267,15 @@ impl SurfacePoint {
         };
         let texel = map.bilerp(Vec2::new(self.uv.x, 1.0 - self.uv.y), WrapMode::Repeat);
         let local = (texel * 2.0 - Vec3::ONE).normalize_or_zero();
+        if local == Vec3::ZERO {
+            return *self;
+        }
         let x = g.dpdu.normalize_or_zero();
         let y = if mirrored { x.cross(g.n) } else { g.n.cross(x) };
         let ns = x * local.x + y * local.y + g.n * local.z;
         let dpdu = (g.dpdu - ns * g.dpdu.dot(ns)).normalize_or_zero() * g.dpdu.length();
         let dpdv = ns.cross(dpdu).normalize_or_zero() * g.dpdv.length();
-        let n = dpdu.cross(dpdv).normalize_or_zero();
-        if local == Vec3::ZERO || n == Vec3::ZERO || !n.is_finite() {
-            return *self;
-        }
-        SurfacePoint {
-            ns: if n.dot(self.ng) < 0.0 { -n } else { n },
-            dpdu,
-            ..*self
-        }
+        self.shaded_by(dpdu, dpdv)
     }
 }
 
