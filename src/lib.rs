@@ -15,6 +15,7 @@ pub mod light;
 pub mod limits;
 pub mod material;
 pub mod math;
+pub mod medium;
 pub mod metrics;
 pub mod photon;
 pub mod sampling;

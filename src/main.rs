@@ -358,19 +358,40 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         scene.desc.spheres.len(),
         scene.desc.disks.len()
     );
-    if !scene.desc.cutouts.is_empty() {
+    // Triangles, spheres and disks among sets of shapes.
+    let count = |sets: &mut dyn Iterator<Item = &raytracer::scene::CutShapes>| {
         use raytracer::scene::CutShapes;
         let (mut tris, mut spheres, mut disks) = (0, 0, 0);
-        for c in &scene.desc.cutouts {
-            match &c.shapes {
+        for set in sets {
+            match set {
                 CutShapes::Triangles(r) => tris += r.len(),
                 CutShapes::Sphere(_) => spheres += 1,
                 CutShapes::Disk(_) => disks += 1,
             }
         }
+        format!("{tris} triangles, {spheres} spheres, {disks} disks")
+    };
+    if !scene.desc.cutouts.is_empty() {
         println!(
-            "cut out by alpha textures: {} shapes ({tris} triangles, {spheres} spheres, {disks} disks)",
-            scene.desc.cutouts.len()
+            "cut out by alpha textures: {} shapes ({})",
+            scene.desc.cutouts.len(),
+            count(&mut scene.desc.cutouts.iter().map(|c| &c.shapes))
+        );
+    }
+    for (name, m) in &scene.desc.media {
+        println!(
+            "medium \"{name}\": homogeneous, sigma_a {}, sigma_s {}, g {}",
+            m.sigma_a, m.sigma_s, m.g
+        );
+    }
+    if !scene.desc.media.is_empty() {
+        let camera = match scene.desc.camera_medium {
+            Some(i) => format!("in \"{}\"", scene.desc.media[i as usize].0),
+            None => "in vacuum".into(),
+        };
+        println!(
+            "media bounded by {}; the camera {camera}",
+            count(&mut scene.desc.boundaries.iter().map(|b| &b.shapes))
         );
     }
     // Lights by kind, in the order kinds first appear.

@@ -185,6 +185,9 @@ pub enum Material {
         map: Arc<TexImage>,
         mirrored: bool,
     },
+    /// No surface at all (pbrt-v4's `interface`): the shape only bounds
+    /// participating media, and rays pass through it. Its BSDF has no lobes.
+    Interface,
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -442,6 +445,8 @@ impl Material {
             } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
             // Resolved above; a black surface if not.
             Material::Mix { .. } | Material::Bumped { .. } | Material::NormalMapped { .. } => Bxdf::diffuse(Vec3::ZERO),
+            // No lobes: integrators that do not pass through it see black.
+            Material::Interface => Bxdf::diffuse(Vec3::ZERO),
         };
         let ns = if sp.ng.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
         if matches!(

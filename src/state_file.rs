@@ -208,6 +208,11 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(b"cutouts");
         h.bytes(format!("{:?}", desc.cutouts).as_bytes());
     }
+    // So did media, likewise.
+    if !desc.media.is_empty() {
+        h.bytes(b"media");
+        h.bytes(format!("{:?} {:?} {:?}", desc.media, desc.camera_medium, desc.boundaries).as_bytes());
+    }
     if camera {
         let c = &desc.camera;
         h.vec3(c.position);
@@ -593,5 +598,38 @@ mod tests {
             change(&mut c.disks[0]);
             assert_ne!(scene_fingerprint(&c, false), fb);
         }
+    }
+
+    #[test]
+    fn scene_fingerprint_sees_media_and_their_boundaries() {
+        use crate::math::Vec3;
+        use crate::medium::{Medium, MediumInterface};
+        use crate::scene::{Boundary, CutShapes};
+        let a = crate::scene::builtin::cornell();
+        let mut b = a.clone();
+        let fog = Medium {
+            sigma_a: Vec3::splat(0.1),
+            sigma_s: Vec3::splat(0.2),
+            g: 0.0,
+        };
+        b.media.push(("fog".into(), fog));
+        b.camera_medium = Some(0);
+        let fb = scene_fingerprint(&b, false);
+        assert_ne!(scene_fingerprint(&a, false), fb);
+        let mut c = b.clone();
+        c.media[0].1.g = 0.1;
+        assert_ne!(scene_fingerprint(&c, false), fb);
+        let mut c = b.clone();
+        c.camera_medium = None;
+        assert_ne!(scene_fingerprint(&c, false), fb);
+        let mut c = b.clone();
+        c.boundaries.push(Boundary {
+            interface: MediumInterface {
+                inside: Some(0),
+                outside: None,
+            },
+            shapes: CutShapes::Triangles(0..2),
+        });
+        assert_ne!(scene_fingerprint(&c, false), fb);
     }
 }

@@ -30,6 +30,11 @@ fn inside_camera(size: u32) -> CameraDesc {
 /// The inside of a sphere of radius 1 at the origin, of the given material,
 /// with an optional sphere light (radius, power) at its centre.
 pub fn closed_sphere(material: Material, light: Option<(f32, f32)>, size: u32) -> Scene {
+    Scene::build(closed_sphere_desc(material, light, size)).unwrap()
+}
+
+/// `closed_sphere`'s description.
+pub fn closed_sphere_desc(material: Material, light: Option<(f32, f32)>, size: u32) -> SceneDesc {
     let mut d = empty(inside_camera(size));
     let m = d.material("wall", material);
     d.spheres.push(SphereDesc {
@@ -49,7 +54,50 @@ pub fn closed_sphere(material: Material, light: Option<(f32, f32)>, size: u32) -
             power: Vec3::splat(power),
         });
     }
-    Scene::build(d).unwrap()
+    d
+}
+
+/// A grey floor (albedo 0.5, the plane z = 0) under a one-sided 1 x 1 quad
+/// light of radiance 2 facing down at height 1, over [0, 1]^2, seen from
+/// (0, 0, 3).
+pub fn floor_under_quad() -> SceneDesc {
+    let camera = CameraDesc {
+        position: Vec3::new(0.0, 0.0, 3.0),
+        look_at: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        width: 8,
+        height: 8,
+        window: None,
+        lens: None,
+        orthographic: None,
+    };
+    let mut d = SceneDesc::empty("floor", camera);
+    let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+    d.triangles.push(TriangleDesc {
+        vertices: [
+            Vec3::new(-9.0, -9.0, 0.0),
+            Vec3::new(9.0, -9.0, 0.0),
+            Vec3::new(0.0, 9.0, 0.0),
+        ],
+        normals: None,
+        uvs: None,
+        material: grey,
+    });
+    let (a, b, c, e) = (
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+    );
+    for vertices in [[a, b, c], [a, c, e]] {
+        d.lights.push(Light::Triangle {
+            vertices,
+            radiance: Vec3::splat(2.0),
+            two_sided: false,
+        });
+    }
+    d
 }
 
 /// A closed cube [-1, 1]^3 of 12 triangles of one grey albedo, lit by `light`.

@@ -212,6 +212,21 @@ pub fn direct_radiance(scene: &Scene, v: &DiffuseVertex, n: u32, sampler: &mut S
     l
 }
 
+/// Whether the BSDF at a hit can scatter light arriving along `wi` towards
+/// `wo`: reflection on the viewer's side, transmission on the other, the
+/// geometric and shading normals agreeing.
+pub fn scatters_towards(hit: &Hit, wo: Vec3, bsdf: &Bsdf, wi: Vec3) -> bool {
+    let flags = bsdf.flags();
+    let geo_same = (wi.dot(hit.ng) > 0.0) == (wo.dot(hit.ng) > 0.0);
+    let shade_same = (wi.dot(bsdf.frame.z) > 0.0) == (wo.dot(bsdf.frame.z) > 0.0);
+    let allowed = if geo_same {
+        flags.is_reflective() && shade_same
+    } else {
+        flags.is_transmissive() && !shade_same
+    };
+    allowed && wi.dot(hit.ng) != 0.0
+}
+
 /// One shadow ray towards light `li`, sampled with `u`, from a hit seen from
 /// `wo`: the light sample, when the BSDF can scatter light from there
 /// (reflection on the viewer's side, transmission on the other; the geometric
@@ -226,15 +241,7 @@ pub fn unoccluded_light_sample(
     stats: &mut RayStats,
 ) -> Option<LightSample> {
     let ls = scene.lights[li].sample_li(hit.p, u)?;
-    let flags = bsdf.flags();
-    let geo_same = (ls.wi.dot(hit.ng) > 0.0) == (wo.dot(hit.ng) > 0.0);
-    let shade_same = (ls.wi.dot(bsdf.frame.z) > 0.0) == (wo.dot(bsdf.frame.z) > 0.0);
-    let allowed = if geo_same {
-        flags.is_reflective() && shade_same
-    } else {
-        flags.is_transmissive() && !shade_same
-    };
-    if !allowed || ls.wi.dot(hit.ng) == 0.0 {
+    if !scatters_towards(hit, wo, bsdf, ls.wi) {
         return None;
     }
     // Aim from the offset origin at the sampled point itself: a ray parallel

@@ -12,6 +12,7 @@ pub mod direct;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+pub mod volpath;
 
 use crate::error::{Error, Result};
 use crate::film::{Film, FrameWindow, PixelRect, PixelSum, SplatBlock};
@@ -198,6 +199,7 @@ pub fn render_observed(
     on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
 ) -> Result<RenderOutput> {
     settings.validate()?;
+    check_media(scene, settings.integrator)?;
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
     let tiles_total = tile_count(window.rect.width(), window.rect.height());
@@ -249,6 +251,18 @@ pub fn render_observed(
         photons,
         passes,
     })
+}
+
+/// Participating media are rendered by the path tracer alone (photons do
+/// not yet travel through them): other integrators refuse such scenes.
+pub fn check_media(scene: &Scene, integrator: IntegratorKind) -> Result<()> {
+    if scene.has_media() && integrator != IntegratorKind::Path {
+        return Err(crate::Error::InvalidSetting(format!(
+            "integrator \"{}\": the scene has participating media, which only the path tracer renders (--integrator path)",
+            integrator.name()
+        )));
+    }
+    Ok(())
 }
 
 /// Ticks `render` gives its `on_tile` callback in all: one per tile, per

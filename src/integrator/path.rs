@@ -52,9 +52,9 @@ const MIN_SAMPLES_PER_PASS: u32 = 4;
 /// Roulette starts after this many bounces: Mitsuba's `rr_depth` of 5 rather
 /// than pbrt-v4's 2, since the noise the longer paths save outweighs their
 /// time (BENCHMARKS.md, "Low-discrepancy samples and roulette depth").
-const ROULETTE_DEPTH: u32 = 5;
+pub(super) const ROULETTE_DEPTH: u32 = 5;
 /// Survival probability cap, so that paths in a white furnace end too.
-const MAX_SURVIVAL: f32 = 0.95;
+pub(super) const MAX_SURVIVAL: f32 = 0.95;
 
 pub struct PathTracer {
     /// Most bounces: emission is counted up to this many bounces, next-event
@@ -65,6 +65,9 @@ pub struct PathTracer {
 
 impl RadianceEstimator for PathTracer {
     fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+        if scene.has_media() {
+            return super::volpath::li(self, scene, camera_ray, sampler, stats);
+        }
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
         let mut ray = *camera_ray;
@@ -430,56 +433,12 @@ mod tests {
         assert!((mean - expected).abs() / expected < 0.01, "{mean} vs {expected}");
     }
 
-    /// A grey floor under a one-sided 1 x 1 quad light at height 1, seen
-    /// straight down at the point under the light's corner.
-    fn floor_under_quad() -> crate::Scene {
-        use crate::light::Light;
-        use crate::scene::{CameraDesc, SceneDesc, TriangleDesc};
-        let camera = CameraDesc {
-            position: Vec3::new(0.0, 0.0, 3.0),
-            look_at: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_deg: 40.0,
-            width: 8,
-            height: 8,
-            window: None,
-            lens: None,
-            orthographic: None,
-        };
-        let mut d = SceneDesc::empty("floor", camera);
-        let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
-        d.triangles.push(TriangleDesc {
-            vertices: [
-                Vec3::new(-9.0, -9.0, 0.0),
-                Vec3::new(9.0, -9.0, 0.0),
-                Vec3::new(0.0, 9.0, 0.0),
-            ],
-            normals: None,
-            uvs: None,
-            material: grey,
-        });
-        let (a, b, c, e) = (
-            Vec3::new(0.0, 0.0, 1.0),
-            Vec3::new(0.0, 1.0, 1.0),
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, 0.0, 1.0),
-        );
-        for vertices in [[a, b, c], [a, c, e]] {
-            d.lights.push(Light::Triangle {
-                vertices,
-                radiance: Vec3::splat(2.0),
-                two_sided: false,
-            });
-        }
-        crate::Scene::build(d).unwrap()
-    }
-
     #[test]
     fn light_bsdf_and_mis_sampling_agree_with_the_form_factor() {
         use super::{LightSampling, PathTracer};
         use crate::integrator::{RadianceEstimator, RayStats, SamplerKind};
         use crate::math::Ray;
-        let scene = floor_under_quad();
+        let scene = crate::Scene::build(crate::integrator::analytic::floor_under_quad()).unwrap();
         // Reflected radiance albedo / pi * E, E = L pi F (the rectangle form factor, a = b = 1).
         let f = 2.0 * (1.0 / 2f64.sqrt()) * (1.0 / 2f64.sqrt()).atan() / (2.0 * std::f64::consts::PI);
         let expected = 0.5 * 2.0 * f;

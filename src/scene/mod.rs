@@ -17,6 +17,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::material::{ShadingGeometry, SurfacePoint};
 use crate::math::{Ray, Vec2, Vec3};
+use crate::medium::{Medium, MediumInterface};
 use crate::sampling::hash_unit;
 pub use crate::settings::SceneSettings;
 use crate::texture::{TexCoord, Texture};
@@ -247,7 +248,16 @@ pub struct Cutout {
     pub shapes: CutShapes,
 }
 
-/// The shapes of a description a [`Cutout`] applies to.
+/// Shapes that bound participating media, and the media on their sides
+/// (`outside` on the side of each shape's stored normal: a triangle's
+/// winding, a sphere's outward normal, a disk's `normal`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Boundary {
+    pub interface: MediumInterface,
+    pub shapes: CutShapes,
+}
+
+/// The shapes of a description a [`Cutout`] or a [`Boundary`] applies to.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CutShapes {
     /// `triangles[range]`: a mesh's.
@@ -336,6 +346,13 @@ pub struct SceneDesc {
     pub lights: Vec<Light>,
     /// Shapes cut out by alpha textures.
     pub cutouts: Vec<Cutout>,
+    /// Participating media, by name.
+    pub media: Vec<(String, Medium)>,
+    /// The medium the camera is in (an index into `media`).
+    pub camera_medium: Option<u32>,
+    /// Shapes that bound media. A shape in none is no boundary: a ray
+    /// crossing it stays in its medium.
+    pub boundaries: Vec<Boundary>,
     /// The render settings the scene recommends: its file's and its preset's.
     pub settings: SceneSettings,
 }
@@ -352,6 +369,9 @@ impl SceneDesc {
             disks: vec![],
             lights: vec![],
             cutouts: vec![],
+            media: vec![],
+            camera_medium: None,
+            boundaries: vec![],
             settings: SceneSettings::default(),
         }
     }
@@ -518,6 +538,61 @@ struct TriInfo {
     alpha: u32,
 }
 
+/// `Scene::object_interfaces` of an object that bounds no medium.
+const NO_INTERFACE: u32 = u32::MAX;
+
+/// Surfaces of no material a ray or shadow ray passes through before it
+/// gives up (nested or grazing boundaries could otherwise go on forever).
+pub const MAX_CROSSINGS: u32 = 256;
+
+/// The scene's media, checked, and the interface of each object id
+/// (`Hit::object`) that bounds any, with the table of distinct interfaces.
+#[allow(clippy::type_complexity)]
+fn media_tables(desc: &SceneDesc, lights: usize) -> Result<(Vec<Medium>, Vec<u32>, Vec<MediumInterface>)> {
+    let n = desc.media.len();
+    for (name, m) in &desc.media {
+        m.check()
+            .map_err(|why| Error::Scene(format!("medium \"{name}\": {why}")))?;
+    }
+    let media: Vec<Medium> = desc.media.iter().map(|(_, m)| *m).collect();
+    let valid = |m: Option<u32>| m.is_none_or(|i| (i as usize) < n);
+    if !valid(desc.camera_medium) {
+        return Err(Error::Scene(format!(
+            "the camera is in medium {:?} of {n}",
+            desc.camera_medium
+        )));
+    }
+    if desc.boundaries.is_empty() {
+        return Ok((media, vec![], vec![]));
+    }
+    let (nt, ns, nd) = (desc.triangles.len(), desc.spheres.len(), desc.disks.len());
+    let mut object = vec![NO_INTERFACE; nt + ns + nd + lights];
+    let mut interfaces: Vec<MediumInterface> = vec![];
+    for (k, b) in desc.boundaries.iter().enumerate() {
+        let mi = b.interface;
+        if !valid(mi.inside) || !valid(mi.outside) {
+            return Err(Error::Scene(format!(
+                "boundary {k} names a medium beyond the {n} there are"
+            )));
+        }
+        let i = match interfaces.iter().position(|&x| x == mi) {
+            Some(i) => i,
+            None => {
+                interfaces.push(mi);
+                interfaces.len() - 1
+            }
+        } as u32;
+        let ids = match &b.shapes {
+            CutShapes::Triangles(r) if r.end <= nt => r.clone(),
+            CutShapes::Sphere(s) if *s < ns => nt + s..nt + s + 1,
+            CutShapes::Disk(d) if *d < nd => nt + ns + d..nt + ns + d + 1,
+            other => return Err(Error::Scene(format!("boundary {k}: {other:?} is not in the scene"))),
+        };
+        object[ids].fill(i);
+    }
+    Ok((media, object, interfaces))
+}
+
 /// `TriInfo::alpha` of a triangle that is not cut out.
 const SOLID: u32 = u32::MAX;
 
@@ -651,6 +726,14 @@ pub struct Scene {
     shapes: BoxBvh,
     /// The cut-outs' alpha textures.
     alphas: Vec<Texture>,
+    /// Participating media (`SceneDesc::media`, without their names).
+    pub media: Vec<Medium>,
+    /// The medium camera rays start in.
+    pub camera_medium: Option<u32>,
+    /// The interface of each object that bounds media, by `Hit::object`
+    /// (an index into `interfaces`, or `NO_INTERFACE`); empty without media.
+    object_interfaces: Vec<u32>,
+    interfaces: Vec<MediumInterface>,
     /// Triangles dropped for zero area or non-finite coordinates.
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
@@ -809,6 +892,7 @@ impl Scene {
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
         let shapes = shape_bvh(&spheres, &disks)?;
+        let (media, object_interfaces, interfaces) = media_tables(&desc, lights.len())?;
         let mut scene = Scene {
             name: desc.name.clone(),
             camera,
@@ -828,6 +912,10 @@ impl Scene {
             disks,
             shapes,
             alphas,
+            media,
+            camera_medium: desc.camera_medium,
+            object_interfaces,
+            interfaces,
             dropped_triangles: dropped,
             desc,
             bvh_build_seconds,
@@ -1211,6 +1299,84 @@ impl Scene {
         } else {
             dpdu
         }
+    }
+
+    /// Whether the scene has participating media: its paths then need the
+    /// volumetric path tracer.
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
+    }
+
+    /// The media on the two sides of the surface a hit is on, when it
+    /// bounds any.
+    pub fn interface(&self, hit: &Hit) -> Option<MediumInterface> {
+        let i = *self.object_interfaces.get(hit.object as usize)?;
+        self.interfaces.get(i as usize).copied()
+    }
+
+    /// Whether the surface hit is no surface, only a boundary of media
+    /// (rays pass through it).
+    pub fn is_interface(&self, hit: &Hit) -> bool {
+        matches!(self.material(hit.material), Material::Interface)
+    }
+
+    /// The medium of a ray leaving `hit` along `w`, having arrived there in
+    /// `current`: the side of the surface it leaves towards when the surface
+    /// is a transition between media (pbrt-v4's `GetMedium`), else `current`.
+    pub fn medium_after(&self, hit: &Hit, current: Option<u32>, w: Vec3) -> Option<u32> {
+        match self.interface(hit) {
+            Some(mi) if mi.is_transition() => {
+                if w.dot(hit.ng) > 0.0 {
+                    mi.outside
+                } else {
+                    mi.inside
+                }
+            }
+            _ => current,
+        }
+    }
+
+    /// The fraction of light that travels from `o` along the unit direction
+    /// `d` for `dist` (infinite: out of the scene) starting in `medium`,
+    /// passing through surfaces that only bound media and taking each
+    /// medium's transmittance; zero when any other surface is in the way.
+    /// The segment is a shadow ray towards `light`, whose own surface does
+    /// not count (as in `occluded_before_light`).
+    pub fn transmittance(&self, o: Vec3, d: Vec3, dist: f32, medium: Option<u32>, light: u32) -> Vec3 {
+        let mut tr = Vec3::ONE;
+        let (mut o, mut medium) = (o, medium);
+        let end = o + d * dist;
+        for _ in 0..MAX_CROSSINGS {
+            let left = if dist.is_finite() {
+                (end - o).dot(d)
+            } else {
+                f32::INFINITY
+            };
+            let t_max = if dist.is_finite() { left * (1.0 - 1e-4) } else { left };
+            let hit = self.intersect(&Ray::new(o, d), 0.0, t_max.max(0.0));
+            let reached = match &hit {
+                None => true,
+                Some(h) => h.light == Some(light),
+            };
+            let seg = if reached {
+                left.max(0.0)
+            } else {
+                hit.as_ref().map_or(0.0, |h| h.t)
+            };
+            if let Some(m) = medium {
+                tr *= self.media[m as usize].transmittance(seg);
+            }
+            if reached || tr == Vec3::ZERO {
+                return tr;
+            }
+            let Some(h) = hit else { return tr };
+            if !self.is_interface(&h) {
+                return Vec3::ZERO;
+            }
+            medium = self.medium_after(&h, medium, d);
+            o = crate::math::offset_origin(h.p, h.ng, d);
+        }
+        Vec3::ZERO
     }
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.

@@ -36,6 +36,9 @@ fn plane_scene(light: Light) -> SceneDesc {
         disks: vec![],
         lights: vec![light],
         cutouts: vec![],
+        media: vec![],
+        camera_medium: None,
+        boundaries: vec![],
         settings: SceneSettings::default(),
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));

@@ -50,6 +50,9 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
             power: Vec3::splat(power),
         }],
         cutouts: vec![],
+        media: vec![],
+        camera_medium: None,
+        boundaries: vec![],
         settings: SceneSettings::default(),
     };
     let mirror = d.material("mirror", Material::mirror(Vec3::ONE));
@@ -111,6 +114,9 @@ fn path_tracer_sees_a_light_in_a_mirror() {
             power: Vec3::splat(power),
         }],
         cutouts: vec![],
+        media: vec![],
+        camera_medium: None,
+        boundaries: vec![],
         settings: SceneSettings::default(),
     };
     let reflectance = Vec3::new(0.5, 0.8, 1.0);

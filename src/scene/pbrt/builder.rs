@@ -1127,10 +1127,6 @@ impl<'a> Builder<'a> {
                     )
                 })?;
                 let world_from_medium = self.ctm_static(&t.loc, "MakeNamedMedium");
-                self.unsupported(
-                    &t.loc,
-                    format!("participating media (MakeNamedMedium \"{name}\") are not supported"),
-                );
                 self.scene.media.push(Medium {
                     name,
                     ty,

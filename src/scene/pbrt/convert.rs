@@ -43,10 +43,13 @@ use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
+use crate::medium::{Medium, MediumInterface};
 use crate::scene::mesh::MeshReport;
 use crate::scene::DiskDesc;
 use crate::scene::FilmCrop;
-use crate::scene::{CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use crate::scene::{
+    Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
+};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -162,6 +165,7 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         warnings: vec![],
         materials: HashMap::new(),
         emissions: HashMap::new(),
+        media: HashMap::new(),
         read: vec![],
         skipped_shapes: HashSet::new(),
         replaced_materials: 0,
@@ -176,6 +180,20 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
     desc.settings = c.settings()?;
     c.lights(&mut desc)?;
     c.shapes(&mut desc)?;
+    if let Some(name) = &scene.camera.medium {
+        let at = scene.camera.loc.clone().unwrap_or_else(|| c.default_loc());
+        desc.camera_medium = c.medium(&mut desc, name, &at)?;
+    }
+    if !desc.media.is_empty() && matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
+        let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
+        c.warn(
+            &at,
+            format!(
+                "Integrator \"{}\": pbrt-v4's ignores participating media; they are rendered here, as its \"volpath\" renders them",
+                scene.integrator.ty
+            ),
+        );
+    }
     if c.imaging_ratio != 1.0 {
         // The film scales what it records; the lights scaled instead give the
         // same image, and photon maps with it.
@@ -238,6 +256,9 @@ struct Conv<'a> {
     materials: HashMap<usize, u32>,
     /// Area light index -> its emission (None: unsupported, reported).
     emissions: HashMap<usize, Option<Emission>>,
+    /// Medium name -> its index in `SceneDesc::media` (None: unsupported,
+    /// reported), converted when first named.
+    media: HashMap<String, Option<u32>>,
     /// Parameter lists whose unused entries are reported (supported
     /// directives only).
     read: Vec<&'a Params>,
@@ -1183,6 +1204,58 @@ impl<'a> Conv<'a> {
         self.skipped_shapes_count += 1;
     }
 
+    /// A shape's material, or none (`Material::Interface`) for a shape of
+    /// pbrt-v4's `interface` material that bounds media.
+    fn surface_material(&mut self, desc: &mut SceneDesc, index: usize, no_surface: bool) -> Result<u32> {
+        if no_surface {
+            Ok(desc.material("<interface>", Material::Interface))
+        } else {
+            self.material(desc, index)
+        }
+    }
+
+    /// The media on a shape's two sides when they differ (pbrt-v4's
+    /// `MediumInterface` being a transition), as pbrt-v4 orients them:
+    /// outside along its surface normal.
+    fn interface(&mut self, desc: &mut SceneDesc, shape: &Shape) -> Result<Option<MediumInterface>> {
+        let mut side = |name: &Option<String>| match name {
+            Some(n) => self.medium(desc, n, &shape.loc),
+            None => Ok(None),
+        };
+        let mi = MediumInterface {
+            inside: side(&shape.inside_medium)?,
+            outside: side(&shape.outside_medium)?,
+        };
+        Ok(mi.is_transition().then_some(mi))
+    }
+
+    /// The index in `SceneDesc::media` of the medium `name`, converted when
+    /// first named; `None` when it cannot be rendered (reported at its
+    /// definition; `--lenient` renders it as vacuum). Naming an undefined
+    /// medium is an error at `at`, as in pbrt-v4.
+    fn medium(&mut self, desc: &mut SceneDesc, name: &str, at: &Loc) -> Result<Option<u32>> {
+        if let Some(&i) = self.media.get(name) {
+            return Ok(i);
+        }
+        let scene = self.scene;
+        let Some(m) = scene.media.iter().find(|m| m.name == name) else {
+            return Err(located(at, format!("medium \"{name}\" is not defined")));
+        };
+        let index = match convert_medium(m)? {
+            Ok(medium) => {
+                self.read.push(&m.params);
+                desc.media.push((name.to_string(), medium));
+                Some(desc.media.len() as u32 - 1)
+            }
+            Err(why) => {
+                self.problem(Kind::Other, &m.loc, format!("MakeNamedMedium \"{name}\": {why}"));
+                None
+            }
+        };
+        self.media.insert(name.to_string(), index);
+        Ok(index)
+    }
+
     fn shapes(&mut self, desc: &mut SceneDesc) -> Result<()> {
         let scene = self.scene;
         for shape in &scene.shapes {
@@ -1213,10 +1286,13 @@ impl<'a> Conv<'a> {
                     continue;
                 }
             };
+            let interface = self.interface(desc, shape)?;
             // pbrt-v4's "interface" and "none" materials make no surface: the
-            // shape only bounds a medium, and without media it is not there.
+            // shape only bounds media, and where it bounds none it is not there.
+            let mut no_surface = false;
             if let Some(m) = scene.materials.get(shape.material) {
                 if matches!(m.ty.as_str(), "interface" | "none" | "") {
+                    no_surface = true;
                     if shape.area_light.is_some() {
                         self.warn(
                             &shape.loc,
@@ -1226,12 +1302,14 @@ impl<'a> Conv<'a> {
                             ),
                         );
                     }
-                    continue;
+                    if interface.is_none() {
+                        continue;
+                    }
                 }
             }
             let emission = match shape.area_light {
-                Some(i) => self.emission(i)?,
-                None => None,
+                Some(i) if !no_surface => self.emission(i)?,
+                _ => None,
             };
             if emission.is_some() && alpha.is_some() {
                 // pbrt-v4 would also mask the light's emission and its samples.
@@ -1283,15 +1361,41 @@ impl<'a> Conv<'a> {
                             self.push_light(desc, light, &shape.loc)?;
                         }
                     } else {
-                        let material = self.material(desc, shape.material)?;
+                        let material = self.surface_material(desc, shape.material, no_surface)?;
                         let first = desc.triangles.len();
+                        let flip = shape.flips_normals();
                         for t in &mesh.triangles {
-                            desc.triangles.push(TriangleDesc {
+                            let tri = TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
                                 uvs: mesh.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize])),
                                 material,
-                            });
+                            };
+                            if let Some(mi) = interface {
+                                // pbrt-v4's normal, whose side is outside: the
+                                // vertex normals' side, else the winding's
+                                // turned when `flips_normals`.
+                                let [a, b, c] = tri.vertices;
+                                let cross = (b - a).cross(c - a);
+                                let side = match &tri.normals {
+                                    Some(ns) => ns[0] + ns[1] + ns[2],
+                                    None if flip => -cross,
+                                    None => cross,
+                                };
+                                let mi = if side.dot(cross) < 0.0 { mi.flipped() } else { mi };
+                                let i = desc.triangles.len();
+                                match desc.boundaries.last_mut() {
+                                    Some(Boundary {
+                                        interface,
+                                        shapes: CutShapes::Triangles(r),
+                                    }) if *interface == mi && r.end == i && r.start >= first => r.end = i + 1,
+                                    _ => desc.boundaries.push(Boundary {
+                                        interface: mi,
+                                        shapes: CutShapes::Triangles(i..i + 1),
+                                    }),
+                                }
+                            }
+                            desc.triangles.push(tri);
                         }
                         if let Some(alpha) = alpha {
                             let shapes = CutShapes::Triangles(first..desc.triangles.len());
@@ -1331,10 +1435,17 @@ impl<'a> Conv<'a> {
                         };
                         self.push_light(desc, light, &shape.loc)?;
                     } else {
-                        let material = self.material(desc, shape.material)?;
+                        let material = self.surface_material(desc, shape.material, no_surface)?;
                         if let Some(alpha) = alpha {
                             let shapes = CutShapes::Sphere(desc.spheres.len());
                             desc.cutouts.push(Cutout { alpha, shapes });
+                        }
+                        if let Some(mi) = interface {
+                            // Ours is the outward normal; pbrt-v4's turns with `flips_normals`.
+                            desc.boundaries.push(Boundary {
+                                interface: if shape.flips_normals() { mi.flipped() } else { mi },
+                                shapes: CutShapes::Sphere(desc.spheres.len()),
+                            });
                         }
                         // Its texture coordinates turn with it (and mirror).
                         let axes = glam::Mat3::from_cols(
@@ -1387,7 +1498,12 @@ impl<'a> Conv<'a> {
                         };
                         self.push_light(desc, light, &shape.loc)?;
                     } else {
-                        let material = self.material(desc, shape.material)?;
+                        let material = self.surface_material(desc, shape.material, no_surface)?;
+                        if let Some(interface) = interface {
+                            // `normal` is pbrt-v4's already.
+                            let shapes = CutShapes::Disk(desc.disks.len());
+                            desc.boundaries.push(Boundary { interface, shapes });
+                        }
                         let mut disk = DiskDesc::new(centre, normal, radius, inner_radius, material);
                         disk.axes = Some(axes);
                         if let Some(alpha) = alpha {
@@ -1403,6 +1519,55 @@ impl<'a> Conv<'a> {
         }
         Ok(())
     }
+}
+
+/// A pbrt-v4 `MakeNamedMedium` as ours (pbrt-v4's `HomogeneousMedium::Create`:
+/// `sigma_a` and `sigma_s` default to 1, both times `scale`; `g`), or why it
+/// cannot be.
+fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, String>> {
+    let p = &m.params;
+    if m.ty != "homogeneous" {
+        return Ok(Err(format!(
+            "media of type \"{}\" are not supported (homogeneous ones are)",
+            m.ty
+        )));
+    }
+    if !p.get_string_or("preset", "")?.is_empty() {
+        return Ok(Err("named scattering presets (\"preset\") are not supported".into()));
+    }
+    // An `rgb` coefficient as given (pbrt-v4's unbounded spectrum of it), a
+    // sampled one projected as a reflectance is.
+    let coefficient = |name: &str| -> Result<std::result::Result<Vec3, String>> {
+        Ok(match p.get_spectrum(name)? {
+            None => Ok(Vec3::ONE),
+            Some(v) => match reflectance_rgb(&v) {
+                Some(c) => Ok(c),
+                None => Err(format!("\"{name}\" given as this spectrum is not supported")),
+            },
+        })
+    };
+    let (sigma_a, sigma_s) = match (coefficient("sigma_a")?, coefficient("sigma_s")?) {
+        (Ok(a), Ok(s)) => (a, s),
+        (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
+    };
+    let emits = match p.get_spectrum("Le")? {
+        None => false,
+        Some(v) => reflectance_rgb(&v).is_none_or(|c| c.max_element() > 0.0),
+    };
+    p.mark_used("Lescale", super::ParamType::Float);
+    if emits {
+        return Ok(Err("emissive media (\"Le\") are not supported".into()));
+    }
+    let scale = p.get_float("scale", 1.0)?;
+    let medium = Medium {
+        sigma_a: sigma_a * scale,
+        sigma_s: sigma_s * scale,
+        g: p.get_float("g", 0.0)?,
+    };
+    medium
+        .check()
+        .map_err(|why| located(&m.loc, format!("MakeNamedMedium \"{}\": {why}", m.name)))?;
+    Ok(Ok(medium))
 }
 
 fn located(loc: &Loc, message: impl Into<String>) -> Error {

@@ -1,0 +1,532 @@
+//! The path tracer in scenes with participating media (pbrt-v4's
+//! `VolPathIntegrator`, for homogeneous media).
+//!
+//! A path carries the medium it travels in: the camera's, then whatever the
+//! surfaces it crosses say (`Scene::medium_after`). Along each segment in a
+//! scattering medium a distance is sampled (`Medium::sample_distance`: one
+//! channel's exponential, weighted by the three channels' mean density so
+//! that coloured media stay unbiased); if it falls short of the next
+//! surface the path scatters there, by the phase function, and that is a
+//! bounce like a surface's. Distances are sampled for one channel, the
+//! path's hero, chosen when it starts; the path's estimate divides by the
+//! mean of the channels' densities (`MediumEvent`). A medium that only absorbs multiplies the
+//! throughput by its transmittance. Surfaces of no material are passed
+//! through without a bounce. At every scattering vertex (surface or medium)
+//! one light sample, its shadow ray taking the transmittance of the media
+//! it crosses (`Scene::transmittance`), combined with the phase function's
+//! or the BSDF's sample by the power heuristic, as in the path tracer.
+//! Russian roulette as there.
+
+use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, scatters_towards};
+use super::path::{PathTracer, MAX_SURVIVAL, ROULETTE_DEPTH};
+use super::{LightSampling, RayStats};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::medium::MediumEvent;
+use crate::sampling::Sampler;
+use crate::scene::{Hit, Scene, MAX_CROSSINGS};
+
+use super::direct::power_heuristic;
+
+/// Where a path scatters: on a surface, or in a medium.
+enum Vertex<'a> {
+    Surface {
+        hit: &'a Hit,
+        wo: Vec3,
+        bsdf: &'a Bsdf,
+        medium: Option<u32>,
+    },
+    Medium {
+        p: Vec3,
+        d: Vec3,
+        medium: u32,
+    },
+}
+
+pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    // Each channel's path density over the hero channel's.
+    let mut ratio = Vec3::ONE;
+    let hero = ((sampler.next_f32() * 3.0) as usize).min(2);
+    // The path's weight: beta over the mean of the channels' densities.
+    let weight = |beta: Vec3, ratio: Vec3| beta * (3.0 / ratio.element_sum());
+    let mut ray = *camera_ray;
+    let mut medium = scene.camera_medium;
+    let mut depth = 0;
+    let mut eta_scale = 1.0f32;
+    let mut from: Option<(Vec3, f32)> = None;
+    let mut crossings = 0;
+    let weigh = |from: Option<(Vec3, f32)>| match (from, pt.light_sampling) {
+        (None, _) | (_, LightSampling::Mis) => (from, 1.0),
+        (Some(_), LightSampling::Bsdf) => (None, 1.0),
+        (Some(_), LightSampling::Light) => (None, 0.0),
+    };
+    loop {
+        let hit = scene.intersect(&ray, 0.0, f32::INFINITY);
+        if let Some(m) = medium {
+            let med = &scene.media[m as usize];
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            let u = if med.scatters() { sampler.next_f32() } else { 0.0 };
+            match med.sample_distance(t_max, hero, u) {
+                MediumEvent::Pass { beta: b, ratio: r } => {
+                    beta *= b;
+                    ratio *= r;
+                }
+                MediumEvent::Scatter { t, beta: b, ratio: r } => {
+                    beta *= b;
+                    ratio *= r;
+                    if !weight(beta, ratio).is_finite() || beta.max_element() <= 0.0 {
+                        break;
+                    }
+                    if pt.max_depth.is_some_and(|d| depth >= d) {
+                        break;
+                    }
+                    depth += 1;
+                    let p = ray.at(t);
+                    let v = Vertex::Medium { p, d: ray.d, medium: m };
+                    if pt.light_sampling != LightSampling::Bsdf {
+                        let mis = pt.light_sampling == LightSampling::Mis;
+                        l += weight(beta, ratio) * sample_direct(scene, &v, mis, sampler, stats);
+                    }
+                    // The phase function is sampled exactly: f / pdf = 1.
+                    let (wi, pdf) = med.sample_phase(ray.d, sampler.next_2d());
+                    from = Some((p, pdf));
+                    if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
+                        break;
+                    }
+                    stats.other_rays += 1;
+                    ray = Ray::new(p, wi);
+                    continue;
+                }
+            }
+            if !weight(beta, ratio).is_finite() || beta.max_element() <= 0.0 {
+                break;
+            }
+        }
+        let Some(hit) = hit else {
+            let (from, w) = weigh(from);
+            l += weight(beta, ratio) * escaped_radiance(scene, &ray, from) * w;
+            break;
+        };
+        if let Some(li) = hit.light {
+            let (from, w) = weigh(from);
+            l += weight(beta, ratio) * emitted_radiance(scene, li as usize, &ray, &hit, from) * w;
+            break;
+        }
+        if scene.is_interface(&hit) {
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                break;
+            }
+            medium = scene.medium_after(&hit, medium, ray.d);
+            ray = Ray::new(offset_origin(hit.p, hit.ng, ray.d), ray.d);
+            continue;
+        }
+        let m = scene.material(hit.material);
+        l += weight(beta, ratio) * m.le();
+        if pt.max_depth.is_some_and(|d| depth >= d) {
+            break;
+        }
+        let wo = -ray.d;
+        depth += 1;
+        let bsdf = m.bsdf(&scene.surface(&hit), wo);
+        let flags = bsdf.flags();
+        if flags.is_empty() {
+            break;
+        }
+        if flags.is_non_specular() && pt.light_sampling != LightSampling::Bsdf {
+            let v = Vertex::Surface {
+                hit: &hit,
+                wo,
+                bsdf: &bsdf,
+                medium,
+            };
+            l +=
+                weight(beta, ratio) * sample_direct(scene, &v, pt.light_sampling == LightSampling::Mis, sampler, stats);
+        }
+        let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
+            break;
+        };
+        if !hit.keeps_side(wo, bs.wi, bs.flags) {
+            break;
+        }
+        beta *= bs.f * (bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            break;
+        }
+        if bs.is_transmission() {
+            eta_scale *= bs.eta * bs.eta;
+        }
+        from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
+            break;
+        }
+        stats.other_rays += 1;
+        medium = scene.medium_after(&hit, medium, bs.wi);
+        ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+    }
+    l
+}
+
+/// The path tracer's Russian roulette on `beta` times `scale` (the squared
+/// relative indices crossed over the channels' mean density); false when
+/// the path ends.
+fn roulette(beta: &mut Vec3, scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
+    if depth < ROULETTE_DEPTH {
+        return true;
+    }
+    let q = (*beta * scale).max_element().min(MAX_SURVIVAL);
+    if sampler.next_f32() >= q {
+        return false;
+    }
+    *beta /= q;
+    true
+}
+
+/// Direct light scattered at a vertex from one light chosen by power and
+/// one sample on it, its shadow ray through the media on the way, weighted
+/// against sampling the BSDF or phase function when `mis`.
+fn sample_direct(scene: &Scene, v: &Vertex, mis: bool, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
+    let u = sampler.next_2d();
+    let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
+        return Vec3::ZERO;
+    };
+    let light = &scene.lights[li];
+    let p = match v {
+        Vertex::Surface { hit, .. } => hit.p,
+        Vertex::Medium { p, .. } => *p,
+    };
+    let Some(ls) = light.sample_li(p, Vec2::new(ux, u.y)) else {
+        return Vec3::ZERO;
+    };
+    let (f, pdf, origin, start) = match v {
+        Vertex::Surface { hit, wo, bsdf, medium } => {
+            if !scatters_towards(hit, *wo, bsdf, ls.wi) {
+                return Vec3::ZERO;
+            }
+            let (f, pdf) = bsdf.f_pdf(*wo, ls.wi, TransportMode::Radiance);
+            let f = f * ls.wi.dot(bsdf.frame.z).abs();
+            let origin = offset_origin(hit.p, hit.ng, ls.wi);
+            (f, pdf, origin, scene.medium_after(hit, *medium, ls.wi))
+        }
+        Vertex::Medium { p, d, medium } => {
+            let ph = scene.media[*medium as usize].phase(*d, ls.wi);
+            (Vec3::splat(ph), ph, *p, Some(*medium))
+        }
+    };
+    if f == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    stats.shadow_rays += 1;
+    // Aimed at the sampled point itself, as `unoccluded_light_sample` aims.
+    let (dir, dist) = if ls.dist.is_finite() {
+        let to = p + ls.wi * ls.dist - origin;
+        let dist = to.length();
+        (to / dist, dist)
+    } else {
+        (ls.wi, f32::INFINITY)
+    };
+    let tr = scene.transmittance(origin, dir, dist, start, li as u32);
+    if tr == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let w = if mis && !light.is_delta() {
+        power_heuristic(pmf * ls.pdf, pdf)
+    } else {
+        1.0
+    };
+    f * tr * ls.weight * (w / pmf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::analytic::{closed_sphere_desc, floor_under_quad};
+    use super::super::path::PathTracer;
+    use super::super::{camera_sampler, render, IntegratorKind, LightSampling, RadianceEstimator, RayStats};
+    use super::super::{RenderSettings, SamplerKind};
+    use crate::material::Material;
+    use crate::math::{Ray, Vec3};
+    use crate::medium::{Medium, MediumInterface};
+    use crate::scene::{Boundary, CameraDesc, CutShapes, SceneDesc, TriangleDesc};
+    use crate::Scene;
+
+    fn path(spp: u32, max_depth: Option<u32>) -> RenderSettings {
+        RenderSettings {
+            integrator: IntegratorKind::Path,
+            spp,
+            max_depth,
+            ..RenderSettings::default()
+        }
+    }
+
+    #[test]
+    fn a_lossless_medium_vanishes_in_a_white_furnace() {
+        // Uniform radiance is left as it is by a medium that scatters without
+        // absorbing, whatever its phase function: the camera, inside such a
+        // medium in a furnace, sees le / (1 - albedo) as without it. Blue's
+        // mean free path is a third of the distance to the wall, red's about
+        // twice it, so most paths scatter, and chromatically.
+        let (a, le) = (0.5, Vec3::new(1.0, 0.5, 0.25));
+        let wall = Material::Emissive {
+            albedo: Vec3::splat(a),
+            le,
+        };
+        let mut d = closed_sphere_desc(wall.clone(), None, 16);
+        d.media.push((
+            "fog".into(),
+            Medium {
+                sigma_a: Vec3::ZERO,
+                sigma_s: Vec3::new(0.7, 1.5, 4.0),
+                g: 0.6,
+            },
+        ));
+        d.camera_medium = Some(0);
+        let scene = Scene::build(d).unwrap();
+        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let mean = film.mean(0, 0, 16, 16);
+        let expected = le / (1.0 - a);
+        let err = ((mean - expected) / expected).abs().max_element();
+        assert!(err < 0.015, "{mean:?} vs {expected:?}");
+        // With absorption the same furnace is darker in every channel.
+        let mut d = closed_sphere_desc(wall, None, 16);
+        d.media.push((
+            "smoke".into(),
+            Medium {
+                sigma_a: Vec3::splat(0.5),
+                sigma_s: Vec3::new(0.7, 1.5, 4.0),
+                g: 0.6,
+            },
+        ));
+        d.camera_medium = Some(0);
+        let film = render(&Scene::build(d).unwrap(), &path(64, None), &|| {}).unwrap().film;
+        let dark = film.mean(0, 0, 16, 16);
+        assert!((dark / expected).max_element() < 0.9, "{dark:?} vs {expected:?}");
+    }
+
+    /// A camera at the origin looking along +z at an emissive wall of
+    /// radiance one at z = 3, through a slab between z = 1 and z = 2 bounded
+    /// by two quads of no material; the slab is medium 0 when `flip_far` is false. With
+    /// `flip_far` the far quad's normal points into the slab, so a ray
+    /// crossing it enters medium 0 instead of leaving it.
+    fn slab(flip_far: bool) -> Scene {
+        let camera = CameraDesc {
+            position: Vec3::ZERO,
+            look_at: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 10.0,
+            width: 4,
+            height: 4,
+            window: None,
+            lens: None,
+            orthographic: None,
+        };
+        let mut d = SceneDesc::empty("slab", camera);
+        let wall = d.material(
+            "wall",
+            Material::Emissive {
+                albedo: Vec3::ZERO,
+                le: Vec3::ONE,
+            },
+        );
+        let none = d.material("none", Material::Interface);
+        let quad = |d: &mut SceneDesc, z: f32, up: bool, material: u32| {
+            let (a, b, c, e) = (
+                Vec3::new(-5.0, -5.0, z),
+                Vec3::new(5.0, -5.0, z),
+                Vec3::new(5.0, 5.0, z),
+                Vec3::new(-5.0, 5.0, z),
+            );
+            // Counter-clockwise seen from +z: the normal is +z.
+            let tris = if up {
+                [[a, b, c], [a, c, e]]
+            } else {
+                [[a, c, b], [a, e, c]]
+            };
+            let first = d.triangles.len();
+            for vertices in tris {
+                d.triangles.push(TriangleDesc {
+                    vertices,
+                    normals: None,
+                    uvs: None,
+                    material,
+                });
+            }
+            first..first + 2
+        };
+        quad(&mut d, 3.0, false, wall);
+        let fog = MediumInterface {
+            inside: Some(0),
+            outside: None,
+        };
+        let near = quad(&mut d, 1.0, false, none);
+        let far = quad(&mut d, 2.0, !flip_far, none);
+        for r in [near, far] {
+            d.boundaries.push(Boundary {
+                interface: fog,
+                shapes: CutShapes::Triangles(r),
+            });
+        }
+        d.media.push((
+            "ink".into(),
+            Medium {
+                sigma_a: Vec3::new(0.2, 0.5, 1.0),
+                sigma_s: Vec3::ZERO,
+                g: 0.0,
+            },
+        ));
+        Scene::build(d).unwrap()
+    }
+
+    #[test]
+    fn an_absorbing_slab_bounded_by_interfaces_transmits_beers_law() {
+        let sigma = Vec3::new(0.2, 0.5, 1.0);
+        let est = PathTracer {
+            max_depth: None,
+            light_sampling: LightSampling::Mis,
+        };
+        for (flip, length) in [(false, 1.0), (true, 2.0)] {
+            let scene = slab(flip);
+            assert!(scene.has_media());
+            let mut sampler = camera_sampler(SamplerKind::Sobol, 1, 0, 0, 4, 1, 0);
+            let l = est.li(
+                &scene,
+                &Ray::new(Vec3::ZERO, Vec3::Z),
+                &mut sampler,
+                &mut RayStats::default(),
+            );
+            // The ray's origin offset at each crossing shortens its path in
+            // the slab by a few 1e-4.
+            let expected = (-sigma * length).exp();
+            assert!(
+                (l / expected - 1.0).abs().max_element() < 1e-3,
+                "flipped {flip}: {l} vs {expected}"
+            );
+        }
+        // Whole renders agree: the pixels' rays are within 5 degrees of the
+        // axis, their paths through the slab 1 / cos longer at most.
+        let film = render(&slab(false), &path(4, None), &|| {}).unwrap().film;
+        let mean = film.mean(0, 0, 4, 4);
+        let (lo, hi) = ((-sigma * 1.004).exp(), (-sigma).exp());
+        assert!(
+            mean.cmpge(lo - 1e-4).all() && mean.cmple(hi + 1e-4).all(),
+            "{mean} not in [{lo}, {hi}]"
+        );
+    }
+
+    /// The floor under the quad light (`floor_under_quad`) in a medium that
+    /// fills space, the camera in it.
+    fn foggy_floor(medium: Medium) -> Scene {
+        let mut d = floor_under_quad();
+        d.media.push(("fog".into(), medium));
+        d.camera_medium = Some(0);
+        Scene::build(d).unwrap()
+    }
+
+    /// The mean and standard error of `li` along `ray`, over `pixels`
+    /// pixels of `spp` Sobol samples each.
+    fn estimate(scene: &Scene, est: &PathTracer, ray: &Ray, pixels: u64, spp: u32) -> (Vec3, Vec3) {
+        let (mut sum, mut sum2) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+        let mut stats = RayStats::default();
+        for pixel in 0..pixels {
+            let mut pixel_sum = glam::DVec3::ZERO;
+            for i in 0..spp {
+                let (x, y) = ((pixel % 64) as u32, (pixel / 64) as u32);
+                let mut sampler = camera_sampler(SamplerKind::Sobol, 5, x, y, 64, spp, i);
+                pixel_sum += est.li(scene, ray, &mut sampler, &mut stats).as_dvec3();
+            }
+            let v = pixel_sum / spp as f64;
+            sum += v;
+            sum2 += v * v;
+        }
+        let mean = sum / pixels as f64;
+        let err = ((sum2 / pixels as f64 - mean * mean) / pixels as f64).max(glam::DVec3::ZERO);
+        (mean.as_vec3(), err.to_array().map(f64::sqrt).map(|v| v as f32).into())
+    }
+
+    #[test]
+    fn direct_light_through_an_absorbing_medium_matches_quadrature() {
+        // Seen from (0, 0, 0.5) straight down, the floor under the light's
+        // corner reflects albedo / pi times the integral over the light of
+        // L exp(-sigma r) cos cos / r^2 = L exp(-sigma r) / r^4 (r^2 = x^2 +
+        // y^2 + 1), and the half unit up to the camera takes exp(-sigma / 2).
+        // Light samples see the transmittance through their shadow rays,
+        // BSDF samples through the path's own; each alone and MIS agree.
+        let sigma = Vec3::new(0.3, 0.8, 2.0);
+        let scene = foggy_floor(Medium {
+            sigma_a: sigma,
+            sigma_s: Vec3::ZERO,
+            g: 0.0,
+        });
+        let n = 600;
+        let mut integral = glam::DVec3::ZERO;
+        for i in 0..n {
+            for j in 0..n {
+                let (x, y) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                let r2 = x * x + y * y + 1.0;
+                let tr = (-sigma.as_dvec3() * r2.sqrt()).exp();
+                integral += 2.0 * tr / (r2 * r2) / (n * n) as f64;
+            }
+        }
+        let expected = (integral * 0.5 / std::f64::consts::PI * (-sigma.as_dvec3() * 0.5).exp()).as_vec3();
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0));
+        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+            let est = PathTracer {
+                max_depth: Some(1),
+                light_sampling: mode,
+            };
+            let (mean, err) = estimate(&scene, &est, &ray, 2048, 16);
+            assert!(
+                ((mean - expected).abs() - 4.0 * err).max_element() < 1e-5,
+                "{mode:?}: {mean} vs {expected} (standard error {err})"
+            );
+        }
+    }
+
+    #[test]
+    fn light_phase_and_mis_sampling_agree_in_a_scattering_medium() {
+        // Single and double scattering in a coloured, forward-scattering
+        // medium, light reaching the vertices in it and on the floor: light
+        // sampling (with its shadow rays' transmittance), phase and BSDF
+        // sampling, and their combination estimate the same thing.
+        let scene = foggy_floor(Medium {
+            sigma_a: Vec3::splat(0.05),
+            sigma_s: Vec3::new(0.3, 0.6, 1.2),
+            g: 0.5,
+        });
+        // Under the light, through the fog, to the floor.
+        let ray = Ray::new(Vec3::new(-0.5, -0.5, 0.5), Vec3::new(1.0, 1.0, -0.5).normalize());
+        let mut results = vec![];
+        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+            let est = PathTracer {
+                max_depth: Some(2),
+                light_sampling: mode,
+            };
+            results.push((mode, estimate(&scene, &est, &ray, 4096, 16)));
+        }
+        let (_, (mis, mis_err)) = results[0];
+        assert!(mis.min_element() > 0.01, "{mis}");
+        for &(mode, (mean, err)) in &results[1..] {
+            let tolerance = 4.0 * (err * err + mis_err * mis_err).powf(0.5);
+            assert!(
+                ((mean - mis).abs() - tolerance).max_element() < 0.0,
+                "{mode:?}: {mean} vs MIS {mis} (tolerance {tolerance})"
+            );
+        }
+    }
+
+    #[test]
+    fn other_integrators_refuse_media() {
+        for kind in [IntegratorKind::Direct, IntegratorKind::Photon, IntegratorKind::Sppm] {
+            let settings = RenderSettings {
+                integrator: kind,
+                ..path(1, None)
+            };
+            let e = render(&slab(false), &settings, &|| {}).err().map(|e| e.to_string());
+            assert!(
+                e.as_deref().is_some_and(|e| e.contains("participating media")),
+                "{kind:?}: {e:?}"
+            );
+        }
+    }
+}
