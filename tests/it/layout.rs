@@ -20,7 +20,9 @@ const RULES: &[(&str, &[&str], &[&str])] = &[
     ),
     (
         "the basic types import nothing above them",
-        &["geometry", "material", "medium", "light", "camera", "sampling", "bsdf", "texture"],
+        &[
+            "geometry", "material", "medium", "light", "camera", "sampling", "bsdf", "texture",
+        ],
         &["scene", "integrator", "photon", "state_file", "viewer", "settings"],
     ),
     (

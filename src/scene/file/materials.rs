@@ -336,6 +336,13 @@ pub(super) fn materials(
             what: format!("material '{name}'"),
             shared: &["displacement", "normal_map"],
         };
+        if k.string("type")? == Some("interface") {
+            // No surface: nothing to bump or map either.
+            let bare = Keys { shared: &[], ..k };
+            bare.only("interface", &[])?;
+            out.insert(name.clone(), Material::Interface);
+            continue;
+        }
         let mut m = material(&k, textures)?;
         // A normal map, over any type: an image of normals in the surface's
         // (dp/du, n x dp/du, n) frame, read as linear RGB (pbrt-v4's `normalmap`).
@@ -585,7 +592,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 Some("type"),
                 format!(
                     "unknown material type '{other}' (diffuse, mirror, glass, conductor, dielectric, \
-                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission)"
+                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission, interface)"
                 ),
             ))
         }

@@ -10,13 +10,16 @@
 
 use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::transform::{Fit, Transform};
-use super::{CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc};
+use super::{
+    Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
+};
 use crate::camera::ThinLens;
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Vec2, Vec3};
+use crate::medium::{Medium, MediumInterface};
 use crate::settings::{self, Kind, Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use std::collections::BTreeMap;
@@ -106,7 +109,22 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
     }
 
-    let meshes = shapes(&src, &file.shapes, (&materials, &textures), opts, files, &mut desc)?;
+    let mut media = Media {
+        specs: &file.media,
+        used: BTreeMap::new(),
+    };
+    if let Some(name) = &file.camera.get_ref().medium {
+        desc.camera_medium = Some(media.index(&src, &mut desc, name)?);
+    }
+    let meshes = shapes(
+        &src,
+        &file.shapes,
+        (&materials, &textures),
+        &mut media,
+        opts,
+        files,
+        &mut desc,
+    )?;
     // Materials no shape uses still belong to the scene, after the used ones.
     for (name, m) in &materials {
         desc.material(name, m.clone());
@@ -172,10 +190,49 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
 }
 
 /// The `[[shapes]]` tables, added to `desc`; returns what loading each mesh took.
+/// The file's `[media.NAME]` tables, each added to the scene when first named.
+struct Media<'a> {
+    specs: &'a BTreeMap<String, Spanned<MediumSpec>>,
+    used: BTreeMap<String, u32>,
+}
+
+impl Media<'_> {
+    /// The index in `desc.media` of the medium `name` names.
+    fn index(&mut self, src: &Source, desc: &mut SceneDesc, name: &Spanned<String>) -> Result<u32> {
+        let n = name.get_ref();
+        if let Some(&i) = self.used.get(n) {
+            return Ok(i);
+        }
+        let Some(spec) = self.specs.get(n) else {
+            let known: Vec<&str> = self.specs.keys().map(String::as_str).collect();
+            let known = if known.is_empty() {
+                "none".into()
+            } else {
+                known.join(", ")
+            };
+            return Err(src.error(name.span(), format!("unknown medium '{n}' (defined: {known})")));
+        };
+        let m = spec.get_ref();
+        let medium = Medium {
+            sigma_a: m.sigma_a.map_or(Vec3::ZERO, RgbSpec::rgb),
+            sigma_s: m.sigma_s.map_or(Vec3::ZERO, RgbSpec::rgb),
+            g: m.g.map_or(0.0, |g| g.0),
+        };
+        medium
+            .check()
+            .map_err(|why| src.error(spec.span(), format!("medium '{n}': {why}")))?;
+        desc.media.push((n.clone(), medium));
+        let i = desc.media.len() as u32 - 1;
+        self.used.insert(n.clone(), i);
+        Ok(i)
+    }
+}
+
 fn shapes(
     src: &Source,
     specs: &[Spanned<ShapeSpec>],
     (materials, textures): (&BTreeMap<String, Material>, &BTreeMap<String, Arc<Texture>>),
+    media: &mut Media,
     opts: &LoadOptions,
     files: &dyn FileSource,
     desc: &mut SceneDesc,
@@ -338,12 +395,32 @@ fn shapes(
                 meshes.push(report);
             }
         }
-        if let Some(alpha) = alpha {
-            let shapes = match s.kind {
-                ShapeKind::Sphere => CutShapes::Sphere(sphere),
-                ShapeKind::Disk => CutShapes::Disk(disk),
-                _ => CutShapes::Triangles(first_triangle..desc.triangles.len()),
+        let shapes = match s.kind {
+            ShapeKind::Sphere => CutShapes::Sphere(sphere),
+            ShapeKind::Disk => CutShapes::Disk(disk),
+            _ => CutShapes::Triangles(first_triangle..desc.triangles.len()),
+        };
+        let mut side = |name: &Option<Spanned<String>>| match name {
+            Some(n) => media.index(src, desc, n).map(Some),
+            None => Ok(None),
+        };
+        let interface = MediumInterface {
+            inside: side(&s.medium_inside)?,
+            outside: side(&s.medium_outside)?,
+        };
+        if interface.is_transition() {
+            // A box's faces wind towards its inside; its inside is its interior.
+            let interface = if s.kind == ShapeKind::Box {
+                interface.flipped()
+            } else {
+                interface
             };
+            desc.boundaries.push(Boundary {
+                interface,
+                shapes: shapes.clone(),
+            });
+        }
+        if let Some(alpha) = alpha {
             desc.cutouts.push(Cutout { alpha, shapes });
         }
     }

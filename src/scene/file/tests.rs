@@ -807,3 +807,102 @@ fn a_camera_may_have_a_thin_lens() {
     let text = format!("{CAMERA}lens_radius = 0\nfocal_distance = 3\n");
     assert_eq!(parse_str(&text).unwrap().desc.camera.lens, None);
 }
+
+#[test]
+fn media_bound_by_shapes_and_the_camera_in_one() {
+    use crate::medium::{Medium, MediumInterface};
+    use crate::scene::{Boundary, CutShapes};
+    let text = r#"
+        [camera]
+        position = [0, 0, 0]
+        look_at = [0, 0, 1]
+        fov_y = 2
+        width = 3
+        height = 3
+        medium = "air"
+        [media.air]
+        sigma_s = 0.0
+        sigma_a = [0.0, 0.0, 0.0]
+        [media.ink]
+        sigma_a = [0.1, 0.3, 0.6]
+        [media.unused]
+        sigma_s = 1
+        [materials.none]
+        type = "interface"
+        [[shapes]]
+        type = "sphere"
+        material = "none"
+        centre = [0, 0, 5]
+        radius = 1
+        medium_inside = "ink"
+        medium_outside = "air"
+        [[shapes]]
+        type = "box"
+        material = "none"
+        min = [-1, -1, 20]
+        max = [1, 1, 21]
+        medium_inside = "ink"
+        medium_outside = "air"
+        [[shapes]]
+        type = "quad"
+        material = "none"
+        vertices = [[-1, -1, 30], [1, -1, 30], [1, 1, 30], [-1, 1, 30]]
+        medium_outside = "air"
+        medium_inside = "air"
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    let (air, ink) = (
+        Medium {
+            sigma_a: Vec3::ZERO,
+            sigma_s: Vec3::ZERO,
+            g: 0.0,
+        },
+        Medium {
+            sigma_a: Vec3::new(0.1, 0.3, 0.6),
+            sigma_s: Vec3::ZERO,
+            g: 0.0,
+        },
+    );
+    // Media in order of first use; the one nobody names is left out.
+    assert_eq!(d.media, [("air".to_string(), air), ("ink".to_string(), ink)]);
+    assert_eq!(d.camera_medium, Some(0));
+    let mi = MediumInterface {
+        inside: Some(1),
+        outside: Some(0),
+    };
+    // The box's faces wind inwards: its interface is turned so that its
+    // interior is inside; a shape between one medium and itself bounds none.
+    assert_eq!(
+        d.boundaries,
+        [
+            Boundary {
+                interface: mi,
+                shapes: CutShapes::Sphere(0),
+            },
+            Boundary {
+                interface: mi.flipped(),
+                shapes: CutShapes::Triangles(0..12),
+            },
+        ]
+    );
+    assert_eq!(d.materials[d.spheres[0].material as usize].1, Material::Interface);
+    assert!(Scene::build(d).unwrap().has_media());
+    let e = parse_str(&text.replacen("medium_inside = \"ink\"", "medium_inside = \"inc\"", 1))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:23: unknown medium 'inc' (defined: air, ink, unused)"),
+        "{e}"
+    );
+    let e = parse_str(&text.replace("sigma_a = [0.1, 0.3, 0.6]", "sigma_a = [0.1, -0.3, 0.6]"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("test.toml:12: medium 'ink': sigma_a"), "{e}");
+    let e = parse_str(&text.replace(
+        "type = \"interface\"",
+        "type = \"interface\"\n        displacement = 0.1",
+    ))
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("material 'none': `displacement` does not apply"), "{e}");
+}

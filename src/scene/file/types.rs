@@ -77,6 +77,34 @@ pub(super) struct SceneFile {
     pub(super) lights: Vec<Spanned<LightSpec>>,
     #[serde(default)]
     pub(super) shapes: Vec<Spanned<ShapeSpec>>,
+    #[serde(default)]
+    pub(super) media: BTreeMap<String, Spanned<MediumSpec>>,
+}
+
+/// A `[media.NAME]` table: a homogeneous medium.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MediumSpec {
+    pub(super) sigma_a: Option<RgbSpec>,
+    pub(super) sigma_s: Option<RgbSpec>,
+    pub(super) g: Option<Num>,
+}
+
+/// A number for all three channels, or one each.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(untagged, expecting = "a number or an array of three numbers")]
+pub(super) enum RgbSpec {
+    Grey(Num),
+    Rgb(Vec3Spec),
+}
+
+impl RgbSpec {
+    pub(super) fn rgb(self) -> Vec3 {
+        match self {
+            RgbSpec::Grey(n) => Vec3::splat(n.0),
+            RgbSpec::Rgb(v) => v.0,
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -90,6 +118,8 @@ pub(super) struct CameraSpec {
     pub(super) height: Option<u32>,
     pub(super) lens_radius: Option<Num>,
     pub(super) focal_distance: Option<Num>,
+    /// The medium the camera is in.
+    pub(super) medium: Option<Spanned<String>>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -193,11 +223,15 @@ pub(super) struct ShapeSpec {
     pub(super) smooth: Option<bool>,
     /// Cuts the shape out where below 1 (pbrt-v4's `alpha`).
     pub(super) alpha: Option<Spanned<AlphaSpec>>,
+    /// The media behind and in front of the surface (against and along its
+    /// normal), when it bounds any.
+    pub(super) medium_inside: Option<Spanned<String>>,
+    pub(super) medium_outside: Option<Spanned<String>>,
 }
 
 impl ShapeSpec {
     /// The optional keys that are present, by name.
-    pub(super) fn given(&self) -> [(&'static str, bool); 17] {
+    pub(super) fn given(&self) -> [(&'static str, bool); 19] {
         [
             ("uvs", self.uvs.is_some()),
             ("material", self.material.is_some()),
@@ -216,9 +250,14 @@ impl ShapeSpec {
             ("fit", self.fit.is_some()),
             ("smooth", self.smooth.is_some()),
             ("alpha", self.alpha.is_some()),
+            ("medium_inside", self.medium_inside.is_some()),
+            ("medium_outside", self.medium_outside.is_some()),
         ]
     }
 }
+
+const MI: &str = "medium_inside";
+const MO: &str = "medium_outside";
 
 impl ShapeKind {
     pub(super) fn name(self) -> &'static str {
@@ -235,11 +274,20 @@ impl ShapeKind {
     /// Keys each shape type reads besides `type`.
     pub(super) fn keys(self) -> &'static [&'static str] {
         match self {
-            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha"],
-            ShapeKind::Quad => &["material", "vertices", "uvs", "alpha"],
-            ShapeKind::Box => &["material", "min", "max", "alpha"],
-            ShapeKind::Sphere => &["material", "centre", "radius", "alpha"],
-            ShapeKind::Disk => &["material", "centre", "normal", "radius", "inner_radius", "alpha"],
+            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha", MI, MO],
+            ShapeKind::Quad => &["material", "vertices", "uvs", "alpha", MI, MO],
+            ShapeKind::Box => &["material", "min", "max", "alpha", MI, MO],
+            ShapeKind::Sphere => &["material", "centre", "radius", "alpha", MI, MO],
+            ShapeKind::Disk => &[
+                "material",
+                "centre",
+                "normal",
+                "radius",
+                "inner_radius",
+                "alpha",
+                MI,
+                MO,
+            ],
             ShapeKind::Mesh => &[
                 "material",
                 "path",
@@ -249,6 +297,8 @@ impl ShapeKind {
                 "fit",
                 "smooth",
                 "alpha",
+                MI,
+                MO,
             ],
         }
     }
