@@ -119,6 +119,9 @@ pub enum ConductorFresnel {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
+    /// No surface at all (pbrt-v4's `interface`): the shape only bounds
+    /// participating media, and rays pass through it. Its BSDF has no lobes.
+    Interface,
     /// Lambertian: f = reflectance / pi (pbrt-v4 `diffuse`).
     Diffuse { reflectance: Texture },
     /// Lambertian that also emits radiance `le` from both sides, uniformly. It is
@@ -185,9 +188,6 @@ pub enum Material {
         map: Arc<TexImage>,
         mirrored: bool,
     },
-    /// No surface at all (pbrt-v4's `interface`): the shape only bounds
-    /// participating media, and rays pass through it. Its BSDF has no lobes.
-    Interface,
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -374,6 +374,10 @@ impl Material {
     }
 
     /// The material a `Mix` shows at a point seen from `wo` (itself otherwise).
+    /// Out of line: inlined into `bsdf`, its hash was computed ahead of the
+    /// match for every material (BENCHMARKS.md, "What media cost scenes
+    /// without them").
+    #[inline(never)]
     fn chosen(&self, tc: &TexCoord, wo: Vec3) -> &Material {
         let Material::Mix { materials, amount } = self else {
             return self;

@@ -128,6 +128,7 @@ pub fn walk_camera_path(
 
 /// A camera path's next direction from the BSDF at a vertex: the lobe
 /// choice (passed over when the BSDF has one lobe), then the 2D sample.
+#[inline(always)]
 pub fn sample_bsdf(bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler) -> Option<BsdfSample> {
     let uc = sampler.lobe_choice(bsdf.uses_lobe_choice());
     bsdf.sample_f(wo, uc, sampler.next_2d(), TransportMode::Radiance)

@@ -43,6 +43,8 @@ enum Vertex<'a> {
     },
 }
 
+// Kept out of the path tracer's own loop, which scenes without media run.
+#[inline(never)]
 pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;

@@ -385,6 +385,9 @@ impl Light {
     /// infinite light uniformly over the sphere or, with a map, in proportion
     /// to the map's luminance. Distant and infinite lights return
     /// `dist = f32::INFINITY`.
+    // Inlined into each integrator's light sampling, as it was when it had
+    // one caller (BENCHMARKS.md, "What media cost scenes without them").
+    #[inline(always)]
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
             Light::Spot { position, .. } => {
