@@ -2,7 +2,8 @@
 //! (`scene::pbrt::parse_bytes`), the converter (`pbrt::convert::convert`,
 //! lenient, so that unsupported features are skipped rather than ending the
 //! run early), the film's crop at a few sizes, into a built scene (BVH
-//! included), and a few camera rays into that: hits, shadow tests, BSDFs.
+//! included), and a few camera rays into that: hits, shadow tests, BSDFs,
+//! and in scenes with participating media a short path through them.
 //!
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
@@ -17,6 +18,9 @@ mod common;
 
 use libfuzzer_sys::fuzz_target;
 use raytracer::scene::mesh::FileSource;
+use raytracer::integrator::path::PathTracer;
+use raytracer::integrator::{LightSampling, RadianceEstimator, RayStats};
+use raytracer::sampling::Sampler;
 use raytracer::scene::pbrt::{convert::convert, parse_bytes};
 use raytracer::scene::Scene;
 use std::io::{Error, ErrorKind};
@@ -72,6 +76,14 @@ fuzz_target!(|data: &[u8]| {
             if let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
                 let _ = scene.occluded(&ray, 0.0, hit.t);
                 let _ = scene.material(hit.material).bsdf(&scene.surface(&hit), -ray.d);
+            }
+            if scene.has_media() {
+                let pt = PathTracer {
+                    max_depth: Some(6),
+                    light_sampling: LightSampling::Mis,
+                };
+                let mut sampler = Sampler::new(true, 1, (x + w * y) as u64, 0);
+                let _ = pt.li(&scene, &ray, &mut sampler, &mut RayStats::default());
             }
         }
     }

@@ -847,3 +847,67 @@ fn an_alpha_cut_out_lets_light_and_sight_through_in_proportion() {
         }
     }
 }
+
+#[test]
+fn a_foggy_cornell_box_renders_the_same_on_any_thread_count_and_photons_refuse_it() {
+    let Some(dir) = bitterli() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(dir.join("cornell-box/scene-v4.pbrt")).unwrap();
+    let fog = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.01 0.01 0.01]\n\
+               \"rgb sigma_s\" [0.05 0.08 0.12] \"float g\" 0.3\nMediumInterface \"\" \"fog\"\nCamera";
+    let scene = tmp.path().join("fog.pbrt");
+    std::fs::write(&scene, text.replacen("Camera", fog, 1)).unwrap();
+    let scene = scene.to_str().unwrap();
+    let out = raytracer(&["info", "--scene", scene]);
+    let info = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(info.contains("medium \"fog\": homogeneous, sigma_a [0.01, 0.01, 0.01], sigma_s [0.05, 0.08, 0.12], g 0.3"));
+    assert!(info.contains("the camera in \"fog\""), "{info}");
+    let render = |name: &str, threads: &str, file: &str| {
+        let path = tmp.path().join(name);
+        let out = raytracer(&[
+            "--quiet",
+            "--scene",
+            file,
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "--spp",
+            "8",
+            "--threads",
+            threads,
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read(path).unwrap()
+    };
+    assert_eq!(render("one.exr", "1", scene), render("two.exr", "2", scene));
+    // The fog dims the box: about a quarter of its light is lost or scattered away.
+    let mean = |bytes: Vec<u8>, name: &str| {
+        let p = tmp.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let img = read_image(&p).unwrap();
+        luminance(img.mean(0, 0, img.width, img.height)) as f64
+    };
+    let clear = dir.join("cornell-box/scene-v4.pbrt");
+    let ratio =
+        mean(render("fog.exr", "2", scene), "a.exr") / mean(render("clear.exr", "2", clear.to_str().unwrap()), "b.exr");
+    assert!((0.6..0.9).contains(&ratio), "{ratio}");
+    let target = tmp.path().join("photon.png");
+    let out = raytracer(&[
+        "--scene",
+        scene,
+        "--integrator",
+        "photon",
+        "-o",
+        target.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    // The file's `Integrator "path"` earns a warning; the refusal is one line.
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert!(errors.len() == 1 && errors[0].contains("participating media"), "{err}");
+    assert!(!target.exists());
+}
