@@ -56,6 +56,9 @@ pub fn place_and_build(mesh: &Mesh) {
         disks: vec![],
         lights: vec![],
         cutouts: vec![],
+        media: vec![],
+        camera_medium: None,
+        boundaries: vec![],
         settings: SceneSettings::default(),
     };
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));

@@ -21,6 +21,9 @@
 //! surfaces are not sampled by shadow rays, so their Le counts wherever a
 //! path hits them.
 //!
+//! Scenes with participating media are path traced by `volpath`, the same
+//! estimator with the media's absorption and scattering along each segment.
+//!
 //! Parameters: `--spp N` samples per pixel [64]; `--max-depth D`, the most
 //! bounces (0: emitted light only, 1: direct light only; default: no limit,
 //! roulette ends paths).
