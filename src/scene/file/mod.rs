@@ -408,6 +408,14 @@ fn shapes(
             inside: side(&s.medium_inside)?,
             outside: side(&s.medium_outside)?,
         };
+        let no_surface = mat.is_some_and(|m| matches!(desc.materials[m as usize].1, Material::Interface));
+        if no_surface && !interface.is_transition() {
+            return Err(err(
+                "its material is an `interface`, no surface, so it must bound media: give `medium_inside` and \
+                 `medium_outside`, different"
+                    .into(),
+            ));
+        }
         if interface.is_transition() {
             // A box's faces wind towards its inside; its inside is its interior.
             let interface = if s.kind == ShapeKind::Box {

@@ -829,6 +829,7 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         sigma_s = 1
         [materials.none]
         type = "interface"
+        [materials.grey]
         [[shapes]]
         type = "sphere"
         material = "none"
@@ -845,7 +846,7 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         medium_outside = "air"
         [[shapes]]
         type = "quad"
-        material = "none"
+        material = "grey"
         vertices = [[-1, -1, 30], [1, -1, 30], [1, 1, 30], [-1, 1, 30]]
         medium_outside = "air"
         medium_inside = "air"
@@ -891,7 +892,7 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("test.toml:23: unknown medium 'inc' (defined: air, ink, unused)"),
+        e.starts_with("test.toml:24: unknown medium 'inc' (defined: air, ink, unused)"),
         "{e}"
     );
     let e = parse_str(&text.replace("sigma_a = [0.1, 0.3, 0.6]", "sigma_a = [0.1, -0.3, 0.6]"))
@@ -905,4 +906,12 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("material 'none': `displacement` does not apply"), "{e}");
+    // A shape of no surface that bounds nothing would only be a hole.
+    let e = parse_str(&text.replacen("medium_inside = \"ink\"\n        medium_outside = \"air\"\n", "", 1))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:19: sphere shape: its material is an `interface`, no surface, so it must bound media"),
+        "{e}"
+    );
 }
