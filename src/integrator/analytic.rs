@@ -160,3 +160,14 @@ pub fn furnace_with_balls(wall: Material, balls: &[(Vec3, f32, Material)], size:
     }
     Scene::build(d).unwrap()
 }
+
+/// A path-traced render's settings: `spp` samples, at most `max_depth` bounces.
+#[cfg(test)]
+pub fn path_settings(spp: u32, max_depth: Option<u32>) -> super::RenderSettings {
+    super::RenderSettings {
+        integrator: super::IntegratorKind::Path,
+        spp,
+        max_depth,
+        ..super::RenderSettings::default()
+    }
+}

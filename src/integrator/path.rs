@@ -271,20 +271,11 @@ impl checkpoint::Progressive for Progressive<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::integrator::analytic::closed_sphere;
+    use crate::integrator::analytic::{closed_sphere, path_settings};
     use crate::integrator::{render, IntegratorKind, RenderSettings};
     use crate::material::Material;
     use crate::math::Vec3;
     use std::f32::consts::PI;
-
-    fn path(spp: u32, max_depth: Option<u32>) -> RenderSettings {
-        RenderSettings {
-            integrator: IntegratorKind::Path,
-            spp,
-            max_depth,
-            ..RenderSettings::default()
-        }
-    }
 
     #[test]
     fn white_furnace_converges_to_le_over_one_minus_albedo() {
@@ -297,7 +288,7 @@ mod tests {
                 None,
                 16,
             );
-            let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+            let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
             let mean = film.mean(0, 0, 16, 16);
             let expected = Vec3::new(le, 2.0 * le, 0.5 * le) / (1.0 - a);
             let err = ((mean - expected) / expected).abs().max_element();
@@ -318,13 +309,13 @@ mod tests {
             None,
             8,
         );
-        let free = render(&scene, &path(16, None), &|| {}).unwrap().film;
+        let free = render(&scene, &path_settings(16, None), &|| {}).unwrap().film;
         assert!((free.mean(0, 0, 8, 8).y - 4.0).abs() < 0.1);
         for integrator in [IntegratorKind::Path, IntegratorKind::Direct] {
             let s = RenderSettings {
                 integrator,
                 max_component: Some(1.0),
-                ..path(16, None)
+                ..path_settings(16, None)
             };
             let film = render(&scene, &s, &|| {}).unwrap().film;
             for p in &film.pixels {
@@ -348,7 +339,7 @@ mod tests {
         // The first five path vertices are always traced (exact); later ones
         // face Russian roulette (right on average).
         for (d, tolerance) in [(0u32, 1e-4), (1, 1e-4), (4, 1e-4), (8, 0.01)] {
-            let film = render(&scene, &path(256, Some(d)), &|| {}).unwrap().film;
+            let film = render(&scene, &path_settings(256, Some(d)), &|| {}).unwrap().film;
             let expected = (0..=d).map(|k| a.powi(k as i32)).sum::<f32>() * le;
             let mean = film.mean(0, 0, 8, 8).x;
             assert!(
@@ -377,7 +368,7 @@ mod tests {
             ],
             16,
         );
-        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
         let expected = le / (1.0 - a);
         // Each ball covers the middle columns of its half of the image.
         for (x0, x1) in [(3, 7), (9, 13)] {
@@ -414,7 +405,7 @@ mod tests {
             ],
             16,
         );
-        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
         let expected = le / (1.0 - a);
         for (x0, x1) in [(3, 7), (9, 13)] {
             let mean = film.mean(x0, 6, x1, 10);
@@ -429,7 +420,7 @@ mod tests {
         // bounce landing on the wall again, L = a E0 / (pi (1 - a)).
         let (a, phi) = (0.6, 10.0);
         let scene = closed_sphere(Material::diffuse(a, a, a), Some((0.01, phi)), 16);
-        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
         let e0 = phi / (4.0 * PI);
         let expected = a * e0 / (PI * (1.0 - a));
         let mean = film.mean(0, 0, 16, 16).x;

@@ -243,7 +243,7 @@ fn sample_direct(scene: &Scene, v: &Vertex, mis: bool, sampler: &mut Sampler, st
 
 #[cfg(test)]
 mod tests {
-    use super::super::analytic::{closed_sphere_desc, floor_under_quad};
+    use super::super::analytic::{closed_sphere_desc, floor_under_quad, path_settings};
     use super::super::path::PathTracer;
     use super::super::{camera_sampler, render, IntegratorKind, LightSampling, RadianceEstimator, RayStats};
     use super::super::{RenderSettings, SamplerKind};
@@ -252,15 +252,6 @@ mod tests {
     use crate::medium::{Medium, MediumInterface};
     use crate::scene::{Boundary, CameraDesc, CutShapes, SceneDesc, TriangleDesc};
     use crate::Scene;
-
-    fn path(spp: u32, max_depth: Option<u32>) -> RenderSettings {
-        RenderSettings {
-            integrator: IntegratorKind::Path,
-            spp,
-            max_depth,
-            ..RenderSettings::default()
-        }
-    }
 
     #[test]
     fn a_lossless_medium_vanishes_in_a_white_furnace() {
@@ -285,7 +276,7 @@ mod tests {
         ));
         d.camera_medium = Some(0);
         let scene = Scene::build(d).unwrap();
-        let film = render(&scene, &path(256, None), &|| {}).unwrap().film;
+        let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
         let mean = film.mean(0, 0, 16, 16);
         let expected = le / (1.0 - a);
         let err = ((mean - expected) / expected).abs().max_element();
@@ -301,7 +292,9 @@ mod tests {
             },
         ));
         d.camera_medium = Some(0);
-        let film = render(&Scene::build(d).unwrap(), &path(64, None), &|| {}).unwrap().film;
+        let film = render(&Scene::build(d).unwrap(), &path_settings(64, None), &|| {})
+            .unwrap()
+            .film;
         let dark = film.mean(0, 0, 16, 16);
         assert!((dark / expected).max_element() < 0.9, "{dark:?} vs {expected:?}");
     }
@@ -407,7 +400,7 @@ mod tests {
         }
         // Whole renders agree: the pixels' rays are within 5 degrees of the
         // axis, their paths through the slab 1 / cos longer at most.
-        let film = render(&slab(false), &path(4, None), &|| {}).unwrap().film;
+        let film = render(&slab(false), &path_settings(4, None), &|| {}).unwrap().film;
         let mean = film.mean(0, 0, 4, 4);
         let (lo, hi) = ((-sigma * 1.004).exp(), (-sigma).exp());
         assert!(
@@ -522,7 +515,7 @@ mod tests {
         for kind in [IntegratorKind::Direct, IntegratorKind::Photon, IntegratorKind::Sppm] {
             let settings = RenderSettings {
                 integrator: kind,
-                ..path(1, None)
+                ..path_settings(1, None)
             };
             let e = render(&slab(false), &settings, &|| {}).err().map(|e| e.to_string());
             assert!(
