@@ -2,22 +2,20 @@
 //! `VolPathIntegrator`, for homogeneous media).
 //!
 //! A path carries the medium it travels in: the camera's, then whatever the
-//! surfaces it crosses say (`Scene::medium_after`). Along each segment in a
-//! scattering medium a distance is sampled (`Medium::sample_distance`: one
-//! channel's exponential, weighted by the three channels' mean density so
-//! that coloured media stay unbiased); if it falls short of the next
-//! surface the path scatters there, by the phase function, and that is a
-//! bounce like a surface's. Distances are sampled for one channel, the
-//! path's hero, chosen when it starts; the path's estimate divides by the
-//! mean of the channels' densities (`MediumEvent`). A medium that only absorbs multiplies the
-//! throughput by its transmittance. Surfaces of no material are passed
-//! through without a bounce. At every scattering vertex (surface or medium)
-//! one light sample, its shadow ray taking the transmittance of the media
-//! it crosses (`Scene::transmittance`), combined with the phase function's
-//! or the BSDF's sample by the power heuristic, as in the path tracer.
-//! Russian roulette as there.
+//! surfaces it crosses say (`Scene::medium_after`). A medium that only
+//! absorbs multiplies the throughput by its transmittance. In a scattering
+//! medium a distance is sampled along each segment (`Medium::sample_distance`,
+//! for the path's hero channel, chosen when it starts; the estimate divides
+//! by the mean of the channels' path densities, so coloured media stay
+//! unbiased); if it falls short of the next surface the path scatters there,
+//! by the phase function, and that is a bounce like a surface's. Surfaces of
+//! no material are passed through without a bounce. At every scattering
+//! vertex (surface or medium) one light sample, its shadow ray taking the
+//! transmittance of the media it crosses (`Scene::transmittance`), combined
+//! with the phase function's or the BSDF's sample by the power heuristic, as
+//! in the path tracer. Russian roulette as there.
 
-use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, scatters_towards};
+use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, sample_bsdf, scatters_towards};
 use super::path::{PathTracer, MAX_SURVIVAL, ROULETTE_DEPTH};
 use super::{LightSampling, RayStats};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -25,8 +23,6 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::medium::MediumEvent;
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, MAX_CROSSINGS};
-
-use super::direct::power_heuristic;
 
 /// Where a path scatters: on a surface, or in a medium.
 enum Vertex<'a> {
