@@ -304,6 +304,10 @@ impl Bxdf {
     /// direction within it. `None` when no direction could be produced
     /// (including degenerate ones: zero or non-finite pdf, `wi` in the
     /// tangent plane).
+    // Inlined into `Bsdf::sample_f`, its one caller: left to itself the
+    // compiler's choice changes with unrelated code (BENCHMARKS.md, "What
+    // media cost scenes without them").
+    #[inline(always)]
     pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let bs = match self {
             Bxdf::Diffuse(b) => b.sample_f(wo, u),
