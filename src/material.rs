@@ -137,6 +137,9 @@ pub enum Material {
     /// An interface to a medium of index `eta`, smooth or rough (pbrt-v4
     /// `dielectric`). Glass is a smooth dielectric.
     Dielectric { eta: f32, roughness: MaterialRoughness },
+    /// A dielectric whose index `eta` differs by colour channel (dispersion:
+    /// pbrt-v4's glass spectra), smooth or rough.
+    Dispersive { eta: Vec3, roughness: MaterialRoughness },
     /// A thin slab of index `eta` (pbrt-v4 `thindielectric`).
     ThinDielectric { eta: f32 },
     /// A dielectric coat over a Lambertian base (pbrt-v4 `coateddiffuse`,
@@ -318,7 +321,9 @@ impl Material {
     /// (whatever the texture values), so photons never stay on it.
     pub fn is_specular(&self) -> bool {
         match self {
-            Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } => roughness.is_smooth(),
+            Material::Conductor { roughness, .. }
+            | Material::Dielectric { roughness, .. }
+            | Material::Dispersive { roughness, .. } => roughness.is_smooth(),
             Material::ThinDielectric { .. } => true,
             Material::CoatedConductor {
                 interface_roughness,
@@ -341,6 +346,7 @@ impl Material {
                 self,
                 Material::Conductor { .. }
                     | Material::Dielectric { .. }
+                    | Material::Dispersive { .. }
                     | Material::ThinDielectric { .. }
                     | Material::CoatedDiffuse { .. }
                     | Material::CoatedConductor { .. }
@@ -418,6 +424,9 @@ impl Material {
             Material::Dielectric { eta, roughness } => {
                 // The outward normal stays: it says which side is inside.
                 return Bsdf::new(Bxdf::dielectric(roughness.distribution(&tc), *eta), sp.ns, sp.dpdu);
+            }
+            Material::Dispersive { eta, roughness } => {
+                return Bsdf::new(Bxdf::dispersive(roughness.distribution(&tc), *eta), sp.ns, sp.dpdu);
             }
             Material::ThinDielectric { eta } => Bxdf::thin_dielectric(*eta),
             Material::CoatedDiffuse {

@@ -12,6 +12,7 @@
 //! | [`DiffuseBxdf`], [`DiffuseTransmissionBxdf`] | `diffuse` | pbrt-v4 9.2; its `DiffuseTransmissionBxDF` |
 //! | [`ConductorBxdf`] | `conductor` | pbrt-v4 9.4 (complex Fresnel), 9.6 (Torrance-Sparrow, Trowbridge-Reitz) |
 //! | [`DielectricBxdf`], [`ThinDielectricBxdf`] | `dielectric` | pbrt-v4 9.3, 9.5, 9.7; Walter et al. 2007 |
+//! | [`DispersiveBxdf`] | `dispersive` | a dielectric per colour channel, one-sample MIS over the channels |
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`CoatedConductorBxdf`] | `layered` | pbrt-v4's `LayeredBxDF` random walk (Guo et al. 2018) for `f`; a deterministic mixture for sampling |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
@@ -32,6 +33,7 @@ mod coated;
 mod conductor;
 mod dielectric;
 mod diffuse;
+mod dispersive;
 mod frame;
 mod fresnel;
 mod layered;
@@ -47,6 +49,7 @@ pub use coated::{CoatTable, CoatedDiffuseBxdf};
 pub use conductor::ConductorBxdf;
 pub use dielectric::{DielectricBxdf, ThinDielectricBxdf};
 pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
+pub use dispersive::DispersiveBxdf;
 pub use frame::Frame;
 pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, reflect, refract};
 pub use layered::CoatedConductorBxdf;
@@ -230,6 +233,7 @@ pub enum Bxdf {
     DiffuseTransmission(DiffuseTransmissionBxdf),
     Conductor(ConductorBxdf),
     Dielectric(DielectricBxdf),
+    Dispersive(DispersiveBxdf),
     ThinDielectric(ThinDielectricBxdf),
     CoatedDiffuse(CoatedDiffuseBxdf),
     CoatedConductor(CoatedConductorBxdf),
@@ -260,6 +264,11 @@ impl Bxdf {
     /// A dielectric interface with relative index `eta` (inside / outside).
     pub fn dielectric(distrib: TrowbridgeReitz, eta: f32) -> Self {
         Bxdf::Dielectric(DielectricBxdf::new(distrib, eta))
+    }
+
+    /// A dielectric interface whose relative index differs by colour channel.
+    pub fn dispersive(distrib: TrowbridgeReitz, eta: Vec3) -> Self {
+        Bxdf::Dispersive(DispersiveBxdf::new(distrib, eta))
     }
 
     /// A thin dielectric slab with index `eta` (pbrt-v4 `thindielectric`).
@@ -294,6 +303,7 @@ impl Bxdf {
             Bxdf::DiffuseTransmission(b) => b.f(wo, wi),
             Bxdf::Conductor(b) => b.f(wo, wi),
             Bxdf::Dielectric(b) => b.f(wo, wi, mode),
+            Bxdf::Dispersive(b) => b.f(wo, wi, mode),
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
@@ -314,6 +324,7 @@ impl Bxdf {
             Bxdf::DiffuseTransmission(b) => b.sample_f(wo, uc, u),
             Bxdf::Conductor(b) => b.sample_f(wo, u),
             Bxdf::Dielectric(b) => b.sample_f(wo, uc, u, mode),
+            Bxdf::Dispersive(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
@@ -330,6 +341,7 @@ impl Bxdf {
             Bxdf::DiffuseTransmission(b) => b.pdf(wo, wi),
             Bxdf::Conductor(b) => b.pdf(wo, wi),
             Bxdf::Dielectric(b) => b.pdf(wo, wi),
+            Bxdf::Dispersive(b) => b.pdf(wo, wi),
             Bxdf::ThinDielectric(_) => 0.0,
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
@@ -342,6 +354,7 @@ impl Bxdf {
             Bxdf::DiffuseTransmission(b) => b.flags(),
             Bxdf::Conductor(b) => b.flags(),
             Bxdf::Dielectric(b) => b.flags(),
+            Bxdf::Dispersive(b) => b.flags(),
             Bxdf::ThinDielectric(b) => b.flags(),
             Bxdf::CoatedDiffuse(b) => b.flags(),
             Bxdf::CoatedConductor(b) => b.flags(),
@@ -378,6 +391,16 @@ impl Bsdf {
             return Vec3::ZERO;
         }
         self.bxdf.f(wo, self.frame.to_local(wi), mode)
+    }
+
+    /// Tells a dispersive BSDF the throughput of the path that meets it, so
+    /// that it follows a colour channel the path still carries (no-op for
+    /// every other BSDF).
+    #[inline(always)]
+    pub fn carry(&mut self, beta: Vec3) {
+        if let Bxdf::Dispersive(d) = &mut self.bxdf {
+            d.weights = beta;
+        }
     }
 
     /// `f` and `pdf` of one pair of directions, taken to the local frame

@@ -358,6 +358,15 @@ fn sampled_bxdfs() -> Vec<(String, Bxdf)> {
             Bxdf::dielectric(tr(ax, ay), eta),
         ));
     }
+    for (ax, ay, eta) in [
+        (0.1, 0.1, Vec3::new(1.45, 1.5, 1.6)),
+        (0.3, 0.2, Vec3::new(1.0 / 1.3, 1.0 / 1.33, 1.0 / 1.4)),
+    ] {
+        cases.push((
+            format!("dispersive alpha {ax}/{ay} eta {eta}"),
+            Bxdf::dispersive(tr(ax, ay), eta),
+        ));
+    }
     for (ax, ay, eta, r, d) in [
         (0.0, 0.0, 1.5, 0.5, 0.0),
         (0.2, 0.2, 1.5, 0.5, 0.01),
@@ -444,6 +453,11 @@ fn chi2_conductor() {
 #[test]
 fn chi2_dielectric() {
     run_chi2(&cases_named("dielectric"), chi2_total_tests());
+}
+
+#[test]
+fn chi2_dispersive() {
+    run_chi2(&cases_named("dispersive"), chi2_total_tests());
 }
 
 #[test]
@@ -920,6 +934,99 @@ fn smooth_dielectric_splits_by_fresnel_and_scales_radiance_only() {
     let bs = matched.sample_f(spherical(0.7, 1.0), 0.0, Vec2::ZERO, TransportMode::Radiance);
     let bs = bs.unwrap();
     assert!((bs.wi + spherical(0.7, 1.0)).length() < 1e-5 && (bs.weight().x - 1.0).abs() < 1e-5);
+}
+
+#[test]
+fn a_smooth_dispersive_interface_is_each_channels_dielectric_on_average() {
+    // Over its samples, each channel of a dispersive interface reflects its
+    // own Fresnel reflectance into the mirror direction and transmits the
+    // rest along its own refracted direction, which no other channel takes.
+    let eta = Vec3::new(1.45, 1.5, 1.6);
+    let glass = Bxdf::dispersive(TrowbridgeReitz::smooth(), eta);
+    assert_eq!(
+        glass.flags(),
+        BxdfFlags::SPECULAR_REFLECTION | BxdfFlags::SPECULAR_TRANSMISSION
+    );
+    for theta in [0.3f32, 1.0, 1.4, PI as f32 - 0.3, PI as f32 - 0.75] {
+        let wo = spherical(theta, 0.4);
+        for mode in [TransportMode::Radiance, TransportMode::Importance] {
+            let n = 30_000;
+            let (mut reflected, mut transmitted) = (Vec3::ZERO, Vec3::ZERO);
+            for i in 0..n {
+                let uc = (i as f32 + 0.5) / n as f32;
+                let bs = glass.sample_f(wo, uc, Vec2::ZERO, mode).unwrap();
+                if bs.is_reflection() {
+                    assert!((bs.wi - mirror(wo)).length() < 1e-6);
+                    reflected += bs.weight() / n as f32;
+                    continue;
+                }
+                let c = (0..3).find(|&c| bs.f[c] > 0.0).unwrap();
+                assert_eq!(bs.f[(c + 1) % 3] + bs.f[(c + 2) % 3], 0.0, "{}", bs.f);
+                let one = Bxdf::dielectric(TrowbridgeReitz::smooth(), eta[c]);
+                let want = one.sample_f(wo, 0.999_99, Vec2::ZERO, mode).unwrap();
+                assert!((bs.wi - want.wi).length() < 1e-5 && bs.eta == want.eta);
+                transmitted += bs.weight() / n as f32;
+            }
+            for c in 0..3 {
+                let r = fr_dielectric(wo.z, eta[c]);
+                let etap = if wo.z > 0.0 { eta[c] } else { 1.0 / eta[c] };
+                let t = (1.0 - r)
+                    / if mode == TransportMode::Radiance {
+                        etap * etap
+                    } else {
+                        1.0
+                    };
+                assert!(
+                    (reflected[c] - r).abs() < 2e-3,
+                    "theta {theta}, {c}: {reflected} vs R {r}"
+                );
+                assert!(
+                    (transmitted[c] - t).abs() < 2e-3,
+                    "theta {theta}, {c}: {transmitted} vs T {t}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_dispersive_interface_follows_the_channels_a_path_carries() {
+    // Once a path carries green alone, every refraction is green's, with
+    // weight T / T = 1 (importance), and a reflection weighs each channel
+    // by its reflectance over green's; rough samples stay consistent with
+    // f and pdf under the same weights.
+    let eta = Vec3::new(1.45, 1.5, 1.6);
+    let wo = spherical(0.8, 0.2);
+    for alpha in [0.0f32, 0.2] {
+        let mut bsdf = Bsdf::new(
+            Bxdf::dispersive(TrowbridgeReitz::isotropic(alpha), eta),
+            Vec3::Z,
+            Vec3::X,
+        );
+        bsdf.carry(Vec3::new(0.0, 0.7, 0.0));
+        let green = Bxdf::dielectric(TrowbridgeReitz::isotropic(alpha), eta.y);
+        for i in 0..1000 {
+            let (uc, u) = ((i as f32 + 0.5) / 1000.0, Vec2::new(0.3, (i % 7) as f32 / 7.0));
+            let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Importance) else {
+                continue;
+            };
+            if bs.is_specular() && bs.is_transmission() {
+                let want = green.sample_f(wo, 0.999_99, u, TransportMode::Importance).unwrap();
+                assert!((bs.wi - want.wi).length() < 1e-5);
+                assert!((bs.weight() - Vec3::Y).abs().max_element() < 1e-5, "{}", bs.weight());
+            } else if bs.is_specular() {
+                let r = eta.to_array().map(|e| fr_dielectric(wo.z, e));
+                let want = Vec3::from_array(r) / r[1];
+                assert!((bs.weight() - want).abs().max_element() < 1e-4, "{}", bs.weight());
+            } else {
+                let (f, pdf) = bsdf.f_pdf(wo, bs.wi, TransportMode::Importance);
+                assert!(close(bs.pdf, pdf, 1e-3) && (bs.f - f).abs().max_element() <= 1e-3 * f.max_element());
+                // Green's density alone: the others are never followed.
+                let green_pdf = green.pdf(wo, bsdf.frame.to_local(bs.wi), TransportMode::Importance);
+                assert!(close(pdf, green_pdf, 1e-4), "{pdf} vs {green_pdf}");
+            }
+        }
+    }
 }
 
 #[test]

@@ -90,7 +90,8 @@ pub fn walk_camera_path(
         }
         let m = scene.material(hit.material);
         l += beta * m.le();
-        let bsdf = m.bsdf(&scene.surface(&hit), wo);
+        let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+        bsdf.carry(beta);
         let flags = bsdf.flags();
         if flags.is_empty() {
             break;

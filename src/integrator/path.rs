@@ -105,7 +105,8 @@ impl RadianceEstimator for PathTracer {
             }
             let wo = -ray.d;
             depth += 1;
-            let bsdf = m.bsdf(&scene.surface(&hit), wo);
+            let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+            bsdf.carry(beta);
             let flags = bsdf.flags();
             if flags.is_empty() {
                 break;
@@ -377,6 +378,68 @@ mod tests {
             eprintln!("columns {x0}..{x1}: {mean:?} vs {expected:?}");
             assert!(err < 0.02, "columns {x0}..{x1}: {mean:?} vs {expected:?}");
         }
+    }
+
+    #[test]
+    fn a_dispersive_ball_shows_each_channel_what_its_own_index_shows() {
+        // A glass ball in front of a bright ball, inside a furnace: what the
+        // camera sees through it depends much on the index. A dispersive
+        // ball's channel c must be, on average, the picture of a glass of
+        // channel c's index, and a lossless one must vanish in the furnace.
+        use crate::integrator::analytic::furnace_with_balls;
+        use crate::material::Roughness;
+        let eta = Vec3::new(1.2, 1.5, 2.0);
+        let wall = Material::Emissive {
+            albedo: Vec3::splat(0.5),
+            le: Vec3::ONE,
+        };
+        let bright = Material::Emissive {
+            albedo: Vec3::ZERO,
+            le: Vec3::splat(8.0),
+        };
+        let region = |glass: Material| {
+            let scene = furnace_with_balls(
+                wall.clone(),
+                &[
+                    (Vec3::new(0.0, 0.0, 0.6), 0.12, glass),
+                    (Vec3::new(0.03, 0.02, 0.9), 0.06, bright.clone()),
+                ],
+                16,
+            );
+            let film = render(&scene, &path_settings(512, None), &|| {}).unwrap().film;
+            film.mean(5, 5, 11, 11)
+        };
+        let dispersive = region(Material::Dispersive {
+            eta,
+            roughness: Roughness::SMOOTH.into(),
+        });
+        let single = [0, 1, 2].map(|c| region(Material::glass(eta[c]))[c]);
+        for c in 0..3 {
+            let err = (dispersive[c] - single[c]).abs() / single[c];
+            assert!(err < 0.03, "channel {c}: {} vs {}", dispersive[c], single[c]);
+        }
+        // The test can tell the indices apart.
+        let (lo, hi) = (
+            single.iter().copied().fold(f32::MAX, f32::min),
+            single.iter().copied().fold(0.0, f32::max),
+        );
+        assert!(hi / lo > 1.2, "{single:?}");
+
+        let scene = furnace_with_balls(
+            wall.clone(),
+            &[(
+                Vec3::new(0.0, 0.0, 0.6),
+                0.12,
+                Material::Dispersive {
+                    eta,
+                    roughness: Roughness::SMOOTH.into(),
+                },
+            )],
+            16,
+        );
+        let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
+        let mean = film.mean(5, 5, 11, 11);
+        assert!((mean - Vec3::splat(2.0)).abs().max_element() < 0.04, "{mean}");
     }
 
     #[test]

@@ -161,7 +161,8 @@ impl PhotonMapping<'_> {
                 }
                 let m = scene.material(y.material);
                 let wo = -ray.d;
-                let bsdf = m.bsdf(&scene.surface(&y), wo);
+                let mut bsdf = m.bsdf(&scene.surface(&y), wo);
+                bsdf.carry(beta);
                 let flags = bsdf.flags();
                 if flags.is_diffuse() {
                     sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));

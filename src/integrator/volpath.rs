@@ -128,7 +128,8 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         }
         let wo = -ray.d;
         depth += 1;
-        let bsdf = m.bsdf(&scene.surface(&hit), wo);
+        let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+        bsdf.carry(beta);
         let flags = bsdf.flags();
         if flags.is_empty() {
             break;

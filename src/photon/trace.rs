@@ -155,7 +155,8 @@ fn trace_chunk(
             // Towards where the photon came from (pbrt's wo on a light path).
             let wi = -ray.d;
             let m = scene.material(hit.material);
-            let bsdf = m.bsdf(&scene.surface(&hit), wi);
+            let mut bsdf = m.bsdf(&scene.surface(&hit), wi);
+            bsdf.carry(power);
             let flags = bsdf.flags();
             if flags.is_empty() {
                 break;

@@ -515,12 +515,45 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
             }
         }
         "dielectric" => {
-            let mut keys = vec!["eta"];
+            let mut keys = vec!["eta", "glass"];
             keys.extend(ROUGHNESS_KEYS);
             k.only(kind, &keys)?;
-            Material::Dielectric {
-                eta: eta(1.5)?,
-                roughness: roughness()?.into(),
+            let roughness = roughness()?.into();
+            // An index per colour channel disperses: from three numbers, or
+            // from one of pbrt-v4's named glasses.
+            let channels = match k.string("glass")? {
+                Some(name) => {
+                    if k.has("eta") {
+                        return Err(k.err(Some("eta"), "give `glass` or `eta`, not both".to_string()));
+                    }
+                    let full = format!("glass-{name}");
+                    if crate::scene::pbrt::spectrum::glass_eta_550(&full).is_none() {
+                        return Err(k.err(
+                            Some("glass"),
+                            format!("unknown glass '{name}' (known: BK7, BAF10, FK51A, LASF9, F5, F10, F11)"),
+                        ));
+                    }
+                    let e = |l| crate::scene::pbrt::spectrum::glass_eta(&full, l).unwrap_or(1.0);
+                    Some(crate::scene::pbrt::spectrum::channel_etas(e))
+                }
+                None => match k.table.get("eta").map(|v| v.get_ref()) {
+                    Some(toml::Value::Array(_)) => {
+                        let e = k.rgb("eta")?.unwrap_or(Vec3::splat(1.5));
+                        if e.min_element() <= 0.0 {
+                            return Err(k.err(Some("eta"), format!("eta {:?} must be > 0", e.to_array())));
+                        }
+                        Some(e)
+                    }
+                    _ => None,
+                },
+            };
+            match channels {
+                Some(eta) if eta.x != eta.y || eta.y != eta.z => Material::Dispersive { eta, roughness },
+                Some(eta) => Material::Dielectric { eta: eta.x, roughness },
+                None => Material::Dielectric {
+                    eta: eta(1.5)?,
+                    roughness,
+                },
             }
         }
         "thindielectric" => {

@@ -507,6 +507,49 @@ fn coated_conductor_materials_are_read_and_checked() {
 }
 
 #[test]
+fn dielectrics_disperse_with_an_index_per_channel_or_a_named_glass() {
+    let text = format!(
+        "{CAMERA}[materials.prism]\ntype = \"dielectric\"\neta = [1.5, 1.52, 1.55]\n\
+         [materials.lens]\ntype = \"dielectric\"\nglass = \"BK7\"\nroughness = 0.1\n\
+         [materials.plain]\ntype = \"dielectric\"\neta = [1.4, 1.4, 1.4]\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m.clone());
+    assert_eq!(
+        get("prism"),
+        Some(Material::Dispersive {
+            eta: Vec3::new(1.5, 1.52, 1.55),
+            roughness: Roughness::SMOOTH.into(),
+        })
+    );
+    let Some(Material::Dispersive { eta, roughness }) = get("lens") else {
+        panic!("{:?}", get("lens"))
+    };
+    assert!(eta.x < eta.y && eta.y < eta.z && eta.x > 1.51 && eta.z < 1.53, "{eta}");
+    assert_eq!(
+        roughness,
+        Roughness {
+            u: 0.1,
+            v: 0.1,
+            remap: true
+        }
+        .into()
+    );
+    // The same index in every channel is a plain dielectric.
+    assert!(matches!(get("plain"), Some(Material::Dielectric { eta, .. }) if eta == 1.4));
+    for (bad, what) in [
+        ("glass = \"BK8\"\n", "unknown glass 'BK8'"),
+        ("glass = \"BK7\"\neta = 1.5\n", "give `glass` or `eta`"),
+        ("eta = [1.5, 0, 1.5]\n", "must be > 0"),
+        ("eta = [1.5, 1.6]\n", "`eta` must be a number or [r, g, b]"),
+    ] {
+        let text = format!("{CAMERA}[materials.x]\ntype = \"dielectric\"\n{bad}");
+        let e = parse_str(&text).unwrap_err().to_string();
+        assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
+    }
+}
+
+#[test]
 fn cornell_specular_toml_is_the_builtin_scene() {
     let file = load(&scenes_dir().join("cornell-specular.toml"), &LoadOptions::default()).unwrap();
     let embedded = builtin::cornell_specular();

@@ -1760,8 +1760,18 @@ fn convert_surface(
             Ok(Ok(Material::diffuse(a.x, a.y, a.z)))
         }
         "dielectric" => {
-            let eta = match constant_eta(p, "eta", loc, approximated)? {
-                Ok(eta) => eta,
+            let roughness = match roughness(scene, p, loc)? {
+                Ok(r) => r,
+                Err(why) => return Ok(Err(why)),
+            };
+            let eta = match eta_param(p, "eta")? {
+                Ok(Eta::Constant(eta)) => eta,
+                Ok(Eta::Dispersive { channels, .. }) => {
+                    return Ok(Ok(Material::Dispersive {
+                        eta: channels,
+                        roughness,
+                    }))
+                }
                 Err(why) => return Ok(Err(why)),
             };
             if !(eta.is_finite() && eta > 0.0) {
@@ -1770,10 +1780,6 @@ fn convert_surface(
                     format!("dielectric: \"eta\" {eta} must be a positive number"),
                 ));
             }
-            let roughness = match roughness(scene, p, loc)? {
-                Ok(r) => r,
-                Err(why) => return Ok(Err(why)),
-            };
             Ok(Ok(Material::Dielectric { eta, roughness }))
         }
         "thindielectric" => {
@@ -2111,21 +2117,23 @@ fn roughness(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Re
     roughness_of(scene, p, loc, "")
 }
 
+/// An index of refraction as a pbrt-v4 file gives it.
+enum Eta {
+    Constant(f32),
+    /// A spectrum that varies (dispersion): its index at 550 nm, near the
+    /// eye's peak sensitivity, and each colour channel's.
+    Dispersive {
+        at_550: f32,
+        channels: Vec3,
+    },
+}
+
 /// An index of refraction that pbrt-v4 takes as a float or a spectrum (never
-/// a texture; only its hair material does): 1.5 when absent. One index
-/// serves all three colour channels: a spectrum that varies (dispersion) is
-/// taken at 550 nm, near the eye's peak sensitivity, and noted in
-/// `approximated`.
-fn constant_eta(
-    p: &Params,
-    name: &str,
-    loc: &Loc,
-    approximated: &mut Vec<(Loc, String)>,
-) -> Result<std::result::Result<f32, String>> {
-    const LAMBDA: f32 = 550.0;
+/// a texture; only its hair material does): 1.5 when absent.
+fn eta_param(p: &Params, name: &str) -> Result<std::result::Result<Eta, String>> {
     let spectrum = match p.get(name) {
-        None => return Ok(Ok(1.5)),
-        Some(e) if e.ty == super::ParamType::Float => return Ok(Ok(p.get_float(name, 1.5)?)),
+        None => return Ok(Ok(Eta::Constant(1.5))),
+        Some(e) if e.ty == super::ParamType::Float => return Ok(Ok(Eta::Constant(p.get_float(name, 1.5)?))),
         Some(e) if e.ty == super::ParamType::Texture => {
             return Ok(Err(format!(
                 "a textured \"{name}\" is not supported (pbrt-v4 takes a float or a spectrum)"
@@ -2135,11 +2143,22 @@ fn constant_eta(
     };
     let eta = match &spectrum {
         Some(SpectrumValue::Sampled(s)) if s.value.windows(2).all(|w| w[0] == w[1]) && !s.value.is_empty() => {
-            return Ok(Ok(s.value[0]))
+            return Ok(Ok(Eta::Constant(s.value[0])))
         }
-        Some(SpectrumValue::Sampled(s)) => s.eval(LAMBDA),
+        Some(SpectrumValue::Sampled(s)) => {
+            // Beyond its wavelengths a sampled index keeps its end values
+            // (pbrt-v4's would drop to 0, an index no glass has).
+            let (lo, hi) = (s.lambda[0], s.lambda[s.lambda.len() - 1]);
+            Eta::Dispersive {
+                at_550: s.eval(550f32.clamp(lo, hi)),
+                channels: super::spectrum::channel_etas(|l| s.eval((l as f32).clamp(lo, hi)) as f64),
+            }
+        }
         Some(SpectrumValue::Named(n)) => match super::spectrum::glass_eta_550(n) {
-            Some(eta) => eta,
+            Some(at_550) => Eta::Dispersive {
+                at_550,
+                channels: super::spectrum::channel_etas(|l| super::spectrum::glass_eta(n, l).unwrap_or(1.0)),
+            },
             None => {
                 return Ok(Err(format!(
                     "the spectrum \"{n}\" as \"{name}\" is not supported (only pbrt-v4's glass spectra)"
@@ -2148,19 +2167,39 @@ fn constant_eta(
         },
         _ => return Ok(Err(format!("\"{name}\" given as this spectrum is not supported"))),
     };
-    if !(eta.is_finite() && eta > 0.0) {
-        return Ok(Err(format!(
-            "an \"{name}\" that varies with wavelength (dispersion) is not supported"
-        )));
+    if let Eta::Dispersive { at_550, channels } = eta {
+        if !(at_550.is_finite() && at_550 > 0.0 && channels.is_finite() && channels.min_element() > 0.0) {
+            return Ok(Err(format!(
+                "an \"{name}\" spectrum must be positive over the visible wavelengths"
+            )));
+        }
     }
-    approximated.push((
-        place(p, name, loc).clone(),
-        format!(
-            "an \"{name}\" that varies with wavelength (dispersion) is not supported (--lenient uses {eta:.4}, its value \
-             at {LAMBDA} nm)"
-        ),
-    ));
     Ok(Ok(eta))
+}
+
+/// An index of refraction where one index serves all three colour channels
+/// (thin dielectrics and coats): a spectrum that varies (dispersion) is
+/// taken at 550 nm and noted in `approximated`.
+fn constant_eta(
+    p: &Params,
+    name: &str,
+    loc: &Loc,
+    approximated: &mut Vec<(Loc, String)>,
+) -> Result<std::result::Result<f32, String>> {
+    Ok(match eta_param(p, name)? {
+        Ok(Eta::Constant(eta)) => Ok(eta),
+        Ok(Eta::Dispersive { at_550, .. }) => {
+            approximated.push((
+                place(p, name, loc).clone(),
+                format!(
+                    "an \"{name}\" that varies with wavelength (dispersion) is not supported here (--lenient uses \
+                     {at_550:.4}, its value at 550 nm)"
+                ),
+            ));
+            Ok(at_550)
+        }
+        Err(why) => Err(why),
+    })
 }
 
 /// A metal's Fresnel terms: `reflectance`, or `prefix` + `eta` and `k`
@@ -3334,27 +3373,28 @@ mod tests {
             assert_eq!(eta(material, name, ""), Ok(1.5));
             let flat = format!("\"spectrum {name}\" [ 300 1.7 800 1.7 ]");
             assert_eq!(eta(material, name, &flat), Ok(1.7));
-            let e = eta(material, name, &format!("\"spectrum {name}\" \"glass-BK7\"")).unwrap_err();
-            assert!(e.contains("dispersion"), "{e}");
             let e = eta(material, name, &format!("\"texture {name}\" \"t\"")).unwrap_err();
             assert!(e.contains("textured"), "{e}");
         }
-        // With --lenient a dispersive glass stays glass, at its index at
-        // 550 nm (BK7: 1.5185 there, 1.5168 at 587.6 nm as Schott lists it;
-        // a sampled spectrum interpolated), with one warning.
+        // A coat has one index: a dispersive one is refused, and with
+        // --lenient taken at 550 nm (BK7: 1.5185 there, 1.5168 at 587.6 nm
+        // as Schott lists it; a sampled spectrum interpolated), with one
+        // warning.
         for (value, want) in [
-            ("\"spectrum eta\" \"glass-BK7\"", 1.51854),
-            ("\"spectrum eta\" \"glass-F11\"", 1.79112),
-            ("\"spectrum eta\" [ 500 1.6 600 1.5 ]", 1.55),
+            ("\"spectrum interface.eta\" \"glass-BK7\"", 1.51852),
+            ("\"spectrum interface.eta\" \"glass-F11\"", 1.79115),
+            ("\"spectrum interface.eta\" [ 500 1.6 600 1.5 ]", 1.55),
         ] {
-            let text = format!("WorldBegin\nMaterial \"dielectric\"\n  {value}\n{}", quad(0.0));
+            let text = format!("WorldBegin\nMaterial \"coatedconductor\"\n  {value}\n{}", quad(0.0));
             let e = convert_text(&text, false).unwrap_err().to_string();
             assert!(
-                e.starts_with("dir/main.pbrt:3: material of type \"dielectric\": an \"eta\" that varies"),
+                e.starts_with(
+                    "dir/main.pbrt:3: material of type \"coatedconductor\": an \"interface.eta\" that varies"
+                ),
                 "{e}"
             );
             let c = convert_text(&text, true).unwrap();
-            let Material::Dielectric { eta, .. } = c.desc.materials[0].1 else {
+            let Material::CoatedConductor { eta, .. } = c.desc.materials[0].1 else {
                 panic!("{:?}", c.desc.materials)
             };
             assert!((eta - want).abs() < 1e-5, "{value}: {eta}");
@@ -3363,6 +3403,25 @@ mod tests {
                 "{:?}",
                 c.warnings
             );
+        }
+        // A dielectric disperses: each colour channel has its own index,
+        // the red one the lowest, for the glasses within their range over
+        // the visible wavelengths. (The negative lobes of the channels'
+        // weights may take a mean beyond a spectrum's range, as for the
+        // sampled one, whose index changes within 100 nm only.)
+        for (value, lo, hi) in [
+            ("\"spectrum eta\" \"glass-BK7\"", 1.5117, 1.5308),
+            ("\"spectrum eta\" \"glass-F11\"", 1.7757, 1.8290),
+            ("\"spectrum eta\" [ 500 1.6 600 1.5 ]", 1.45, 1.65),
+        ] {
+            let text = format!("WorldBegin\nMaterial \"dielectric\"\n  {value}\n{}", quad(0.0));
+            let c = convert_text(&text, false).unwrap();
+            let Material::Dispersive { eta, .. } = c.desc.materials[0].1 else {
+                panic!("{:?}", c.desc.materials)
+            };
+            assert!(eta.x < eta.y && eta.y < eta.z, "{value}: {eta}");
+            assert!(eta.x > lo && eta.z < hi, "{value}: {eta}");
+            assert!(c.warnings.is_empty(), "{:?}", c.warnings);
         }
         // A named spectrum that is no glass is refused as a material.
         let text = format!(
