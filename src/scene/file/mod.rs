@@ -129,6 +129,14 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     for (name, m) in &materials {
         desc.material(name, m.clone());
     }
+    // Only the path tracer renders media: a scene with them that names no
+    // integrator gets it, in place of its preset's or the default.
+    if !desc.media.is_empty() && desc.settings.scene_file.get("integrator").is_none() {
+        let origin = Origin::Preset("participating media".into());
+        let path_tracer = Value::Name(settings::IntegratorKind::Path.name());
+        let set = desc.settings.preset.set("integrator", path_tracer, origin);
+        debug_assert!(set.is_ok(), "{set:?}");
+    }
     Ok(LoadedScene {
         desc,
         meshes,

@@ -930,7 +930,24 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         ]
     );
     assert_eq!(d.materials[d.spheres[0].material as usize].1, Material::Interface);
+    // Only the path tracer renders media: it is what the scene recommends
+    // unless the file names an integrator, whatever its preset says.
+    let integrator = |d: &crate::scene::SceneDesc| {
+        let layers = [&d.settings.scene_file, &d.settings.preset];
+        layers.iter().find_map(|l| l.get("integrator").map(|v| v.0))
+    };
+    assert_eq!(integrator(&d), Some(Value::Name("path")));
     assert!(Scene::build(d).unwrap().has_media());
+    let preset = parse_str(&format!("[settings]\npreset = \"cornell\"\n{text}"))
+        .unwrap()
+        .desc;
+    assert_eq!(integrator(&preset), Some(Value::Name("path")));
+    let chosen = parse_str(&format!("[settings]\nintegrator = \"sppm\"\n{text}"))
+        .unwrap()
+        .desc;
+    assert_eq!(integrator(&chosen), Some(Value::Name("sppm")));
+    // Without media, nothing is recommended.
+    assert_eq!(integrator(&parse_str(CAMERA).unwrap().desc), None);
     let e = parse_str(&text.replacen("medium_inside = \"ink\"", "medium_inside = \"inc\"", 1))
         .unwrap_err()
         .to_string();
