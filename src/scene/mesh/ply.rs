@@ -62,6 +62,10 @@ pub struct PlyData {
     pub quads: usize,
     /// Faces skipped under [`Polygons::TrianglesAndQuads`].
     pub skipped_faces: usize,
+    /// Vertices whose normal is not finite (some exporters write NaN where
+    /// a normal is undefined): read as having no normal, so that the
+    /// triangles around them are shaded flat.
+    pub non_finite_normals: usize,
     /// ASCII: the line where data follows the last element the header
     /// declares (ignored, as pbrt-v4's reader ignores it; most likely the
     /// header's counts are wrong).
@@ -415,7 +419,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             ),
         });
     }
-    let warnings = data.trailing_note().into_iter().collect();
+    let warnings = data.normals_note().into_iter().chain(data.trailing_note()).collect();
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -588,10 +592,12 @@ fn read_plain(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> 
                 mesh.positions.push(p);
                 if has_normals {
                     let n = get(nxyz);
-                    if !n.is_finite() {
-                        return Err(r.error(path, start, format!("vertex {item} has a non-finite normal: {n}")));
+                    if n.is_finite() {
+                        normals.push(n);
+                    } else {
+                        mesh.non_finite_normals += 1;
+                        normals.push(Vec3::ZERO);
                     }
-                    normals.push(n);
                 }
                 if let [Some(iu), Some(iv)] = uv_ix {
                     let t = Vec2::new(values[iu] as f32, values[iv] as f32);
@@ -623,6 +629,18 @@ fn read_plain(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> 
 }
 
 impl PlyData {
+    /// What the vertices without a finite normal mean for the render, if
+    /// there are any.
+    pub fn normals_note(&self) -> Option<String> {
+        (self.non_finite_normals > 0).then(|| {
+            format!(
+                "{} of {} vertices have a normal that is not finite: the triangles around them are shaded flat",
+                self.non_finite_normals,
+                self.positions.len()
+            )
+        })
+    }
+
     /// What the file's data beyond its declared elements means for the
     /// reader, if there is any.
     pub fn trailing_note(&self) -> Option<String> {

@@ -82,6 +82,36 @@ fn obj_normals_are_kept_per_vertex_and_missing_mtl_is_a_warning() {
     assert_eq!(m.parts[0].albedo, None);
 }
 
+#[test]
+fn ply_normals_that_are_not_finite_shade_their_triangles_flat() {
+    // Some exporters write NaN normals where a normal is undefined (three
+    // meshes of Bitterli's `lamp` in a public pbrt-v4 conversion): such a
+    // vertex has no normal, and the triangles around it are flat; the rest
+    // of the mesh keeps its normals. A position that is not finite is
+    // still an error (`ply_errors_...`).
+    let dir = tempfile::tempdir().unwrap();
+    let ply = write(
+        dir.path(),
+        "nan-normal.ply",
+        b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+          property float nx\nproperty float ny\nproperty float nz\nelement face 2\n\
+          property list uchar int vertex_indices\nend_header\n\
+          0 0 0 0 0.6 0.8\n1 0 0 0 0.6 0.8\n0 1 0 nan nan nan\n1 1 0 0 0.6 0.8\n3 0 1 2\n3 1 3 0\n",
+    );
+    let m = load_mesh(&ply).unwrap();
+    let n = m.normals.as_ref().expect("normals");
+    assert_eq!(n[2], Vec3::ZERO);
+    assert_eq!(n[0], Vec3::new(0.0, 0.6, 0.8));
+    assert_eq!(m.warnings.len(), 1);
+    assert!(
+        m.warnings[0].contains("1 of 4 vertices have a normal that is not finite"),
+        "{:?}",
+        m.warnings
+    );
+    let read = ply::read(&ply, &std::fs::read(&ply).unwrap(), ply::Polygons::TrianglesAndQuads).unwrap();
+    assert_eq!(read.non_finite_normals, 1);
+}
+
 /// One mesh, written as PLY in each encoding: a quad and a triangle over four
 /// vertices with normals, extra properties of several types, an element we
 /// do not know, and a face list with an extra property after it.

@@ -1315,7 +1315,7 @@ impl<'a> Builder<'a> {
                 ),
             );
         }
-        if let Some(note) = read.trailing_note() {
+        for note in read.normals_note().into_iter().chain(read.trailing_note()) {
             self.warn(loc, format!("plymesh \"{name}\": {note}"));
         }
         if read.triangles.is_empty() {

@@ -986,6 +986,24 @@ fn ply_binary(big_endian: bool) -> Vec<u8> {
 }
 
 #[test]
+fn a_ply_normal_that_is_not_finite_is_no_normal_with_a_warning() {
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+               property float nx\nproperty float ny\nproperty float nz\nelement face 1\n\
+               property list uchar int vertex_indices\nend_header\n\
+               0 0 0 0 0 1\n1 0 0 nan nan nan\n0 1 0 0 0 1\n3 0 1 2\n";
+    let files = Files::default().with("scene/n.ply", ply);
+    let s = parse_with("WorldBegin\nShape \"plymesh\" \"string filename\" \"n.ply\"\n", files).unwrap();
+    assert_eq!(mesh(&s.shapes[0]).normals, Some(vec![Vec3::Z, Vec3::ZERO, Vec3::Z]));
+    assert!(
+        s.warnings.iter().any(|w| w.message.starts_with(
+            "plymesh \"n.ply\": 1 of 3 vertices have a normal that is not finite: the triangles around them are shaded flat"
+        )),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
 fn ply_meshes_read_uv_normals_quads_and_gzip() {
     let ascii = ply_ascii("4 0 1 2 3 7\n3 0 2 4 8\n5 0 1 2 3 4 9\n", 3);
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
