@@ -1033,14 +1033,25 @@ impl Scene {
             best_t = t;
             best = Some(Found::Shape(id));
         }
-        let p = ray.at(best_t);
+        // Each hit point is put on its surface (from a triangle's
+        // barycentrics, onto a sphere or a disk's plane) rather than taken
+        // along the ray: accurate to the surface's own rounding however far
+        // the ray came, so that rays leaving it need only a small offset
+        // (`offset_origin`) and still meet a surface a hair's breadth away.
         let idx = match best? {
-            Found::Triangle(slot, u, v) => return Some(self.triangle_hit(slot, u, v, best_t, p)),
+            Found::Triangle(slot, u, v) => {
+                let tri = &self.triangles[slot];
+                let p = tri.v0 + tri.e1 * u + tri.e2 * v;
+                return Some(self.triangle_hit(slot, u, v, best_t, p));
+            }
             Found::Shape(id) => id as usize,
         };
+        let p = ray.at(best_t);
         let before = self.desc.triangles.len() + self.desc.spheres.len() + self.desc.disks.len();
         if let Some(s) = self.spheres.get(idx) {
-            let n = (p - s.sphere.centre) / s.sphere.radius;
+            let c = s.sphere.centre;
+            let p = c + (p - c) * (s.sphere.radius / (p - c).length());
+            let n = (p - c) / s.sphere.radius;
             let (uv, dpdu) = s.uv_dpdu(n);
             return Some(Hit {
                 t: best_t,
@@ -1064,6 +1075,7 @@ impl Scene {
         }
         let j = idx - self.spheres.len();
         let d = &self.disks[j];
+        let p = p - d.disk.normal * (p - d.disk.centre).dot(d.disk.normal);
         let (uv, dpdu) = d.disk.uv_dpdu(p);
         Some(Hit {
             t: best_t,
@@ -1610,6 +1622,89 @@ mod shading_tests {
             .unwrap();
         assert_eq!(h.material, 1);
         assert!(scene.surface(&h).shading.is_none());
+    }
+}
+
+#[cfg(test)]
+mod offset_tests {
+    use super::*;
+    use crate::math::offset_origin;
+
+    #[test]
+    fn a_ray_leaving_a_sheet_meets_the_sheet_right_behind_it() {
+        // The two sides of a thin slat, 2.5e-4 apart, three units from the
+        // origin (a blind in Bitterli's kitchen): a shadow ray from the
+        // front side towards a light behind must meet the back side, at
+        // every angle, seen from a camera near or far; and a ray leaving
+        // either side must not meet the side it leaves. Spheres and disks
+        // likewise.
+        let gap = 2.5e-4f32;
+        let mut d = SceneDesc::empty("sheets", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        let z0 = -2.748f32;
+        for (z, flip) in [(z0, false), (z0 - gap, true)] {
+            let v = [(-1.0, 2.0), (1.0, 2.0), (1.0, 4.0), (-1.0, 4.0)].map(|(x, y)| Vec3::new(x, y, z));
+            for t in [[0, 1, 2], [0, 2, 3]] {
+                let t = if flip { [t[0], t[2], t[1]] } else { t };
+                d.triangles.push(TriangleDesc {
+                    vertices: t.map(|i| v[i]),
+                    normals: None,
+                    uvs: None,
+                    material: m,
+                });
+            }
+        }
+        let (centre, radius) = (Vec3::new(40.0, 3.0, -30.0), 5.0);
+        for r in [radius, radius - gap * 20.0] {
+            d.spheres.push(SphereDesc {
+                sphere: crate::geometry::Sphere { centre, radius: r },
+                material: m,
+                axes: None,
+            });
+        }
+        let scene = Scene::build(d).unwrap();
+        let mut rng = crate::sampling::Rng::new(3, 4);
+        let mut spheres = 0;
+        for k in 0..2000 {
+            // From a camera 1 to 1000 units in front of the sheet.
+            let dist = 10f32.powf(3.0 * rng.next_f32());
+            let target = Vec3::new(rng.next_f32() - 0.5, 2.5 + rng.next_f32(), z0);
+            let from = target + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 1.0).normalize() * dist;
+            let ray = Ray::new(from, (target - from).normalize());
+            let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+            assert!((hit.p.z - z0).abs() < 1e-5, "{k}: {}", hit.p);
+            let behind = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, -1.0).normalize();
+            let next = scene.intersect(
+                &Ray::new(offset_origin(hit.p, hit.ng, behind), behind),
+                0.0,
+                f32::INFINITY,
+            );
+            let next = next.unwrap_or_else(|| panic!("{k}: the back side missed"));
+            assert!((next.p.z - (z0 - gap)).abs() < 1e-5 && next.t > 0.0, "{k}: {}", next.p);
+            let back = -ray.d;
+            let out = Ray::new(offset_origin(hit.p, hit.ng, back), back);
+            assert!(
+                scene.intersect(&out, 0.0, f32::INFINITY).is_none(),
+                "{k}: met the side it left"
+            );
+            // The same off the outer sphere, whose inner shell is 5e-3 in.
+            let to_sphere = (centre + Vec3::new(0.0, 0.0, radius) - from).normalize();
+            let Some(s) = scene.intersect(&Ray::new(from, to_sphere), 0.0, f32::INFINITY) else {
+                continue;
+            };
+            if s.kind != PrimKind::Sphere || ((s.p - centre).length() - radius).abs() > 1e-3 {
+                continue;
+            }
+            let inward = -s.ng;
+            let inner = scene.intersect(&Ray::new(offset_origin(s.p, s.ng, inward), inward), 0.0, f32::INFINITY);
+            let inner = inner.unwrap_or_else(|| panic!("{k}: the inner sphere missed"));
+            assert!(
+                ((inner.p - centre).length() - (radius - gap * 20.0)).abs() < 1e-4,
+                "{k}"
+            );
+            spheres += 1;
+        }
+        assert!(spheres > 1000, "{spheres}");
     }
 }
 
