@@ -1636,8 +1636,8 @@ mod offset_tests {
         // origin (a blind in Bitterli's kitchen): a shadow ray from the
         // front side towards a light behind must meet the back side, at
         // every angle, seen from a camera near or far; and a ray leaving
-        // either side must not meet the side it leaves. Spheres and disks
-        // likewise.
+        // either side must not meet the side it leaves. And a ray leaving a
+        // sphere inwards meets the sphere nested 5e-3 inside it.
         let gap = 2.5e-4f32;
         let mut d = SceneDesc::empty("sheets", builtin::cornell().camera);
         let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));

@@ -21,11 +21,13 @@
 //!   the whole scene is reflected across the camera's vertical plane (the
 //!   plane through the camera spanned by its forward and up axes). The
 //!   camera is unchanged by that reflection and sees exactly pbrt's picture.
-//! * One-sided area lights emit on the side of pbrt's surface normal: for a
-//!   mesh with normals `N`, the side of the normals (turned by
-//!   `ReverseOrientation`, as pbrt-v4's `TriangleMesh` does); otherwise the
-//!   side of `cross(p1 - p0, p2 - p0)` in world space, turned when
-//!   [`Shape::flips_normals`]. Light triangles are ordered to emit there.
+//! * Triangles are wound so that their geometric normal lies on the side of
+//!   pbrt's surface normal: for a mesh with normals `N`, the side of the
+//!   normals (turned by `ReverseOrientation`, as pbrt-v4's `TriangleMesh`
+//!   does; pbrt-v4 turns its geometric normal to them); otherwise the side
+//!   of `cross(p1 - p0, p2 - p0)` in world space, turned when
+//!   [`Shape::flips_normals`]. A dielectric's inside, an interface's media
+//!   and a one-sided area light's emission follow it.
 //!   A disk emits on the side of the normal pbrt-v4's `Disk::Intersect`
 //!   reports: the transformed +z, turned when [`Shape::flips_normals`].
 //!   (pbrt-v4's `Disk::Sample` turns it for `ReverseOrientation` only, so
@@ -1365,6 +1367,21 @@ impl<'a> Conv<'a> {
                         let first = desc.triangles.len();
                         let flip = shape.flips_normals();
                         for t in &mesh.triangles {
+                            // Wound so that the geometric normal lies on the
+                            // side of pbrt-v4's surface normal: the vertex
+                            // normals' side (pbrt-v4 takes them as
+                            // authoritative), else the winding's turned when
+                            // `flips_normals`. A dielectric's inside, an
+                            // interface's media and a bump's direction
+                            // follow it.
+                            let [a, b, c] = t.map(|i| world[i as usize]);
+                            let cross = (b - a).cross(c - a);
+                            let side = match &normals {
+                                Some(ns) => t.iter().map(|&i| ns[i as usize]).sum::<Vec3>(),
+                                None if flip => -cross,
+                                None => cross,
+                            };
+                            let t = if side.dot(cross) < 0.0 { [t[0], t[2], t[1]] } else { *t };
                             let tri = TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
@@ -1373,16 +1390,7 @@ impl<'a> Conv<'a> {
                             };
                             if let Some(mi) = interface {
                                 // pbrt-v4's normal, whose side is outside: the
-                                // vertex normals' side, else the winding's
-                                // turned when `flips_normals`.
-                                let [a, b, c] = tri.vertices;
-                                let cross = (b - a).cross(c - a);
-                                let side = match &tri.normals {
-                                    Some(ns) => ns[0] + ns[1] + ns[2],
-                                    None if flip => -cross,
-                                    None => cross,
-                                };
-                                let mi = if side.dot(cross) < 0.0 { mi.flipped() } else { mi };
+                                // triangle's, as wound above.
                                 let i = desc.triangles.len();
                                 match desc.boundaries.last_mut() {
                                     Some(Boundary {

@@ -1754,8 +1754,9 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
         outside: None,
     };
     // The first sphere has no surface; the second is turned inside out; the
-    // second triangle's normals face away from its winding; the last sphere
-    // is in no medium's boundary.
+    // second triangle's normals face away from its winding, so it is wound
+    // the other way (its geometric normal on pbrt-v4's side) and bounds the
+    // fog as the first does; the last sphere is in no medium's boundary.
     let expected = [
         Boundary {
             interface: inside,
@@ -1770,11 +1771,13 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
             shapes: CutShapes::Triangles(0..1),
         },
         Boundary {
-            interface: inside.flipped(),
+            interface: inside,
             shapes: CutShapes::Triangles(1..2),
         },
     ];
     assert_eq!(d.boundaries, expected);
+    let [p0, p1, p2] = d.triangles[1].vertices;
+    assert!((p1 - p0).cross(p2 - p0).z < 0.0);
     assert_eq!(d.materials[d.spheres[0].material as usize].1, Material::Interface);
     assert_ne!(d.materials[d.spheres[1].material as usize].1, Material::Interface);
     assert_eq!(d.spheres.len(), 3);
@@ -1783,6 +1786,49 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
     assert!(!ignored(&c), "{:?}", c.warnings);
     let c = converted(&format!("Integrator \"path\"\n{text}"), Files::default(), false).unwrap();
     assert!(ignored(&c), "{:?}", c.warnings);
+}
+
+#[test]
+fn triangles_are_wound_to_face_pbrts_surface_normal() {
+    // pbrt-v4's surface normal says which side of a dielectric is inside:
+    // the vertex normals' side when a mesh has them (pbrt-v4 takes them as
+    // authoritative, turned by ReverseOrientation), else the winding's,
+    // turned by ReverseOrientation and by a transformation that swaps
+    // handedness. Ours is the geometric normal: triangles are wound to it.
+    let quad = |extra: &str| {
+        format!(
+            "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 1 1 0 0 1 0] \"integer indices\" [0 1 2 0 2 3] {extra}\n"
+        )
+    };
+    let away = "\"normal N\" [0 0 -1 0 0 -1 0 0 -1 0 0 -1]";
+    let text = format!(
+        "WorldBegin\nMaterial \"dielectric\"\n{}{}AttributeBegin\nReverseOrientation\n{}{}AttributeEnd\n\
+         AttributeBegin\nScale 1 1 -1\n{}AttributeEnd\n",
+        quad(""),
+        quad(away),
+        quad(""),
+        quad(away),
+        quad(""),
+    );
+    let c = converted(&text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let z: Vec<f32> = c
+        .desc
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.vertices;
+            (b - a).cross(c - a).normalize().z
+        })
+        .collect();
+    // The plain quad faces +z; its normals turn it; ReverseOrientation turns
+    // the bare quad and turns the normals back; the mirror turns it.
+    let want = [1.0, 1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0];
+    for (i, (z, w)) in z.iter().zip(want).enumerate() {
+        assert!((z - w).abs() < 1e-6, "triangle {i}: {z:?}");
+    }
+    // Normals and texture coordinates go with their vertices.
+    let t = &c.desc.triangles[2];
+    assert_eq!(t.normals, Some([Vec3::NEG_Z; 3]));
 }
 
 /// The centre pixel of a render of an emissive wall (radiance 1) at z = 10
