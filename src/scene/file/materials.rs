@@ -528,9 +528,13 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                     }
                     let full = format!("glass-{name}");
                     if crate::scene::pbrt::spectrum::glass_eta_550(&full).is_none() {
+                        let known: Vec<&str> = crate::scene::pbrt::spectrum::NAMED_SPECTRA
+                            .iter()
+                            .filter_map(|n| n.strip_prefix("glass-"))
+                            .collect();
                         return Err(k.err(
                             Some("glass"),
-                            format!("unknown glass '{name}' (known: BK7, BAF10, FK51A, LASF9, F5, F10, F11)"),
+                            format!("unknown glass '{name}' (known: {})", known.join(", ")),
                         ));
                     }
                     let e = |l| crate::scene::pbrt::spectrum::glass_eta(&full, l).unwrap_or(1.0);

@@ -538,7 +538,10 @@ fn dielectrics_disperse_with_an_index_per_channel_or_a_named_glass() {
     // The same index in every channel is a plain dielectric.
     assert!(matches!(get("plain"), Some(Material::Dielectric { eta, .. }) if eta == 1.4));
     for (bad, what) in [
-        ("glass = \"BK8\"\n", "unknown glass 'BK8'"),
+        (
+            "glass = \"BK8\"\n",
+            "unknown glass 'BK8' (known: BK7, BAF10, FK51A, LASF9, F5, F10, F11)",
+        ),
         ("glass = \"BK7\"\neta = 1.5\n", "give `glass` or `eta`"),
         ("eta = [1.5, 0, 1.5]\n", "must be > 0"),
         ("eta = [1.5, 1.6]\n", "`eta` must be a number or [r, g, b]"),
