@@ -198,6 +198,53 @@ impl Camera {
         (sx, sy)
     }
 
+    /// A direction in the camera's frame: x right, y up, z forward (pbrt-v4's
+    /// camera space).
+    fn to_camera(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
+    }
+
+    fn camera_to_world(&self, c: Vec3) -> Vec3 {
+        self.right * c.x + self.up * c.y + self.forward * c.z
+    }
+
+    /// What pbrt-v4's `CameraBase::FindMinimumDifferentials` finds: the
+    /// shortest changes of a camera ray's origin (camera space) and
+    /// direction (in the frame of the ray) from one pixel to the next, over
+    /// 512 points of the image's diagonal, for a render of `spp` samples a
+    /// pixel.
+    pub fn pixel_footprint(&self, spp: u32) -> PixelFootprint {
+        let mut min_pos = [Vec3::INFINITY; 2];
+        let mut min_dir = [Vec3::INFINITY; 2];
+        let n = 512;
+        for i in 0..n {
+            let x = i as f32 / (n - 1) as f32 * self.width as f32;
+            let y = i as f32 / (n - 1) as f32 * self.height as f32;
+            let ray = self.generate_ray(x, y);
+            let (z, tx, ty) = frame_from_z(ray.d);
+            let local = |d: Vec3| Vec3::new(d.dot(tx), d.dot(ty), d.dot(z));
+            let df = local(ray.d);
+            for (k, r) in [self.generate_ray(x + 1.0, y), self.generate_ray(x, y + 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let dox = self.to_camera(r.o - ray.o);
+                if dox.length() < min_pos[k].length() {
+                    min_pos[k] = dox;
+                }
+                let dd = local(r.d).normalize() - df;
+                if dd.length() < min_dir[k].length() {
+                    min_dir[k] = dd;
+                }
+            }
+        }
+        PixelFootprint {
+            min_pos,
+            min_dir,
+            scale: (1.0 / (spp.max(1) as f32).sqrt()).max(0.125),
+        }
+    }
+
     /// Where a world-space point lands in continuous pixel coordinates, if in front.
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
         let v = p - self.position;
@@ -418,4 +465,162 @@ mod tests {
         assert!(Camera::new(Vec3::ZERO, Vec3::Y, Vec3::Y, 60.0, 4, 4).is_none());
         assert!(Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 180.0, 4, 4).is_none());
     }
+
+    #[test]
+    fn a_camera_rays_footprint_is_its_pixel_on_the_surface_scaled_by_the_sample_spacing() {
+        let c = cornell_camera(512, 512);
+        // 64 samples a pixel and more: an eighth of a pixel; 16: a quarter.
+        let fp = c.pixel_footprint(64);
+        assert_eq!(fp.scale, 0.125);
+        assert_eq!(c.pixel_footprint(16).scale, 0.25);
+        // The plane z = 0 faces the camera 3 units away: a pixel there is
+        // 2 tan(fov / 2) 3 / 512 wide, along +x (image right) and +y (down).
+        let pixel = 2.0 * 0.5 * 3.0 / 512.0;
+        let (dx, dy) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, true);
+        assert!((dx - Vec3::X * pixel * 0.125).length() < 1e-3 * pixel, "{dx}");
+        assert!((dy - Vec3::Y * pixel * 0.125).length() < 1e-3 * pixel, "{dy}");
+        // Tilted 60 degrees about x, the plane stretches y's footprint twice.
+        let n = Vec3::new(0.0, 60f32.to_radians().sin(), -60f32.to_radians().cos());
+        let (tx, ty) = fp.dp_dxy(&c, Vec3::ZERO, n, true);
+        assert!((tx.length() / dx.length() - 1.0).abs() < 1e-3);
+        assert!(
+            (ty.length() / dy.length() - 2.0).abs() < 1e-2,
+            "{}",
+            ty.length() / dy.length()
+        );
+        assert!(ty.dot(n).abs() < 1e-4 * ty.length() && tx.dot(n).abs() < 1e-4 * tx.length());
+        // Away from camera rays, pbrt-v4's approximation: the image's
+        // smallest pixel (its corners', 0.53 of its centre's here) at the
+        // point's distance, on its plane; a point twice as far, twice as big.
+        let (ax, ay) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, false);
+        for a in [ax, ay] {
+            let ratio = a.length() / dx.length();
+            assert!(ratio > 0.5 && ratio < 0.75, "{ratio}");
+            assert!(a.dot(Vec3::Z).abs() < 1e-6 * a.length());
+        }
+        let (fx, _) = fp.dp_dxy(&c, Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, false);
+        assert!((fx.length() / ax.length() - 2.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn an_orthographic_footprint_is_the_pixel_whatever_the_distance() {
+        let c = Camera::orthographic(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO, Vec3::Y, 2.0, 100, 100).unwrap();
+        let fp = c.pixel_footprint(1);
+        assert_eq!(fp.scale, 1.0);
+        // On the axis (pbrt-v4's approximation turns the point onto it, and
+        // its plane with it) and, for camera rays, anywhere.
+        for (from_camera, x, y) in [(true, 0.5, 0.25), (false, 0.0, 0.0)] {
+            for z in [0.0, 5.0] {
+                let (dx, dy) = fp.dp_dxy(&c, Vec3::new(x, y, z), -Vec3::Z, from_camera);
+                assert!(
+                    (dx.length() - 0.04).abs() < 1e-5 && (dy.length() - 0.04).abs() < 1e-5,
+                    "{dx} {dy}"
+                );
+            }
+        }
+    }
+}
+
+/// How far a surface point moves on its tangent plane from one pixel to the
+/// next, as pbrt-v4 estimates it for texture filtering and bump maps:
+/// exactly for a camera ray's hit (its ray differentials), and for any other
+/// hit from the camera's smallest differentials at the point's distance
+/// (`Camera::Approximate_dp_dxy`), both scaled by max(1/8, 1/sqrt(spp)), the
+/// spacing of a pixel's samples. Two departures: a camera ray's
+/// differentials are those of the pinhole through the lens' centre, and a
+/// specular bounce does not carry differentials on (its hit takes the
+/// approximation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelFootprint {
+    min_pos: [Vec3; 2],
+    min_dir: [Vec3; 2],
+    scale: f32,
+}
+
+impl PixelFootprint {
+    /// dp/dx and dp/dy at the point `p` of a surface with normal `n`
+    /// (zero where they cannot be found).
+    pub fn dp_dxy(&self, cam: &Camera, p: Vec3, n: Vec3, from_camera: bool) -> (Vec3, Vec3) {
+        if from_camera {
+            if let Some(d) = self.exact(cam, p, n) {
+                return d;
+            }
+        }
+        self.approximate(cam, p, n)
+    }
+
+    /// The camera ray's own differentials through the pixel position `p`
+    /// projects to, met on the tangent plane.
+    fn exact(&self, cam: &Camera, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
+        let (x, y) = cam.project(p)?;
+        let ray = cam.generate_ray(x, y);
+        let on_plane = |r: Ray| {
+            let o = ray.o + (r.o - ray.o) * self.scale;
+            let d = ray.d + (r.d - ray.d) * self.scale;
+            let cos = n.dot(d);
+            let t = n.dot(p - o) / cos;
+            (cos != 0.0 && t.is_finite()).then(|| o + d * t - p)
+        };
+        Some((
+            on_plane(cam.generate_ray(x + 1.0, y))?,
+            on_plane(cam.generate_ray(x, y + 1.0))?,
+        ))
+    }
+
+    fn approximate(&self, cam: &Camera, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
+        let pc = cam.to_camera(p - cam.position);
+        let Some(dir) = pc.try_normalize() else {
+            return (Vec3::ZERO, Vec3::ZERO);
+        };
+        let r = rotate_from_to(dir, Vec3::Z);
+        let pd = r * pc;
+        let nd = r * cam.to_camera(n);
+        let d = nd.z * pd.z;
+        let at = |k: usize| {
+            let (o, dir) = (self.min_pos[k], Vec3::Z + self.min_dir[k]);
+            let t = -(nd.dot(o) - d) / nd.dot(dir);
+            let dp = cam.camera_to_world(r.transpose() * (o + dir * t - pd)) * self.scale;
+            if dp.is_finite() {
+                dp
+            } else {
+                Vec3::ZERO
+            }
+        };
+        (at(0), at(1))
+    }
+}
+
+/// pbrt-v4's `Frame::FromZ`: the unit vector `z` and two tangents, by
+/// `CoordinateSystem` (Duff et al. 2017).
+fn frame_from_z(z: Vec3) -> (Vec3, Vec3, Vec3) {
+    let sign = 1.0f32.copysign(z.z);
+    let a = -1.0 / (sign + z.z);
+    let b = z.x * z.y * a;
+    let x = Vec3::new(1.0 + sign * z.x * z.x * a, sign * b, -sign * z.x);
+    let y = Vec3::new(b, sign + z.y * z.y * a, -z.y);
+    (z, x, y)
+}
+
+/// pbrt-v4's `RotateFromTo`: a rotation taking the unit vector `from` to
+/// `to`, made of two reflections through an axis far from both.
+fn rotate_from_to(from: Vec3, to: Vec3) -> glam::Mat3 {
+    let refl = if from.x.abs() < 0.72 && to.x.abs() < 0.72 {
+        Vec3::X
+    } else if from.y.abs() < 0.72 && to.y.abs() < 0.72 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let (u, v) = (refl - from, refl - to);
+    let (uu, vv, uv) = (u.dot(u), v.dot(v), u.dot(v));
+    let m = |i: usize, j: usize| {
+        let delta = if i == j { 1.0 } else { 0.0 };
+        delta - 2.0 / uu * u[i] * u[j] - 2.0 / vv * v[i] * v[j] + 4.0 * uv / (uu * vv) * v[i] * u[j]
+    };
+    // Rows i, columns j.
+    glam::Mat3::from_cols(
+        Vec3::new(m(0, 0), m(1, 0), m(2, 0)),
+        Vec3::new(m(0, 1), m(1, 1), m(2, 1)),
+        Vec3::new(m(0, 2), m(1, 2), m(2, 2)),
+    )
 }

@@ -10,7 +10,7 @@
 use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
-use crate::texture::{TexCoord, TexImage, Texture, WrapMode};
+use crate::texture::{Footprint, TexCoord, TexImage, Texture, WrapMode};
 use std::sync::Arc;
 
 /// Microfacet roughness as pbrt-v4's materials take it: `uroughness` and
@@ -59,6 +59,13 @@ pub enum MaterialRoughness {
 }
 
 impl MaterialRoughness {
+    fn has_image(&self) -> bool {
+        match self {
+            MaterialRoughness::Constant(_) => false,
+            MaterialRoughness::Textured { u, v, .. } => u.has_image() || v.has_image(),
+        }
+    }
+
     /// The microfacet distribution at a shading point. Where a texture is
     /// (near) zero it is effectively smooth, and the BxDF built from it is
     /// specular there, with specular flags, as pbrt-v4's is.
@@ -207,6 +214,9 @@ pub struct SurfacePoint {
     /// The differential geometry a bump map needs, when the material has
     /// one (the scene computes it only then).
     pub shading: Option<ShadingGeometry>,
+    /// How (u, v) changes from pixel to pixel here, for image lookups and
+    /// bump maps (zero unless the material needs it).
+    pub footprint: Footprint,
 }
 
 /// pbrt-v4's shading geometry of a surface point: its shading normal (as
@@ -222,27 +232,31 @@ pub struct ShadingGeometry {
     pub dndv: Vec3,
 }
 
-/// The step along u and v of a bump map's finite differences: pbrt-v4's when
-/// a ray carries no differentials (it takes half the pixel's footprint
-/// otherwise, about as small where a texture is seen a texel a pixel).
+/// The step along u or v of a bump map's finite differences without a
+/// footprint (pbrt-v4's when its derivatives are zero).
 const BUMP_STEP: f32 = 0.0005;
 
 impl SurfacePoint {
     /// The point with its shading normal and dp/du perturbed by the
     /// displacement texture `d` as pbrt-v4's `BumpMap` does: the displaced
-    /// surface p + d(u, v) n differentiated by finite steps in u and v.
+    /// surface p + d(u, v) n differentiated by finite steps in u and v, each
+    /// half the footprint's extent along it (so the bumps a pixel resolves,
+    /// read at the MIP level the footprint picks), `BUMP_STEP` without one.
     /// Without shading geometry the point is returned as it is.
     pub fn bumped(&self, d: &Texture) -> SurfacePoint {
         let Some(g) = self.shading else {
             return *self;
         };
-        let at = |uv: Vec2, p: Vec3| d.evaluate_scalar(&TexCoord { uv, p });
-        let h = BUMP_STEP;
+        let f = self.footprint;
+        let at = |uv: Vec2, p: Vec3| d.evaluate_scalar(&TexCoord { uv, p, footprint: f });
+        let step = |d: f32| if d == 0.0 { BUMP_STEP } else { d };
+        let du = step(0.5 * (f.dudx.abs() + f.dudy.abs()));
+        let dv = step(0.5 * (f.dvdx.abs() + f.dvdy.abs()));
         let here = at(self.uv, self.p);
-        let along_u = at(self.uv + Vec2::new(h, 0.0), self.p + g.dpdu * h);
-        let along_v = at(self.uv + Vec2::new(0.0, h), self.p + g.dpdv * h);
-        let dpdu = g.dpdu + g.n * ((along_u - here) / h) + g.dndu * here;
-        let dpdv = g.dpdv + g.n * ((along_v - here) / h) + g.dndv * here;
+        let along_u = at(self.uv + Vec2::new(du, 0.0), self.p + g.dpdu * du);
+        let along_v = at(self.uv + Vec2::new(0.0, dv), self.p + g.dpdv * dv);
+        let dpdu = g.dpdu + g.n * ((along_u - here) / du) + g.dndu * here;
+        let dpdv = g.dpdv + g.n * ((along_v - here) / dv) + g.dndv * here;
         self.shaded_by(dpdu, dpdv)
     }
 
@@ -369,6 +383,36 @@ impl Material {
         }
     }
 
+    /// Whether the material (or one it mixes) looks up an image texture or
+    /// is bump mapped: its lookups then take the surface's footprint.
+    pub fn needs_footprint(&self) -> bool {
+        let fresnel = |f: &ConductorFresnel| matches!(f, ConductorFresnel::Reflectance(r) if r.has_image());
+        match self {
+            Material::Diffuse { reflectance } => reflectance.has_image(),
+            Material::Emissive { .. } | Material::ThinDielectric { .. } | Material::Interface => false,
+            Material::Conductor { fresnel: f, roughness } => fresnel(f) || roughness.has_image(),
+            Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => roughness.has_image(),
+            Material::CoatedDiffuse {
+                reflectance, roughness, ..
+            } => reflectance.has_image() || roughness.has_image(),
+            Material::CoatedConductor {
+                interface_roughness,
+                conductor,
+                conductor_roughness,
+                ..
+            } => interface_roughness.has_image() || fresnel(conductor) || conductor_roughness.has_image(),
+            Material::DiffuseTransmission {
+                reflectance,
+                transmittance,
+            } => reflectance.has_image() || transmittance.has_image(),
+            Material::Mix { materials, amount } => {
+                amount.has_image() || materials.iter().any(Material::needs_footprint)
+            }
+            Material::Bumped { .. } => true,
+            Material::NormalMapped { base, .. } => base.needs_footprint(),
+        }
+    }
+
     /// Whether the material (or one it mixes) is bump or normal mapped: its
     /// BSDF then needs the surface point's `shading` geometry.
     pub fn is_bumped(&self) -> bool {
@@ -401,7 +445,11 @@ impl Material {
 
     /// The BSDF at a surface point seen from direction `wo`.
     pub fn bsdf(&self, sp: &SurfacePoint, wo: Vec3) -> Bsdf {
-        let tc = TexCoord { uv: sp.uv, p: sp.p };
+        let tc = TexCoord {
+            uv: sp.uv,
+            p: sp.p,
+            footprint: sp.footprint,
+        };
         if let Material::Mix { .. } = self {
             return self.chosen(&tc, wo).bsdf(sp, wo);
         }
@@ -495,7 +543,57 @@ mod tests {
             ns: n,
             dpdu: Vec3::X,
             shading: None,
+            footprint: Footprint::NONE,
         }
+    }
+
+    #[test]
+    fn a_bump_maps_bumps_finer_than_the_footprint_do_not_tilt_the_normal() {
+        // 16 x 16 texels of 0 and 0.01 over the unit square of a plane.
+        let pixels = (0..256)
+            .map(|i| Vec3::splat(0.01 * ((i % 16 + i / 16) % 2) as f32))
+            .collect();
+        let img = crate::texture::TexImage::from_pixels("fine", 16, 16, pixels);
+        let opts = crate::texture::ImageOptions {
+            encoding: crate::texture::Encoding::Linear,
+            ..Default::default()
+        };
+        let d = Texture::Image(std::sync::Arc::new(crate::texture::ImageTexture::new(
+            std::sync::Arc::new(img),
+            &opts,
+        )));
+        let flat = ShadingGeometry {
+            n: Vec3::Z,
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        };
+        // Between two texels' centres.
+        let sp = SurfacePoint {
+            uv: Vec2::new(2.0 / 16.0, 2.5 / 16.0),
+            shading: Some(flat),
+            ..point(Vec3::Z)
+        };
+        // Without a footprint, pbrt-v4's step of 0.0005 sees the texels'
+        // slope, 0.01 over a texel: a tilt of 9 degrees.
+        let sharp = sp.bumped(&d).ns;
+        assert!(
+            (sharp.z.acos().to_degrees() - 0.16f32.atan().to_degrees()).abs() < 0.5,
+            "{sharp}"
+        );
+        // A pixel four texels wide reads a level where they average out, over
+        // a step of its size: no tilt.
+        let wide = SurfacePoint {
+            footprint: Footprint {
+                dudx: 0.25,
+                dvdx: 0.0,
+                dudy: 0.0,
+                dvdy: 0.25,
+            },
+            ..sp
+        };
+        assert!((wide.bumped(&d).ns - Vec3::Z).length() < 1e-6, "{}", wide.bumped(&d).ns);
     }
 
     #[test]

@@ -70,7 +70,8 @@ impl Fnv64 {
 /// Fingerprint of what a scene is made of: materials, triangles (with their
 /// vertex normals, so `--smooth` counts), spheres, disks and lights, in description
 /// order, as raw f32 bits. With `camera`, the camera and image size too (a
-/// checkpoint's pixels depend on them; a photon map's photons do not). The
+/// checkpoint's pixels depend on them; a photon map's photons do not, unless
+/// image textures or bump maps are looked up with the camera's footprint). The
 /// scene's name and its recommended settings are left out: settings that
 /// matter are in the file's key.
 pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
@@ -213,7 +214,14 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(b"media");
         h.bytes(format!("{:?} {:?} {:?}", desc.media, desc.camera_medium, desc.boundaries).as_bytes());
     }
-    if camera {
+    // Texture lookups filtered by the camera's footprint make even photons
+    // depend on the camera and the sample count.
+    let footprinted = desc.materials.iter().any(|(_, m)| m.needs_footprint());
+    if footprinted {
+        h.bytes(b"footprint");
+        h.u32(desc.texture_spp);
+    }
+    if camera || footprinted {
         let c = &desc.camera;
         h.vec3(c.position);
         h.vec3(c.look_at);
@@ -574,6 +582,37 @@ mod tests {
             scene_fingerprint(&d, false)
         };
         assert_ne!(with(0.01), with(0.02));
+    }
+
+    #[test]
+    fn a_photon_fingerprint_sees_the_camera_and_sample_count_only_with_footprinted_textures() {
+        use crate::material::Material;
+        use crate::math::Vec3;
+        use crate::texture::{ImageOptions, ImageTexture, TexImage, Texture};
+        use std::sync::Arc;
+        let moved = |d: &SceneDesc| {
+            let mut m = d.clone();
+            m.camera.position.x += 0.1;
+            m
+        };
+        let more = |d: &SceneDesc| SceneDesc {
+            texture_spp: 16,
+            ..d.clone()
+        };
+        // Without image textures the photons do not depend on either.
+        let plain = crate::scene::builtin::cornell();
+        for other in [moved(&plain), more(&plain)] {
+            assert_eq!(scene_fingerprint(&plain, false), scene_fingerprint(&other, false));
+        }
+        // An image's MIP level follows the camera's footprint, so they do.
+        let mut textured = plain.clone();
+        let img = TexImage::from_pixels("t", 2, 1, vec![Vec3::ZERO, Vec3::ONE]);
+        textured.materials[0].1 = Material::Diffuse {
+            reflectance: Texture::Image(Arc::new(ImageTexture::new(Arc::new(img), &ImageOptions::default()))),
+        };
+        for other in [moved(&textured), more(&textured)] {
+            assert_ne!(scene_fingerprint(&textured, false), scene_fingerprint(&other, false));
+        }
     }
 
     #[test]

@@ -14,14 +14,51 @@ use std::sync::Arc;
 mod imagemap;
 
 pub use imagemap::{
-    decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, TexImage, UvMapping, WrapMode,
+    decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, MipFilter, TexImage, UvMapping,
+    WrapMode,
 };
 
-/// Where a texture is looked up: the surface's (u, v) and the point itself.
+/// Where a texture is looked up: the surface's (u, v), the point itself,
+/// and how far (u, v) moves from one pixel to the next there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TexCoord {
     pub uv: Vec2,
     pub p: Vec3,
+    pub footprint: Footprint,
+}
+
+impl TexCoord {
+    /// A lookup at a point, with no footprint: an image's finest level.
+    pub fn at(uv: Vec2, p: Vec3) -> TexCoord {
+        TexCoord {
+            uv,
+            p,
+            footprint: Footprint::NONE,
+        }
+    }
+}
+
+/// The change of (u, v) from one pixel to the next at a surface point, along
+/// the image's x and y (pbrt-v4's dudx, dvdx, dudy, dvdy, estimated as its
+/// `SurfaceInteraction::ComputeDifferentials` does and scaled, as there, by
+/// the sampling rate). It chooses an image's MIP level and a bump map's
+/// finite-difference step. Zero: no footprint (the finest level, pbrt-v4's
+/// default step).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Footprint {
+    pub dudx: f32,
+    pub dvdx: f32,
+    pub dudy: f32,
+    pub dvdy: f32,
+}
+
+impl Footprint {
+    pub const NONE: Footprint = Footprint {
+        dudx: 0.0,
+        dvdx: 0.0,
+        dudy: 0.0,
+        dvdy: 0.0,
+    };
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -103,7 +140,19 @@ impl Texture {
                 let t: f32 = amount.eval(tc);
                 a.eval::<V>(tc) * (1.0 - t) + b.eval::<V>(tc) * t
             }
-            Texture::Image(img) => V::image(img, tc.uv),
+            Texture::Image(img) => V::image(img, tc),
+        }
+    }
+
+    /// Whether an image is looked up anywhere in the texture (its lookups
+    /// then want a footprint).
+    pub fn has_image(&self) -> bool {
+        match self {
+            Texture::Constant(_) => false,
+            Texture::Checkerboard { even, odd, .. } => even.has_image() || odd.has_image(),
+            Texture::Scale { tex, scale } => tex.has_image() || scale.has_image(),
+            Texture::Mix { a, b, amount } => a.has_image() || b.has_image() || amount.has_image(),
+            Texture::Image(_) => true,
         }
     }
 
@@ -133,15 +182,15 @@ trait TexValue:
     Copy + std::ops::Mul<Output = Self> + std::ops::Mul<f32, Output = Self> + std::ops::Add<Output = Self>
 {
     fn constant(v: Vec3) -> Self;
-    fn image(img: &ImageTexture, uv: Vec2) -> Self;
+    fn image(img: &ImageTexture, tc: &TexCoord) -> Self;
 }
 
 impl TexValue for Vec3 {
     fn constant(v: Vec3) -> Self {
         v
     }
-    fn image(img: &ImageTexture, uv: Vec2) -> Self {
-        img.evaluate(uv)
+    fn image(img: &ImageTexture, tc: &TexCoord) -> Self {
+        img.evaluate_filtered(tc.uv, &tc.footprint)
     }
 }
 
@@ -154,8 +203,8 @@ impl TexValue for f32 {
             (v.x + v.y + v.z) / 3.0
         }
     }
-    fn image(img: &ImageTexture, uv: Vec2) -> Self {
-        img.evaluate_scalar(uv)
+    fn image(img: &ImageTexture, tc: &TexCoord) -> Self {
+        img.evaluate_scalar_filtered(tc.uv, &tc.footprint)
     }
 }
 
@@ -178,10 +227,7 @@ mod tests {
     use super::*;
 
     fn at(u: f32, v: f32) -> TexCoord {
-        TexCoord {
-            uv: Vec2::new(u, v),
-            p: Vec3::ZERO,
-        }
+        TexCoord::at(Vec2::new(u, v), Vec3::ZERO)
     }
 
     #[test]

@@ -90,7 +90,12 @@ pub fn walk_camera_path(
         }
         let m = scene.material(hit.material);
         l += beta * m.le();
-        let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+        let sp = if depth == 0 {
+            scene.camera_surface(&hit)
+        } else {
+            scene.surface(&hit)
+        };
+        let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();
         if flags.is_empty() {

@@ -105,7 +105,13 @@ impl RadianceEstimator for PathTracer {
             }
             let wo = -ray.d;
             depth += 1;
-            let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+            // The camera ray's hit has the ray's own texture footprint.
+            let sp = if depth == 1 {
+                scene.camera_surface(&hit)
+            } else {
+                scene.surface(&hit)
+            };
+            let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
             let flags = bsdf.flags();
             if flags.is_empty() {

@@ -55,6 +55,9 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     let mut eta_scale = 1.0f32;
     let mut from: Option<(Vec3, f32)> = None;
     let mut crossings = 0;
+    // Whether `ray` is still the camera's (passing through media boundaries
+    // keeps it): its hit then has the ray's own texture footprint.
+    let mut camera_ray = true;
     let weigh = |from: Option<(Vec3, f32)>| match (from, pt.light_sampling) {
         (None, _) | (_, LightSampling::Mis) => (from, 1.0),
         (Some(_), LightSampling::Bsdf) => (None, 1.0),
@@ -95,6 +98,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                     }
                     stats.other_rays += 1;
                     ray = Ray::new(p, wi);
+                    camera_ray = false;
                     continue;
                 }
             }
@@ -128,7 +132,12 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         }
         let wo = -ray.d;
         depth += 1;
-        let mut bsdf = m.bsdf(&scene.surface(&hit), wo);
+        let sp = if camera_ray {
+            scene.camera_surface(&hit)
+        } else {
+            scene.surface(&hit)
+        };
+        let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();
         if flags.is_empty() {
@@ -164,6 +173,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         stats.other_rays += 1;
         medium = scene.medium_after(&hit, medium, bs.wi);
         ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+        camera_ray = false;
     }
     l
 }

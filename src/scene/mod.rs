@@ -10,6 +10,7 @@ pub mod transform;
 
 use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
+use crate::camera::PixelFootprint;
 use crate::error::{Error, Result};
 use crate::geometry::triangle::TriHit;
 use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
@@ -20,7 +21,7 @@ use crate::math::{Ray, Vec2, Vec3};
 use crate::medium::{Medium, MediumInterface};
 use crate::sampling::hash_unit;
 pub use crate::settings::SceneSettings;
-use crate::texture::{TexCoord, Texture};
+use crate::texture::{Footprint, TexCoord, Texture};
 use mesh::MeshReport;
 use std::path::{Path, PathBuf};
 
@@ -355,6 +356,9 @@ pub struct SceneDesc {
     pub boundaries: Vec<Boundary>,
     /// The render settings the scene recommends: its file's and its preset's.
     pub settings: SceneSettings,
+    /// The samples a pixel of the render, which scale texture footprints
+    /// (`camera::PixelFootprint`); the render's settings set it.
+    pub texture_spp: u32,
 }
 
 impl SceneDesc {
@@ -373,6 +377,7 @@ impl SceneDesc {
             camera_medium: None,
             boundaries: vec![],
             settings: SceneSettings::default(),
+            texture_spp: 64,
         }
     }
 
@@ -436,6 +441,7 @@ impl Hit {
             ns: self.ns,
             dpdu: self.dpdu,
             shading: None,
+            footprint: Footprint::NONE,
         }
     }
 }
@@ -463,6 +469,24 @@ pub struct Hit {
     pub light: Option<u32>,
 }
 
+/// The change of (u, v) for changes `dpdx`, `dpdy` of the point on a surface
+/// with derivatives `dpdu`, `dpdv`: pbrt-v4's least-squares solution
+/// (`SurfaceInteraction::ComputeDifferentials`), zero where it fails.
+fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
+    let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let inv = 1.0 / (a00 * a11 - a01 * a01);
+    let inv = if inv.is_finite() { inv } else { 0.0 };
+    let (b0x, b1x) = (dpdu.dot(dpdx), dpdv.dot(dpdx));
+    let (b0y, b1y) = (dpdu.dot(dpdy), dpdv.dot(dpdy));
+    let clamp = |v: f32| if v.is_finite() { v.clamp(-1e8, 1e8) } else { 0.0 };
+    Footprint {
+        dudx: clamp((a11 * b0x - a01 * b1x) * inv),
+        dvdx: clamp((a00 * b1x - a01 * b0x) * inv),
+        dudy: clamp((a11 * b0y - a01 * b1y) * inv),
+        dvdy: clamp((a00 * b1y - a01 * b0y) * inv),
+    }
+}
+
 /// Texture coordinates of a triangle without its own: pbrt-v4's.
 const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
 
@@ -470,7 +494,7 @@ const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::n
 /// the texture coordinates; with vertex normals, pbrt-v4's shading frame
 /// (dp/du made perpendicular to the shading normal, dp/dv their cross
 /// product) and the normals' derivatives.
-fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<ShadingGeometry> {
+fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let uv = t.uvs.unwrap_or(DEFAULT_UV);
     let [p0, p1, p2] = t.vertices;
     let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
@@ -487,13 +511,14 @@ fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<ShadingGeometry> {
         (dpdu, dpdv) = crate::math::orthonormal_basis(ng);
     }
     let Some(normals) = t.normals else {
-        return Some(ShadingGeometry {
+        let g = ShadingGeometry {
             n: hit.ng,
             dpdu,
             dpdv,
             dndu: Vec3::ZERO,
             dndv: Vec3::ZERO,
-        });
+        };
+        return Some((g, [dpdu, dpdv]));
     };
     // The vertex normals orient pbrt-v4's shading normal; ours keeps to
     // the side of the winding.
@@ -518,13 +543,14 @@ fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<ShadingGeometry> {
             None => (Vec3::ZERO, Vec3::ZERO),
         }
     };
-    Some(ShadingGeometry {
+    let g = ShadingGeometry {
         n,
         dpdu: ss,
         dpdv: ts,
         dndu,
         dndv,
-    })
+    };
+    Some((g, [dpdu, dpdv]))
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -738,6 +764,11 @@ pub struct Scene {
     pub dropped_triangles: usize,
     pub desc: SceneDesc,
     pub bvh_build_seconds: f64,
+    /// What each material needs of a hit's differential geometry: its
+    /// shading geometry (`Material::is_bumped`), its texture footprint
+    /// (`Material::needs_footprint`).
+    differentials: Vec<(bool, bool)>,
+    footprint: PixelFootprint,
 }
 
 impl Scene {
@@ -893,6 +924,7 @@ impl Scene {
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
         let shapes = shape_bvh(&spheres, &disks)?;
         let (media, object_interfaces, interfaces) = media_tables(&desc, lights.len())?;
+        let footprint = camera.pixel_footprint(desc.texture_spp);
         let mut scene = Scene {
             name: desc.name.clone(),
             camera,
@@ -917,9 +949,16 @@ impl Scene {
             object_interfaces,
             interfaces,
             dropped_triangles: dropped,
+            differentials: vec![],
+            footprint,
             desc,
             bvh_build_seconds,
         };
+        scene.differentials = scene
+            .materials
+            .iter()
+            .map(|m| (m.is_bumped(), m.needs_footprint()))
+            .collect();
         // Lights at infinity reach the scene through its bounding sphere.
         let bounds = scene.bounds();
         let world = if bounds.is_empty() {
@@ -1162,7 +1201,7 @@ impl Scene {
     /// cut-out `alpha` counts.
     #[inline(never)]
     fn solid(&self, alpha: u32, uv: Vec2, p: Vec3, ray: &Ray, prim: [u32; 2]) -> bool {
-        let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord { uv, p });
+        let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord::at(uv, p));
         if a >= 1.0 {
             return true;
         }
@@ -1198,16 +1237,35 @@ impl Scene {
     /// point, with the shading geometry a bump map needs when the material
     /// has one.
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        self.surface_seen(hit, false)
+    }
+
+    /// [`Scene::surface`] of a camera ray's hit: its texture footprint is
+    /// that of the ray's own differentials, where other hits take the
+    /// camera's approximation at their distance (as pbrt-v4 does).
+    pub fn camera_surface(&self, hit: &Hit) -> SurfacePoint {
+        self.surface_seen(hit, true)
+    }
+
+    fn surface_seen(&self, hit: &Hit, from_camera: bool) -> SurfacePoint {
         let mut sp = hit.surface();
-        if self.materials[hit.material as usize].is_bumped() {
-            sp.shading = self.shading_geometry(hit);
+        let (shaded, footprinted) = self.differentials[hit.material as usize];
+        if shaded || footprinted {
+            if let Some((g, [dpdu, dpdv])) = self.shading_geometry(hit) {
+                sp.shading = shaded.then_some(g);
+                if footprinted {
+                    let (dpdx, dpdy) = self.footprint.dp_dxy(&self.camera, hit.p, hit.ng, from_camera);
+                    sp.footprint = uv_footprint(dpdu, dpdv, dpdx, dpdy);
+                }
+            }
         }
         sp
     }
 
     /// pbrt-v4's shading geometry at a hit on a triangle, sphere or disk
-    /// (`None` on emitters and where the parametrisation degenerates).
-    fn shading_geometry(&self, hit: &Hit) -> Option<ShadingGeometry> {
+    /// (`None` on emitters and where the parametrisation degenerates), and
+    /// the surface's own dp/du and dp/dv.
+    fn shading_geometry(&self, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
         let tris = self.desc.triangles.len();
         match hit.kind {
             PrimKind::Triangle => triangle_shading(self.desc.triangles.get(hit.object as usize)?, hit),
@@ -1223,13 +1281,14 @@ impl Scene {
                 let dpdv = object.axes
                     * Vec3::new(q.z * q.x / sin_theta, q.z * q.y / sin_theta, -sin_theta)
                     * (-std::f32::consts::PI * s.radius);
-                Some(ShadingGeometry {
+                let g = ShadingGeometry {
                     n: hit.ng,
                     dpdu: hit.dpdu,
                     dpdv,
                     dndu: hit.dpdu / s.radius,
                     dndv: dpdv / s.radius,
-                })
+                };
+                Some((g, [hit.dpdu, dpdv]))
             }
             PrimKind::Disk => {
                 let j = (hit.object as usize).checked_sub(tris + self.desc.spheres.len())?;
@@ -1240,13 +1299,15 @@ impl Scene {
                 if r < 1e-6 * d.radius {
                     return None;
                 }
-                Some(ShadingGeometry {
+                let dpdv = planar * ((d.inner_radius - d.radius) / r);
+                let g = ShadingGeometry {
                     n: hit.ng,
                     dpdu: hit.dpdu,
-                    dpdv: planar * ((d.inner_radius - d.radius) / r),
+                    dpdv,
                     dndu: Vec3::ZERO,
                     dndv: Vec3::ZERO,
-                })
+                };
+                Some((g, [hit.dpdu, dpdv]))
             }
             PrimKind::Light => None,
         }
@@ -1561,6 +1622,50 @@ mod shading_tests {
             "{g:?} {dpdu} {dpdv}"
         );
         assert_eq!((g.n, g.dndu, g.dndv), (Vec3::Z, Vec3::ZERO, Vec3::ZERO));
+    }
+
+    #[test]
+    fn the_uv_footprint_is_the_least_squares_change_of_uv() {
+        let (dpdu, dpdv) = (Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.5, 3.0, 1.0));
+        // Changes within the surface are recovered exactly...
+        let f = uv_footprint(dpdu, dpdv, dpdu * 0.1 + dpdv * 0.2, dpdu * -0.3 + dpdv * 0.05);
+        for (got, want) in [(f.dudx, 0.1), (f.dvdx, 0.2), (f.dudy, -0.3), (f.dvdy, 0.05)] {
+            assert!((got - want).abs() < 1e-6, "{f:?}");
+        }
+        // ...a change along the normal adds nothing, and a degenerate
+        // parametrisation gives no footprint.
+        let n = dpdu.cross(dpdv);
+        assert_eq!(uv_footprint(dpdu, dpdv, n, n), Footprint::NONE);
+        assert_eq!(uv_footprint(dpdu, dpdu, dpdu, dpdu), Footprint::NONE);
+    }
+
+    #[test]
+    fn only_materials_that_look_up_images_or_bump_get_a_footprint() {
+        let scene = scene_with(|d| {
+            for (i, material) in [0, 1].into_iter().enumerate() {
+                let shift = Vec3::new(10.0 * i as f32, 0.0, 0.0);
+                d.triangles.push(TriangleDesc {
+                    vertices: [Vec3::ZERO, Vec3::X * 2.0, Vec3::Y * 2.0].map(|v| v + shift),
+                    normals: None,
+                    uvs: None,
+                    material,
+                });
+            }
+        });
+        let hit = |x: f32| {
+            let o = Vec3::new(x + 0.5, 0.5, 3.0);
+            scene.intersect(&Ray::new(o, -Vec3::Z), 1e-4, f32::INFINITY).unwrap()
+        };
+        let (bumped, plain) = (hit(0.0), hit(10.0));
+        assert_eq!(scene.surface(&plain).footprint, Footprint::NONE);
+        let approximate = scene.surface(&bumped).footprint;
+        let exact = scene.camera_surface(&bumped).footprint;
+        assert_ne!(approximate, Footprint::NONE);
+        assert_ne!(approximate, exact);
+        // Both about an eighth of the pixel: the same order of size.
+        let size = |f: Footprint| f.dudx.abs() + f.dvdx.abs() + f.dudy.abs() + f.dvdy.abs();
+        let ratio = size(approximate) / size(exact);
+        assert!(ratio > 0.2 && ratio < 5.0, "{ratio}");
     }
 
     #[test]

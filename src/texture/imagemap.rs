@@ -7,20 +7,31 @@
 //! t = 1 - t, and the image, whose first row is its top, is read at pixel
 //! coordinates (s w - 0.5, t h - 0.5): texel centres sit at half-integers.
 //! So (u, v) = (0, 0) is the bottom-left corner of the picture as seen, and
-//! v grows upwards. pbrt-v4 also builds a MIP map and resizes images whose
-//! sides are not powers of two for it; without ray differentials its
-//! bilinear filter reads the finest level, which here is the image as stored.
+//! v grows upwards.
+//!
+//! A lookup with a [`Footprint`] reads a MIP map level as pbrt-v4's
+//! `MIPMap::Filter` does (its `filter` parameter: point, bilinear by default,
+//! trilinear; EWA is read as trilinear): the level where a texel is as wide
+//! as twice the largest of the footprint's (s, t) derivatives. The pyramid
+//! is pbrt-v4's: sides rounded up to powers of two, each level the 2 x 2 box
+//! average of the one below, stored as the file was (an 8-bit image's levels
+//! are 8-bit again, in its encoding). Two departures: the finest level is the
+//! image as stored, not resampled to the powers of two (pbrt-v4 resamples it
+//! with a windowed sinc), and the second level of such an image averages
+//! bilinear samples of the first. A lookup without a footprint reads the
+//! finest level, as pbrt-v4 does without ray differentials.
 //!
 //! Decoded images are shared: [`load_image`] keeps a cache of the images
 //! alive in the process, keyed by canonical path and encoding, so a scene
 //! that uses one file in several textures (or several scenes in one process)
 //! decodes it once.
 
+use super::Footprint;
 use crate::error::{Error, Result};
 use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 /// What happens to lookups outside [0, 1]^2 (pbrt-v4's `WrapMode`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -80,6 +91,15 @@ impl Encoding {
         }
     }
 
+    /// A linear value in [0, 1] as stored: the inverse of `to_linear`.
+    pub fn encode(self, v: f32) -> f32 {
+        match self {
+            Encoding::Linear => v,
+            Encoding::Gamma(g) => v.max(0.0).powf(1.0 / g),
+            Encoding::Srgb => linear_to_srgb(v),
+        }
+    }
+
     /// A key for the cache (f32 is not `Hash`).
     fn key(self) -> (u8, u32) {
         match self {
@@ -96,6 +116,15 @@ pub fn srgb_to_linear(v: f32) -> f32 {
         v / 12.92
     } else {
         ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The sRGB opto-electronic transfer function, the inverse of [`srgb_to_linear`].
+pub fn linear_to_srgb(v: f32) -> f32 {
+    if v <= 0.0031308 {
+        v * 12.92
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
     }
 }
 
@@ -118,6 +147,46 @@ pub struct TexImage {
     /// has one that is not 1 everywhere: pbrt-v4 keeps such a channel, and a
     /// float lookup of the image reads it (an `alpha` cut-out's mask).
     pub alpha: Option<Vec<f32>>,
+    /// Whether the file held 8 bits a channel: the MIP map's levels are
+    /// quantised to them again, as pbrt-v4 stores its levels.
+    pub eight_bit: bool,
+    /// The MIP map's levels above the finest (the image itself), built at
+    /// the first lookup that needs one.
+    pyramid: OnceLock<Vec<MipLevel>>,
+}
+
+/// One level of a MIP map above the finest: linear RGB, first row at the
+/// top, and the alpha channel if the image has one.
+struct MipLevel {
+    width: u32,
+    height: u32,
+    pixels: Vec<Vec3>,
+    alpha: Option<Vec<f32>>,
+}
+
+/// How a lookup with a footprint reads the MIP map (pbrt-v4's
+/// `FilterFunction`; its `EWA` is read as `Trilinear`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MipFilter {
+    /// The nearest texel of the level below the footprint's.
+    Point,
+    /// A bilinear lookup in the level below the footprint's (pbrt-v4's default).
+    #[default]
+    Bilinear,
+    /// Bilinear lookups in the two levels about the footprint's, blended.
+    Trilinear,
+}
+
+impl MipFilter {
+    /// pbrt-v4's names: "point", "bilinear", "trilinear", "ewa".
+    pub fn parse(name: &str) -> Option<MipFilter> {
+        match name {
+            "point" => Some(MipFilter::Point),
+            "bilinear" => Some(MipFilter::Bilinear),
+            "trilinear" | "ewa" | "EWA" => Some(MipFilter::Trilinear),
+            _ => None,
+        }
+    }
 }
 
 /// Two images are equal when their files' bytes and encodings are: the hash
@@ -179,24 +248,9 @@ impl TexImage {
             max,
             min,
             alpha: None,
+            eight_bit: false,
+            pyramid: OnceLock::new(),
         }
-    }
-
-    /// The index of the texel at integer coordinates after wrapping; `None`
-    /// outside with `Black`.
-    fn texel_index(&self, x: i64, y: i64, wrap: WrapMode) -> Option<usize> {
-        let (w, h) = (self.width as i64, self.height as i64);
-        let (x, y) = match wrap {
-            WrapMode::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
-            WrapMode::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
-            WrapMode::Black => {
-                if x < 0 || y < 0 || x >= w || y >= h {
-                    return None;
-                }
-                (x, y)
-            }
-        };
-        Some((y * w + x) as usize)
     }
 
     /// Bilinear lookup at image coordinates `st` in [0, 1]^2 (t down from the
@@ -209,21 +263,224 @@ impl TexImage {
     where
         T: Default + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
     {
-        // Far outside, f32 -> i64 saturates; repeat's rem_euclid still works.
-        let x = st.x as f64 * self.width as f64 - 0.5;
-        let y = st.y as f64 * self.height as f64 - 0.5;
-        if !(x.is_finite() && y.is_finite()) {
-            return T::default();
-        }
-        let (xf, yf) = (x.floor(), y.floor());
-        let (dx, dy) = ((x - xf) as f32, (y - yf) as f32);
-        let (xi, yi) = (xf as i64, yf as i64);
-        let t = |x, y| self.texel_index(x, y, wrap).map_or_else(T::default, &texel);
-        t(xi, yi) * ((1.0 - dx) * (1.0 - dy))
-            + t(xi + 1, yi) * (dx * (1.0 - dy))
-            + t(xi, yi + 1) * ((1.0 - dx) * dy)
-            + t(xi + 1, yi + 1) * (dx * dy)
+        bilerp_grid(self.width, self.height, st, wrap, texel)
     }
+
+    /// Levels of the MIP map: 1 + log2 of the longer side rounded up to a
+    /// power of two (pbrt-v4's count).
+    fn level_count(&self) -> usize {
+        let side = self.width.max(self.height).next_power_of_two();
+        1 + side.trailing_zeros() as usize
+    }
+
+    /// The levels above the finest, built once.
+    fn pyramid(&self) -> &[MipLevel] {
+        self.pyramid.get_or_init(|| build_pyramid(self))
+    }
+
+    /// A bilinear lookup in MIP level `level` (0: the image itself), colour
+    /// or the float lookup (alpha, else the channels' mean).
+    fn level_bilerp(&self, level: usize, st: Vec2, wrap: WrapMode) -> Vec3 {
+        if level == 0 {
+            return self.bilerp(st, wrap);
+        }
+        let l = &self.pyramid()[level - 1];
+        bilerp_grid(l.width, l.height, st, wrap, |i| l.pixels[i])
+    }
+
+    fn level_bilerp_scalar(&self, level: usize, st: Vec2, wrap: WrapMode) -> f32 {
+        let alpha = if level == 0 {
+            self.alpha.as_ref().map(|a| self.bilerp_with(st, wrap, |i| a[i]))
+        } else {
+            let l = &self.pyramid()[level - 1];
+            l.alpha
+                .as_ref()
+                .map(|a| bilerp_grid(l.width, l.height, st, wrap, |i| a[i]))
+        };
+        alpha.unwrap_or_else(|| channel_mean(self.level_bilerp(level, st, wrap)))
+    }
+
+    /// The texel of level `level` nearest to `st` (pbrt-v4's point filter).
+    fn level_nearest(&self, level: usize, st: Vec2, wrap: WrapMode) -> (Vec3, Option<f32>) {
+        let (w, h) = match level {
+            0 => (self.width, self.height),
+            k => (self.pyramid()[k - 1].width, self.pyramid()[k - 1].height),
+        };
+        let x = (st.x as f64 * w as f64 - 0.5).round();
+        let y = (st.y as f64 * h as f64 - 0.5).round();
+        if !(x.is_finite() && y.is_finite()) {
+            return (Vec3::ZERO, None);
+        }
+        let Some(i) = texel_index(w, h, x as i64, y as i64, wrap) else {
+            return (Vec3::ZERO, self.alpha.as_ref().map(|_| 0.0));
+        };
+        match level {
+            0 => (self.pixels[i], self.alpha.as_ref().map(|a| a[i])),
+            k => {
+                let l = &self.pyramid()[k - 1];
+                (l.pixels[i], l.alpha.as_ref().map(|a| a[i]))
+            }
+        }
+    }
+
+    /// pbrt-v4's `MIPMap::Filter` (not EWA) for a filter `width` in (s, t):
+    /// the colour, or with `scalar` the float lookup in its first channel.
+    fn filter(&self, st: Vec2, width: f32, filter: MipFilter, wrap: WrapMode, scalar: bool) -> Vec3 {
+        let levels = self.level_count();
+        let level = (levels - 1) as f32 + width.max(1e-8).log2();
+        let scalar_of = |c: Vec3, a: Option<f32>| a.unwrap_or_else(|| channel_mean(c));
+        if level >= (levels - 1) as f32 || level.is_nan() {
+            // The one texel of the top level; pbrt-v4's float lookup of it
+            // reads its first channel whatever the image's channels are.
+            let top = self.level_nearest(levels - 1, Vec2::ZERO, WrapMode::Clamp).0;
+            return if scalar { Vec3::splat(top.x) } else { top };
+        }
+        let i = (level.floor().max(0.0)) as usize;
+        let at = |k: usize| {
+            if scalar {
+                Vec3::splat(self.level_bilerp_scalar(k, st, wrap))
+            } else {
+                self.level_bilerp(k, st, wrap)
+            }
+        };
+        match filter {
+            MipFilter::Point => {
+                let (c, a) = self.level_nearest(i, st, wrap);
+                if scalar {
+                    Vec3::splat(scalar_of(c, a))
+                } else {
+                    c
+                }
+            }
+            MipFilter::Bilinear => at(i),
+            MipFilter::Trilinear if i == 0 => at(0),
+            MipFilter::Trilinear => {
+                let f = level - i as f32;
+                at(i) * (1.0 - f) + at(i + 1) * f
+            }
+        }
+    }
+}
+
+/// The mean of the channels, exactly the value of a grey colour.
+fn channel_mean(v: Vec3) -> f32 {
+    if v.x == v.y && v.y == v.z {
+        v.x
+    } else {
+        (v.x + v.y + v.z) / 3.0
+    }
+}
+
+/// The index of the texel at integer coordinates of a `w` x `h` grid after
+/// wrapping; `None` outside with `Black`.
+fn texel_index(w: u32, h: u32, x: i64, y: i64, wrap: WrapMode) -> Option<usize> {
+    let (w, h) = (w as i64, h as i64);
+    let (x, y) = match wrap {
+        WrapMode::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
+        WrapMode::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
+        WrapMode::Black => {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                return None;
+            }
+            (x, y)
+        }
+    };
+    Some((y * w + x) as usize)
+}
+
+/// Bilinear lookup in a `w` x `h` grid at `st` in [0, 1]^2, texel centres at
+/// half-integers (pbrt-v4's `Image::Bilerp`).
+fn bilerp_grid<T>(w: u32, h: u32, st: Vec2, wrap: WrapMode, texel: impl Fn(usize) -> T) -> T
+where
+    T: Default + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
+    // Far outside, f32 -> i64 saturates; repeat's rem_euclid still works.
+    let x = st.x as f64 * w as f64 - 0.5;
+    let y = st.y as f64 * h as f64 - 0.5;
+    if !(x.is_finite() && y.is_finite()) {
+        return T::default();
+    }
+    let (xf, yf) = (x.floor(), y.floor());
+    let (dx, dy) = ((x - xf) as f32, (y - yf) as f32);
+    let (xi, yi) = (xf as i64, yf as i64);
+    let t = |x, y| texel_index(w, h, x, y, wrap).map_or_else(T::default, &texel);
+    t(xi, yi) * ((1.0 - dx) * (1.0 - dy))
+        + t(xi + 1, yi) * (dx * (1.0 - dy))
+        + t(xi, yi + 1) * ((1.0 - dx) * dy)
+        + t(xi + 1, yi + 1) * (dx * dy)
+}
+
+/// The MIP map's levels above the finest, as pbrt-v4's
+/// `Image::GeneratePyramid` makes them: the image at sides rounded up to
+/// powers of two, then each level the 2 x 2 box average of the one below,
+/// in floats; each level is stored as the file was (8 bits again, in its
+/// encoding, for an 8-bit image).
+fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
+    let (pw, ph) = (img.width.next_power_of_two(), img.height.next_power_of_two());
+    let alpha = img.alpha.as_deref();
+    // The finest level at the powers of two: the image itself, or (our
+    // departure from pbrt-v4's windowed sinc) its bilinear samples.
+    let (mut colour, mut opacity): (Vec<Vec3>, Option<Vec<f32>>) = if (pw, ph) == (img.width, img.height) {
+        (img.pixels.clone(), alpha.map(<[f32]>::to_vec))
+    } else {
+        let st = |i: usize| {
+            let (x, y) = ((i % pw as usize) as f32, (i / pw as usize) as f32);
+            Vec2::new((x + 0.5) / pw as f32, (y + 0.5) / ph as f32)
+        };
+        let n = pw as usize * ph as usize;
+        (
+            (0..n).map(|i| img.bilerp(st(i), WrapMode::Clamp)).collect(),
+            alpha.map(|a| {
+                (0..n)
+                    .map(|i| img.bilerp_with(st(i), WrapMode::Clamp, |j| a[j]))
+                    .collect()
+            }),
+        )
+    };
+    let (mut w, mut h) = (pw, ph);
+    let quantise = |v: f32| {
+        if img.eight_bit {
+            let stored = img.encoding.encode(v.clamp(0.0, 1.0));
+            img.encoding.to_linear((stored * 255.0).round() / 255.0)
+        } else {
+            v
+        }
+    };
+    let mut levels = Vec::new();
+    while w > 1 || h > 1 {
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        // The 2 x 2 box below each texel of the next level (a side of one
+        // texel averages that texel with itself).
+        fn down<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T>>(
+            src: &[T],
+            (w, h): (u32, u32),
+            (nw, nh): (u32, u32),
+        ) -> Vec<T> {
+            let at = |x: u32, y: u32| src[y as usize * w as usize + x as usize];
+            let mut out = Vec::with_capacity(nw as usize * nh as usize);
+            for y in 0..nh {
+                for x in 0..nw {
+                    let (x0, y0) = (2 * x, 2 * y);
+                    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+                    out.push((at(x0, y0) + at(x1, y0) + at(x0, y1) + at(x1, y1)) * 0.25);
+                }
+            }
+            out
+        }
+        let next = down(&colour, (w, h), (nw, nh));
+        let next_alpha = opacity.as_deref().map(|a| down(a, (w, h), (nw, nh)));
+        levels.push(MipLevel {
+            width: nw,
+            height: nh,
+            pixels: next
+                .iter()
+                .map(|c| Vec3::new(quantise(c.x), quantise(c.y), quantise(c.z)))
+                .collect(),
+            alpha: next_alpha.as_ref().map(|a| a.iter().map(|&v| quantise(v)).collect()),
+        });
+        (colour, opacity, w, h) = (next, next_alpha, nw, nh);
+    }
+    levels
 }
 
 /// (s, t) = (su u + du, sv v + dv): pbrt-v4's `UVMapping`.
@@ -263,6 +520,8 @@ pub struct ImageOptions {
     /// Returns 1 - value (after `scale`), clamped at 0.
     pub invert: bool,
     pub mapping: UvMapping,
+    /// How lookups with a footprint read the MIP map.
+    pub filter: MipFilter,
 }
 
 impl Default for ImageOptions {
@@ -273,6 +532,7 @@ impl Default for ImageOptions {
             scale: 1.0,
             invert: false,
             mapping: UvMapping::default(),
+            filter: MipFilter::default(),
         }
     }
 }
@@ -285,6 +545,7 @@ pub struct ImageTexture {
     pub scale: f32,
     pub invert: bool,
     pub mapping: UvMapping,
+    pub filter: MipFilter,
 }
 
 impl PartialEq for ImageTexture {
@@ -294,6 +555,7 @@ impl PartialEq for ImageTexture {
             && self.scale == o.scale
             && self.invert == o.invert
             && self.mapping == o.mapping
+            && self.filter == o.filter
     }
 }
 
@@ -312,6 +574,7 @@ impl ImageTexture {
             scale: opts.scale,
             invert: opts.invert,
             mapping: opts.mapping,
+            filter: opts.filter,
         }
     }
 
@@ -320,6 +583,60 @@ impl ImageTexture {
         let st = self.mapping.map(uv);
         // Images are stored top row first; v grows upwards (pbrt-v4 flips t).
         let v = self.image.bilerp(Vec2::new(st.x, 1.0 - st.y), self.wrap) * self.scale;
+        if self.invert {
+            (Vec3::ONE - v).max(Vec3::ZERO)
+        } else {
+            v.max(Vec3::ZERO)
+        }
+    }
+
+    /// The value at `uv` for a lookup whose (u, v) changes by `footprint`
+    /// from pixel to pixel: a MIP map level's (the finest without one).
+    pub fn evaluate_filtered(&self, uv: Vec2, footprint: &Footprint) -> Vec3 {
+        match self.filter_width(footprint) {
+            None => self.evaluate(uv),
+            Some(width) => {
+                let st = self.mapping.map(uv);
+                let st = Vec2::new(st.x, 1.0 - st.y);
+                let v = self.image.filter(st, width, self.filter, self.wrap, false) * self.scale;
+                self.finish(v)
+            }
+        }
+    }
+
+    /// `evaluate_scalar` with a footprint, as `evaluate_filtered`.
+    pub fn evaluate_scalar_filtered(&self, uv: Vec2, footprint: &Footprint) -> f32 {
+        match self.filter_width(footprint) {
+            None => self.evaluate_scalar(uv),
+            Some(width) => {
+                let st = self.mapping.map(uv);
+                let st = Vec2::new(st.x, 1.0 - st.y);
+                let v = self.image.filter(st, width, self.filter, self.wrap, true).x * self.scale;
+                if self.invert {
+                    (1.0 - v).max(0.0)
+                } else {
+                    v.max(0.0)
+                }
+            }
+        }
+    }
+
+    /// The width in (s, t) pbrt-v4's MIP map filter takes for a footprint:
+    /// twice the largest of its derivatives; `None` without a footprint.
+    fn filter_width(&self, f: &Footprint) -> Option<f32> {
+        if *f == Footprint::NONE {
+            return None;
+        }
+        let (su, sv) = (self.mapping.su.abs(), self.mapping.sv.abs());
+        let w = 2.0
+            * (su * f.dudx.abs())
+                .max(sv * f.dvdx.abs())
+                .max(su * f.dudy.abs())
+                .max(sv * f.dvdy.abs());
+        w.is_finite().then_some(w)
+    }
+
+    fn finish(&self, v: Vec3) -> Vec3 {
         if self.invert {
             (Vec3::ONE - v).max(Vec3::ZERO)
         } else {
@@ -526,8 +843,10 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
         .map(|im| im.pixels().map(|p| lin(p.0[3])).collect());
     h.bytes(&[enc.key().0]);
     h.bytes(&enc.key().1.to_le_bytes());
+    let eight_bit = table.is_some();
     let mut image = TexImage::finish(path.to_path_buf(), width, height, pixels, h.0, integer, enc);
     image.alpha = alpha;
+    image.eight_bit = eight_bit;
     Ok(image)
 }
 
@@ -721,5 +1040,129 @@ mod tests {
         let p = dir.path().join("bad.pfm");
         std::fs::write(&p, "PF\n2 2\n-1\nxx").unwrap();
         assert!(load_image(&p, Encoding::Srgb).is_err());
+    }
+
+    /// A texture over a `w` x `h` checkerboard of 0 and 1 texels.
+    fn checker(w: u32, h: u32, filter: MipFilter) -> ImageTexture {
+        let pixels = (0..w * h).map(|i| Vec3::splat(((i % w + i / w) % 2) as f32)).collect();
+        let opts = ImageOptions {
+            encoding: Encoding::Linear,
+            filter,
+            ..ImageOptions::default()
+        };
+        ImageTexture::new(Arc::new(TexImage::from_pixels("checker", w, h, pixels)), &opts)
+    }
+
+    fn footprint(d: f32) -> Footprint {
+        Footprint {
+            dudx: d,
+            dvdx: 0.0,
+            dudy: 0.0,
+            dvdy: d,
+        }
+    }
+
+    #[test]
+    fn mip_levels_are_box_averages_chosen_by_the_footprint() {
+        let t = checker(8, 8, MipFilter::Bilinear);
+        assert_eq!(t.image.level_count(), 4);
+        let uv = Vec2::new(0.3, 0.6);
+        // No footprint, or one smaller than a texel: the texels themselves
+        // (bilinear between 0 and 1 away from their centres).
+        let fine = t.evaluate(uv);
+        assert_eq!(t.evaluate_filtered(uv, &Footprint::NONE), fine);
+        assert_eq!(t.evaluate_filtered(uv, &footprint(0.01)), fine);
+        assert!(fine.x > 0.05 && fine.x < 0.95, "{fine}");
+        // A footprint of two texels and more: the 2 x 2 averages of a
+        // checkerboard, grey everywhere.
+        for d in [2.0 / 8.0, 0.5, 10.0] {
+            let v = t.evaluate_filtered(uv, &footprint(d));
+            assert!((v - Vec3::splat(0.5)).abs().max_element() < 1e-6, "{d}: {v}");
+        }
+        // The level is the one where a texel is as wide as twice the largest
+        // derivative: 2 x 0.0625 = 1/8 is level 0; 1/4 is level 1.
+        let level = |d: f32| t.image.level_count() as f32 - 1.0 + (2.0 * d).log2();
+        assert_eq!(level(1.0 / 16.0), 0.0);
+        assert_eq!(level(1.0 / 8.0), 1.0);
+        // The texture's (u, v) scale scales the footprint.
+        let mut scaled = checker(8, 8, MipFilter::Bilinear);
+        scaled.mapping.su = 8.0;
+        scaled.mapping.sv = 8.0;
+        let v = scaled.evaluate_filtered(uv, &footprint(1.0 / 32.0));
+        assert!((v - Vec3::splat(0.5)).abs().max_element() < 1e-6, "{v}");
+    }
+
+    #[test]
+    fn trilinear_blends_two_levels_and_point_takes_the_nearest_texel() {
+        // 8 x 8, pairs of rows of 0 and of 1: level 1 has rows 0, 1, 0, 1,
+        // level 2 is grey.
+        let pixels = (0..64).map(|i| Vec3::splat(((i / 8 / 2) % 2) as f32)).collect();
+        let opts = |filter| ImageOptions {
+            encoding: Encoding::Linear,
+            filter,
+            ..ImageOptions::default()
+        };
+        let image = Arc::new(TexImage::from_pixels("rows", 8, 8, pixels));
+        let tri = ImageTexture::new(image.clone(), &opts(MipFilter::Trilinear));
+        // The centre of level 1's top row (0); level 2 is 0.5 there.
+        let uv = Vec2::new(0.5, 1.0 - 0.125);
+        // Level 1.5 (a filter width of 2^-1.5): halfway between them.
+        let at = |level: f32| footprint(2f32.powf(level - 3.0) / 2.0);
+        let v = tri.evaluate_filtered(uv, &at(1.5)).x;
+        assert!((v - 0.25).abs() < 1e-6, "{v}");
+        // Below level 1 pbrt-v4 reads level 0 alone.
+        assert_eq!(tri.evaluate_filtered(uv, &at(0.5)), tri.evaluate(uv));
+        // Bilinear reads the level below: level 1's 0.
+        let bi = ImageTexture::new(image.clone(), &opts(MipFilter::Bilinear));
+        assert_eq!(bi.evaluate_filtered(uv, &at(1.5)).x, 0.0);
+        // Point: the nearest texel of that level (row 1 of level 1: 1).
+        let point = ImageTexture::new(image, &opts(MipFilter::Point));
+        assert_eq!(point.evaluate_filtered(Vec2::new(0.3, 0.6), &at(1.5)).x, 1.0);
+    }
+
+    #[test]
+    fn levels_of_8_bit_images_are_8_bit_and_odd_sizes_round_up_to_powers_of_two() {
+        let dir = tempfile::tempdir().unwrap();
+        // 3 x 1, grey 0, 255, 128: rounded up to 4 x 1, then 2 x 1 and 1 x 1.
+        let path = dir.path().join("odd.png");
+        ::image::GrayImage::from_raw(3, 1, vec![0, 255, 128])
+            .unwrap()
+            .save(&path)
+            .unwrap();
+        let image = load_image(&path, Encoding::Linear).unwrap();
+        assert!(image.eight_bit);
+        assert_eq!(image.level_count(), 3);
+        let levels = image.pyramid();
+        assert_eq!(
+            levels.iter().map(|l| (l.width, l.height)).collect::<Vec<_>>(),
+            [(2, 1), (1, 1)]
+        );
+        for l in levels {
+            for p in &l.pixels {
+                let stored = p.x * 255.0;
+                assert!((stored - stored.round()).abs() < 1e-3, "{stored} is not an 8-bit value");
+            }
+        }
+        // A power-of-two image: each level averages the floats of the level
+        // below (not its 8-bit copy), then keeps 8 bits.
+        let path4 = dir.path().join("four.png");
+        ::image::GrayImage::from_raw(4, 1, vec![0, 255, 128, 64])
+            .unwrap()
+            .save(&path4)
+            .unwrap();
+        let four = load_image(&path4, Encoding::Linear).unwrap();
+        let v = [0.0, 255.0, 128.0, 64.0].map(|x: f32| x / 255.0);
+        let eight = |x: f32| (x * 255.0).round() / 255.0;
+        let level1 = [eight((v[0] + v[1]) * 0.5), eight((v[2] + v[3]) * 0.5)];
+        let top = eight(((v[0] + v[1]) * 0.5 + (v[2] + v[3]) * 0.5) * 0.5);
+        let got = four.pyramid();
+        assert_eq!([got[0].pixels[0].x, got[0].pixels[1].x], level1);
+        assert_eq!(got[1].pixels[0].x, top);
+        // sRGB levels are quantised in the encoding: values stay on its grid.
+        let srgb = load_image(&path, Encoding::Srgb).unwrap();
+        for p in &srgb.pyramid()[0].pixels {
+            let stored = Encoding::Srgb.encode(p.x) * 255.0;
+            assert!((stored - stored.round()).abs() < 1e-2, "{stored}");
+        }
     }
 }

@@ -40,6 +40,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         camera_medium: None,
         boundaries: vec![],
         settings: SceneSettings::default(),
+        texture_spp: 64,
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));
     let s = 10.0;

@@ -8,7 +8,7 @@ use crate::error::Result;
 use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::FileSource;
-use crate::texture::{Encoding, ImageOptions, ImageTexture, Texture, UvMapping, WrapMode};
+use crate::texture::{Encoding, ImageOptions, ImageTexture, MipFilter, Texture, UvMapping, WrapMode};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -239,7 +239,7 @@ impl Resolver<'_> {
                 k.only(
                     kind,
                     &[
-                        "file", "wrap", "encoding", "scale", "invert", "uscale", "vscale", "udelta", "vdelta",
+                        "file", "wrap", "encoding", "scale", "invert", "uscale", "vscale", "udelta", "vdelta", "filter",
                     ],
                 )?;
                 let file = k.string("file")?.ok_or_else(|| k.err(None, "missing `file`".into()))?;
@@ -247,6 +247,15 @@ impl Resolver<'_> {
                     None => WrapMode::Repeat,
                     Some(w) => WrapMode::parse(w)
                         .ok_or_else(|| k.err(Some("wrap"), format!("wrap '{w}': use repeat, clamp or black")))?,
+                };
+                let filter = match k.string("filter")? {
+                    None => MipFilter::default(),
+                    Some(f) => MipFilter::parse(f).ok_or_else(|| {
+                        k.err(
+                            Some("filter"),
+                            format!("filter '{f}': use point, bilinear, trilinear or ewa"),
+                        )
+                    })?,
                 };
                 let encoding = match k.string("encoding")? {
                     None => Encoding::Srgb,
@@ -268,6 +277,7 @@ impl Resolver<'_> {
                         du: k.num("udelta")?.unwrap_or(0.0),
                         dv: k.num("vdelta")?.unwrap_or(0.0),
                     },
+                    filter,
                 };
                 let path = dir.join(file);
                 let image = files

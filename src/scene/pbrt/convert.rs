@@ -1987,7 +1987,7 @@ fn texture(
     at: &Loc,
     depth: usize,
 ) -> Result<std::result::Result<Texture, String>> {
-    use crate::texture::{Encoding, ImageOptions, UvMapping, WrapMode};
+    use crate::texture::{Encoding, ImageOptions, MipFilter, UvMapping, WrapMode};
     let kind_name = match kind {
         TextureKind::Float => "float",
         TextureKind::Spectrum => "spectrum",
@@ -2102,12 +2102,20 @@ fn texture(
                     format!("imagemap \"{name}\": unknown encoding \"{enc_name}\""),
                 ));
             };
+            let filter_name = p.get_string_or("filter", "bilinear")?;
+            let Some(filter) = MipFilter::parse(&filter_name) else {
+                return Err(located(
+                    &t.loc,
+                    format!("imagemap \"{name}\": unknown filter \"{filter_name}\""),
+                ));
+            };
             let opts = ImageOptions {
                 wrap,
                 encoding,
                 scale: p.get_float("scale", 1.0)?,
                 invert: p.get_bool("invert", false)?,
                 mapping: uv(p)?,
+                filter,
             };
             let tex =
                 Texture::image(&path, &opts).map_err(|e| located(&file_at, format!("imagemap \"{name}\": {e}")))?;
@@ -3043,7 +3051,7 @@ mod tests {
             let Material::Diffuse { reflectance } = &scene.materials[hit.material as usize] else {
                 panic!()
             };
-            reflectance.evaluate(&crate::texture::TexCoord { uv: hit.uv, p: hit.p })
+            reflectance.evaluate(&crate::texture::TexCoord::at(hit.uv, hit.p))
         };
         let (a, b) = (albedo(-0.5), albedo(0.5));
         assert!(a != b, "{a} {b}");
