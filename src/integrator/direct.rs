@@ -90,11 +90,7 @@ pub fn walk_camera_path(
         }
         let m = scene.material(hit.material);
         l += beta * m.le();
-        let sp = if depth == 0 {
-            scene.camera_surface(&hit)
-        } else {
-            scene.surface(&hit)
-        };
+        let sp = scene.surface_seen(&hit, depth == 0);
         let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();

@@ -106,11 +106,7 @@ impl RadianceEstimator for PathTracer {
             let wo = -ray.d;
             depth += 1;
             // The camera ray's hit has the ray's own texture footprint.
-            let sp = if depth == 1 {
-                scene.camera_surface(&hit)
-            } else {
-                scene.surface(&hit)
-            };
+            let sp = scene.surface_seen(&hit, depth == 1);
             let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
             let flags = bsdf.flags();

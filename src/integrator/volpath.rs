@@ -132,11 +132,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         }
         let wo = -ray.d;
         depth += 1;
-        let sp = if camera_ray {
-            scene.camera_surface(&hit)
-        } else {
-            scene.surface(&hit)
-        };
+        let sp = scene.surface_seen(&hit, camera_ray);
         let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();

@@ -1240,14 +1240,11 @@ impl Scene {
         self.surface_seen(hit, false)
     }
 
-    /// [`Scene::surface`] of a camera ray's hit: its texture footprint is
-    /// that of the ray's own differentials, where other hits take the
-    /// camera's approximation at their distance (as pbrt-v4 does).
-    pub fn camera_surface(&self, hit: &Hit) -> SurfacePoint {
-        self.surface_seen(hit, true)
-    }
-
-    fn surface_seen(&self, hit: &Hit, from_camera: bool) -> SurfacePoint {
+    /// [`Scene::surface`] of a hit, telling whether a camera ray made it:
+    /// its texture footprint is then that of the ray's own differentials,
+    /// where other hits take the camera's approximation at their distance
+    /// (as pbrt-v4 does).
+    pub fn surface_seen(&self, hit: &Hit, from_camera: bool) -> SurfacePoint {
         let mut sp = hit.surface();
         let (shaded, footprinted) = self.differentials[hit.material as usize];
         if shaded || footprinted {
@@ -1659,7 +1656,7 @@ mod shading_tests {
         let (bumped, plain) = (hit(0.0), hit(10.0));
         assert_eq!(scene.surface(&plain).footprint, Footprint::NONE);
         let approximate = scene.surface(&bumped).footprint;
-        let exact = scene.camera_surface(&bumped).footprint;
+        let exact = scene.surface_seen(&bumped, true).footprint;
         assert_ne!(approximate, Footprint::NONE);
         assert_ne!(approximate, exact);
         // Both about an eighth of the pixel: the same order of size.

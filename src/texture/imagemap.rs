@@ -418,26 +418,47 @@ where
 fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
     let (pw, ph) = (img.width.next_power_of_two(), img.height.next_power_of_two());
     let alpha = img.alpha.as_deref();
-    // The finest level at the powers of two: the image itself, or (our
-    // departure from pbrt-v4's windowed sinc) its bilinear samples.
-    let (mut colour, mut opacity): (Vec<Vec3>, Option<Vec<f32>>) = if (pw, ph) == (img.width, img.height) {
-        (img.pixels.clone(), alpha.map(<[f32]>::to_vec))
-    } else {
-        let st = |i: usize| {
-            let (x, y) = ((i % pw as usize) as f32, (i / pw as usize) as f32);
-            Vec2::new((x + 0.5) / pw as f32, (y + 0.5) / ph as f32)
-        };
-        let n = pw as usize * ph as usize;
-        (
-            (0..n).map(|i| img.bilerp(st(i), WrapMode::Clamp)).collect(),
-            alpha.map(|a| {
-                (0..n)
-                    .map(|i| img.bilerp_with(st(i), WrapMode::Clamp, |j| a[j]))
-                    .collect()
-            }),
-        )
+    if pw == 1 && ph == 1 {
+        return Vec::new();
+    }
+    // The level above the finest, from the finest at the powers of two:
+    // the image itself, or (our departure from pbrt-v4's windowed sinc) its
+    // bilinear samples there, never held at that size.
+    let (w1, h1) = ((pw / 2).max(1), (ph / 2).max(1));
+    let (sx, sy) = (pw / w1, ph / h1);
+    let children = |x: u32, y: u32| {
+        (0..sy).flat_map(move |j| {
+            (0..sx).map(move |i| {
+                let (cx, cy) = (x * sx + i, y * sy + j);
+                Vec2::new((cx as f32 + 0.5) / pw as f32, (cy as f32 + 0.5) / ph as f32)
+            })
+        })
     };
-    let (mut w, mut h) = (pw, ph);
+    let exact = (pw, ph) == (img.width, img.height);
+    let n = (sx * sy) as f32;
+    let mut first = Vec::with_capacity(w1 as usize * h1 as usize);
+    let mut first_alpha = alpha.map(|_| Vec::with_capacity(w1 as usize * h1 as usize));
+    for y in 0..h1 {
+        for x in 0..w1 {
+            let texel = |cx: u32, cy: u32| (cy as usize) * img.width as usize + cx as usize;
+            let (mut c, mut a) = (Vec3::ZERO, 0.0f32);
+            for (k, st) in children(x, y).enumerate() {
+                let (i, j) = (k as u32 % sx, k as u32 / sx);
+                if exact {
+                    let t = texel(x * sx + i, y * sy + j);
+                    c += img.pixels[t];
+                    a += alpha.map_or(0.0, |al| al[t]);
+                } else {
+                    c += img.bilerp(st, WrapMode::Clamp);
+                    a += alpha.map_or(0.0, |al| img.bilerp_with(st, WrapMode::Clamp, |t| al[t]));
+                }
+            }
+            first.push(c * (1.0 / n));
+            if let Some(v) = first_alpha.as_mut() {
+                v.push(a / n);
+            }
+        }
+    }
     let quantise = |v: f32| {
         if img.eight_bit {
             let stored = img.encoding.encode(v.clamp(0.0, 1.0));
@@ -446,7 +467,17 @@ fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
             v
         }
     };
-    let mut levels = Vec::new();
+    let store = |w: u32, h: u32, pixels: &[Vec3], alpha: Option<&Vec<f32>>| MipLevel {
+        width: w,
+        height: h,
+        pixels: pixels
+            .iter()
+            .map(|c| Vec3::new(quantise(c.x), quantise(c.y), quantise(c.z)))
+            .collect(),
+        alpha: alpha.map(|a| a.iter().map(|&v| quantise(v)).collect()),
+    };
+    let mut levels = vec![store(w1, h1, &first, first_alpha.as_ref())];
+    let (mut colour, mut opacity, mut w, mut h) = (first, first_alpha, w1, h1);
     while w > 1 || h > 1 {
         let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
         // The 2 x 2 box below each texel of the next level (a side of one
@@ -469,15 +500,7 @@ fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
         }
         let next = down(&colour, (w, h), (nw, nh));
         let next_alpha = opacity.as_deref().map(|a| down(a, (w, h), (nw, nh)));
-        levels.push(MipLevel {
-            width: nw,
-            height: nh,
-            pixels: next
-                .iter()
-                .map(|c| Vec3::new(quantise(c.x), quantise(c.y), quantise(c.z)))
-                .collect(),
-            alpha: next_alpha.as_ref().map(|a| a.iter().map(|&v| quantise(v)).collect()),
-        });
+        levels.push(store(nw, nh, &next, next_alpha.as_ref()));
         (colour, opacity, w, h) = (next, next_alpha, nw, nh);
     }
     levels
