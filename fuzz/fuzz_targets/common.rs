@@ -60,6 +60,7 @@ pub fn place_and_build(mesh: &Mesh) {
         camera_medium: None,
         boundaries: vec![],
         settings: SceneSettings::default(),
+        texture_spp: 64,
     };
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
     if mesh

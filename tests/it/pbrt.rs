@@ -743,6 +743,44 @@ fn striped_plane(dir: &Path, bumped: bool, integrator: &str) -> Film {
 }
 
 #[test]
+fn an_imagemaps_filter_is_read_and_an_unknown_one_refused_at_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    image::save_buffer(dir.path().join("t.png"), &[0, 255, 0, 255], 2, 2, image::ColorType::L8).unwrap();
+    let scene = |filter: &str| {
+        let path = dir.path().join(format!("{filter}.pbrt"));
+        std::fs::write(
+            &path,
+            format!(
+                "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 30 ]\nWorldBegin\n\
+                 LightSource \"distant\" \"point3 from\" [ 0 0 -1 ] \"point3 to\" [ 0 0 0 ] \"rgb L\" [ 2 2 2 ]\n\
+                 Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"t.png\" \"string filter\" \"{filter}\"\n\
+                 Material \"diffuse\" \"texture reflectance\" \"t\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [ -2 -2 0  2 -2 0  2 2 0  -2 2 0 ] \
+                 \"point2 uv\" [ 0 0 1 0 1 1 0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    for filter in ["point", "bilinear", "trilinear", "ewa"] {
+        let out = dir.path().join(format!("{filter}.pfm"));
+        let film = render_to(&scene(filter), &["--width", "16", "--height", "16", "--spp", "4"], &out);
+        assert!(film.pixels.iter().any(|p| p.y > 0.0), "{filter}");
+    }
+    let out = dir.path().join("sharp.pfm");
+    let bad = scene("sharp");
+    let o = raytracer(&["--scene", bad.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("sharp.pbrt:5: imagemap \"t\": unknown filter \"sharp\""),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
 fn a_bump_map_shades_a_plane_as_its_displaced_surface_would() {
     let dir = tempfile::tempdir().unwrap();
     for integrator in ["path", "direct"] {

@@ -233,7 +233,7 @@ fn bad_materials_and_textures_are_one_line_errors_at_their_line() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("notes.png"), "not an image").unwrap();
     // CAMERA is 7 lines; each case's first line is line 8.
-    let cases: [(&str, usize, &str); 12] = [
+    let cases: [(&str, usize, &str); 13] = [
         (
             "[materials.x]\ntype = \"conductor\"\nroughness = -0.1\n",
             10,
@@ -279,6 +279,11 @@ fn bad_materials_and_textures_are_one_line_errors_at_their_line() {
             "[textures.t]\ntype = \"image\"\nfile = \"notes.png\"\nwrap = \"mirror\"\n",
             11,
             "wrap 'mirror'",
+        ),
+        (
+            "[textures.t]\ntype = \"image\"\nfile = \"notes.png\"\nfilter = \"sharp\"\n",
+            11,
+            "filter 'sharp'",
         ),
         (
             "[materials.x]\ntype = \"coateddiffuse\"\nthickness = 0\n",
