@@ -1,10 +1,12 @@
 //! Camera: continuous pixel position (and a lens sample) -> primary ray.
 //! Perspective (a pinhole by default; a thin lens, pbrt-v4's
 //! `PerspectiveCamera`, when it has one) or orthographic (pbrt-v4's
-//! `OrthographicCamera`: parallel rays from the image plane).
+//! `OrthographicCamera`: parallel rays from the image plane) or spherical
+//! (pbrt-v4's `SphericalCamera`: the whole sphere of directions about a
+//! point, in an equal-area or an equirectangular image).
 
 use crate::math::{Ray, Vec2, Vec3};
-use crate::sampling::concentric_disk;
+use crate::sampling::{concentric_disk, equal_area_sphere_to_square, equal_area_square_to_sphere};
 
 /// The image's window on the plane at unit distance before the camera, in
 /// units of the tangent of half the field of view: x from `left` to `right`
@@ -36,6 +38,28 @@ impl ThinLens {
     }
 }
 
+/// How a spherical camera lays the sphere of directions on its image
+/// (pbrt-v4's `mapping`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphericalMapping {
+    /// pbrt-v4's equal-area octahedral square (Clarberg's), its default.
+    EqualArea,
+    /// Latitude and longitude: x from 0 to 2 pi about the up axis, y from
+    /// up (the top row) to down.
+    Equirectangular,
+}
+
+impl SphericalMapping {
+    /// pbrt-v4's names: "equalarea", "equirectangular".
+    pub fn parse(name: &str) -> Option<SphericalMapping> {
+        match name {
+            "equalarea" => Some(SphericalMapping::EqualArea),
+            "equirectangular" => Some(SphericalMapping::Equirectangular),
+            _ => None,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub position: Vec3,
@@ -51,6 +75,8 @@ pub struct Camera {
     /// Rays parallel to `forward` from the plane through `position`;
     /// `tan_half_fov` is then the world length of a unit of the window.
     orthographic: bool,
+    /// Rays from `position` in every direction, the image a map of the sphere.
+    spherical: Option<SphericalMapping>,
     pub width: u32,
     pub height: u32,
 }
@@ -78,9 +104,28 @@ impl Camera {
             centre: Vec2::ZERO,
             lens: None,
             orthographic: false,
+            spherical: None,
             width,
             height,
         })
+    }
+
+    /// A spherical camera at `position`: its image maps every direction,
+    /// laid out by `mapping` in the frame of the view direction and `up` as
+    /// pbrt-v4 lays it out (the sphere's pole is `up`; in the
+    /// equirectangular layout the top row looks up and the column a quarter
+    /// of the way across looks along `look_at`); `None` as [`Camera::new`].
+    pub fn spherical(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        mapping: SphericalMapping,
+        width: u32,
+        height: u32,
+    ) -> Option<Camera> {
+        let mut c = Camera::new(position, look_at, up, 90.0, width, height)?;
+        c.spherical = Some(mapping);
+        Some(c)
     }
 
     /// An orthographic camera whose image spans `2 half_height` world units
@@ -121,7 +166,7 @@ impl Camera {
     /// an orthographic camera (pbrt-v4's orthographic lens starts every ray
     /// about the camera's centre, a model we do not copy).
     pub fn with_lens(mut self, lens: ThinLens) -> Option<Camera> {
-        if !lens.is_valid() || self.orthographic {
+        if !lens.is_valid() || self.orthographic || self.spherical.is_some() {
             return None;
         }
         self.lens = Some(lens);
@@ -153,6 +198,10 @@ impl Camera {
     /// top-left corner of the image and (width, height) the bottom-right one.
     /// The ray leaves the lens' centre (the pinhole's ray).
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
+        if let Some(mapping) = self.spherical {
+            let c = spherical_direction(mapping, Vec2::new(x / self.width as f32, y / self.height as f32));
+            return Ray::new(self.position, self.camera_to_world(c).normalize());
+        }
         if self.orthographic {
             let (sx, sy) = self.screen(x, y);
             return Ray::new(self.position + self.right * sx + self.up * sy, self.forward);
@@ -248,6 +297,10 @@ impl Camera {
     /// Where a world-space point lands in continuous pixel coordinates, if in front.
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
         let v = p - self.position;
+        if let Some(mapping) = self.spherical {
+            let uv = spherical_uv(mapping, self.to_camera(v).try_normalize()?);
+            return Some((uv.x * self.width as f32, uv.y * self.height as f32));
+        }
         let z = v.dot(self.forward);
         if z <= 0.0 {
             return None;
@@ -467,6 +520,45 @@ mod tests {
     }
 
     #[test]
+    fn a_spherical_camera_lays_out_the_sphere_as_pbrt_v4_does() {
+        let (pos, ahead, up) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, 4.0), Vec3::Y);
+        let eq = Camera::spherical(pos, ahead, up, SphericalMapping::Equirectangular, 400, 200).unwrap();
+        let right = Vec3::Z.cross(Vec3::Y);
+        // Equirectangular: the top row looks up, the bottom down; across the
+        // middle row right, ahead, left and back (pbrt-v4's phi from camera
+        // x towards camera z).
+        let d = |x: f32, y: f32| eq.generate_ray(x, y).d;
+        assert!((d(123.0, 0.0) - Vec3::Y).length() < 1e-5);
+        assert!((d(77.0, 200.0) + Vec3::Y).length() < 1e-3);
+        for (x, want) in [(0.0, right), (100.0, Vec3::Z), (200.0, -right), (300.0, -Vec3::Z)] {
+            assert!((d(x, 100.0) - want).length() < 1e-5, "{x}: {}", d(x, 100.0));
+        }
+        assert_eq!(eq.generate_ray(5.0, 5.0).o, pos);
+        // Equal area: the centre looks up, the corners down, the middles of
+        // the edges along the horizon.
+        let ea = Camera::spherical(pos, ahead, up, SphericalMapping::EqualArea, 300, 300).unwrap();
+        let d = |x: f32, y: f32| ea.generate_ray(x, y).d;
+        assert!((d(150.0, 150.0) - Vec3::Y).length() < 1e-5);
+        assert!((d(0.0, 0.0) + Vec3::Y).length() < 1e-5 && (d(300.0, 300.0) + Vec3::Y).length() < 1e-5);
+        assert!(d(150.0, 0.0).y.abs() < 1e-5 && d(0.0, 150.0).y.abs() < 1e-5);
+        // Beyond the square's edge (a filter's reach) the map folds back.
+        assert!((d(-10.0, 150.0) - d(10.0, 150.0)).length() < 1e-2);
+        // Project inverts both, anywhere on the image.
+        for cam in [&eq, &ea] {
+            for (x, y) in [(37.5, 20.25), (250.0, 120.0), (133.0, 177.0)] {
+                let (px, py) = cam.project(cam.generate_ray(x, y).at(2.5)).unwrap();
+                assert!((px - x).abs() < 0.02 && (py - y).abs() < 0.02, "{x} {y}: {px} {py}");
+            }
+        }
+        // No lens on a spherical camera.
+        let lens = ThinLens {
+            radius: 0.1,
+            focal_distance: 2.0,
+        };
+        assert!(eq.clone().with_lens(lens).is_none());
+    }
+
+    #[test]
     fn a_camera_rays_footprint_is_its_pixel_on_the_surface_scaled_by_the_sample_spacing() {
         let c = cornell_camera(512, 512);
         // 64 samples a pixel and more: an eighth of a pixel; 16: a quarter.
@@ -588,6 +680,50 @@ impl PixelFootprint {
         };
         (at(0), at(1))
     }
+}
+
+/// The camera-space direction (x right, y up, z forward) of the point `uv`
+/// of a spherical camera's image (pbrt-v4's `SphericalCamera::GenerateRay`:
+/// the sphere's z axis is the camera's up, its x the camera's right).
+fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
+    let d = match mapping {
+        SphericalMapping::Equirectangular => {
+            let (sin_t, cos_t) = (std::f32::consts::PI * uv.y).sin_cos();
+            let (sin_p, cos_p) = (2.0 * std::f32::consts::PI * uv.x).sin_cos();
+            Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
+        }
+        SphericalMapping::EqualArea => equal_area_square_to_sphere(wrap_equal_area_square(uv)),
+    };
+    Vec3::new(d.x, d.z, d.y)
+}
+
+/// The image point of a unit camera-space direction: `spherical_direction`'s inverse.
+fn spherical_uv(mapping: SphericalMapping, c: Vec3) -> Vec2 {
+    let d = Vec3::new(c.x, c.z, c.y);
+    match mapping {
+        SphericalMapping::Equirectangular => {
+            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+            let theta = Vec2::new(d.x, d.y).length().atan2(d.z);
+            Vec2::new(phi / (2.0 * std::f32::consts::PI), theta / std::f32::consts::PI)
+        }
+        SphericalMapping::EqualArea => equal_area_sphere_to_square(d),
+    }
+}
+
+/// pbrt-v4's `WrapEqualAreaSquare`: a point beyond the square's edge folded
+/// back across it, where the octahedral map continues.
+fn wrap_equal_area_square(mut uv: Vec2) -> Vec2 {
+    if uv.x < 0.0 {
+        uv = Vec2::new(-uv.x, 1.0 - uv.y);
+    } else if uv.x > 1.0 {
+        uv = Vec2::new(2.0 - uv.x, 1.0 - uv.y);
+    }
+    if uv.y < 0.0 {
+        uv = Vec2::new(1.0 - uv.x, -uv.y);
+    } else if uv.y > 1.0 {
+        uv = Vec2::new(1.0 - uv.x, 2.0 - uv.y);
+    }
+    uv
 }
 
 /// pbrt-v4's `Frame::FromZ`: the unit vector `z` and two tangents, by

@@ -246,6 +246,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
             h.u32(3);
             h.f32(o);
         }
+        if let Some(m) = c.spherical {
+            h.u32(4);
+            h.bytes(format!("{m:?}").as_bytes());
+        }
     }
     h.finish()
 }

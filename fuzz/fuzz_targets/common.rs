@@ -49,6 +49,7 @@ pub fn place_and_build(mesh: &Mesh) {
             window: None,
             lens: None,
             orthographic: None,
+            spherical: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -24,6 +24,7 @@ fn inside_camera(size: u32) -> CameraDesc {
         window: None,
         lens: None,
         orthographic: None,
+        spherical: None,
     }
 }
 
@@ -71,6 +72,7 @@ pub fn floor_under_quad() -> SceneDesc {
         window: None,
         lens: None,
         orthographic: None,
+        spherical: None,
     };
     let mut d = SceneDesc::empty("floor", camera);
     let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));

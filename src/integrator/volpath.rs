@@ -318,6 +318,7 @@ mod tests {
             window: None,
             lens: None,
             orthographic: None,
+            spherical: None,
         };
         let mut d = SceneDesc::empty("slab", camera);
         let wall = d.material(

@@ -607,6 +607,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         window: None,
         lens: None,
         orthographic: None,
+        spherical: None,
     };
     let quad = |desc: &mut SceneDesc, [a, b, c, d]: [Vec3; 4]| {
         for vertices in [[a, b, c], [a, c, d]] {

@@ -163,6 +163,9 @@ pub struct CameraDesc {
     /// vertically (`fov_y_deg` unused); with a `window`, the world length of
     /// a unit of the window.
     pub orthographic: Option<f32>,
+    /// A spherical camera (pbrt-v4's `spherical`): the whole sphere of
+    /// directions in this layout (`fov_y_deg`, `window` and `lens` unused).
+    pub spherical: Option<crate::camera::SphericalMapping>,
 }
 
 impl CameraDesc {
@@ -192,6 +195,9 @@ impl CameraDesc {
     /// with `up` (the preview's moves).
     pub fn camera_at(&self, position: Vec3, look_at: Vec3, up: Vec3) -> Option<Camera> {
         let (w, h) = (self.width, self.height);
+        if let Some(mapping) = self.spherical {
+            return Camera::spherical(position, look_at, up, mapping, w, h);
+        }
         match self.orthographic {
             Some(half) => Camera::orthographic(position, look_at, up, half, w, h),
             None => Camera::new(position, look_at, up, self.fov_y_deg, w, h),

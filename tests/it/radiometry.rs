@@ -29,6 +29,7 @@ fn plane_scene(light: Light) -> SceneDesc {
             window: None,
             lens: None,
             orthographic: None,
+            spherical: None,
         },
         materials: vec![],
         triangles: vec![],

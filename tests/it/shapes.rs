@@ -21,6 +21,7 @@ fn camera() -> CameraDesc {
         window: None,
         lens: None,
         orthographic: None,
+        spherical: None,
     }
 }
 

@@ -13,7 +13,7 @@ use super::transform::{Fit, Transform};
 use super::{
     Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
 };
-use crate::camera::ThinLens;
+use crate::camera::{SphericalMapping, ThinLens};
 use crate::error::{Error, Result};
 use crate::geometry::Sphere;
 use crate::light::Light;
@@ -149,17 +149,36 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
 fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
     let cam_span = spanned.span();
     let cam = spanned.get_ref();
+    let spherical = match &cam.spherical {
+        None => None,
+        Some(name) => Some(SphericalMapping::parse(name).ok_or_else(|| {
+            src.error(
+                cam_span.clone(),
+                format!("camera spherical '{name}': use equalarea or equirectangular"),
+            )
+        })?),
+    };
+    let fov_y = match (cam.fov_y, spherical) {
+        (Some(f), _) => f.0,
+        // Unused: the camera sees every direction.
+        (None, Some(_)) => 90.0,
+        (None, None) => return Err(src.error(cam_span, "camera: missing `fov_y`".to_string())),
+    };
     let camera = CameraDesc {
         position: cam.position.0,
         look_at: cam.look_at.0,
         up: cam.up.map_or(Vec3::new(0.0, -1.0, 0.0), |u| u.0),
-        fov_y_deg: cam.fov_y.0,
+        fov_y_deg: fov_y,
         width: cam.width.unwrap_or(512),
         height: cam.height.unwrap_or(512),
         window: None,
         lens: None,
         orthographic: None,
+        spherical,
     };
+    if spherical.is_some() && cam.lens_radius.is_some_and(|r| r.0 != 0.0) {
+        return Err(src.error(cam_span, "camera: a spherical camera has no lens".to_string()));
+    }
     if !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0) {
         return Err(src.error(
             cam_span,

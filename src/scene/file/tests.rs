@@ -49,6 +49,19 @@ fn without_settings(d: &SceneDesc) -> SceneDesc {
 }
 
 #[test]
+fn a_spherical_camera_needs_no_field_of_view() {
+    let text = "[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nspherical = \"equirectangular\"\nwidth = 64\nheight = 32\n";
+    let desc = parse_str(text).unwrap().desc;
+    assert_eq!(
+        desc.camera.spherical,
+        Some(crate::camera::SphericalMapping::Equirectangular)
+    );
+    let cam = desc.camera.camera().unwrap();
+    // A quarter across the middle row: along the view, +z.
+    assert!((cam.generate_ray(16.0, 16.0).d - Vec3::Z).length() < 1e-5);
+}
+
+#[test]
 fn cornell_toml_is_the_builtin_scene_bit_for_bit() {
     let file = load(&scenes_dir().join("cornell.toml"), &LoadOptions::default()).unwrap();
     let embedded = builtin::cornell();
@@ -219,6 +232,9 @@ fn errors_name_the_file_and_line() {
         (format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\npower = 1e25\n"), 5, "point light: its power is 1e25, beyond the limit of 1e15"),
         (format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1e-20\npower = 10\n"), 5, "sphere light: its radiance is inf"),
         (format!("{CAMERA}lens_radius = 0.1\n"), 1, "a lens needs both lens_radius and focal_distance"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\n".into(), 1, "missing `fov_y`"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nspherical = \"cube\"\n".into(), 1, "spherical 'cube': use equalarea or equirectangular"),
+        ("[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nspherical = \"equalarea\"\nlens_radius = 0.1\nfocal_distance = 1\n".into(), 1, "a spherical camera has no lens"),
         (format!("{CAMERA}lens_radius = 0.1\nfocal_distance = -1\n"), 1, "must be positive (lens_radius 0: a pinhole)"),
         (format!("{CAMERA}\n[settings]\nssaa = 0\n"), 7, "ssaa = 0: must be between 1 and 64"),
         (format!("{CAMERA}\n[settings]\nssaa = 2\nthreads = 2\n"), 8, "unknown key `threads`"),

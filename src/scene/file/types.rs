@@ -113,13 +113,16 @@ pub(super) struct CameraSpec {
     pub(super) position: Vec3Spec,
     pub(super) look_at: Vec3Spec,
     pub(super) up: Option<Vec3Spec>,
-    pub(super) fov_y: Num,
+    /// Required but for a spherical camera, which has none.
+    pub(super) fov_y: Option<Num>,
     pub(super) width: Option<u32>,
     pub(super) height: Option<u32>,
     pub(super) lens_radius: Option<Num>,
     pub(super) focal_distance: Option<Num>,
     /// The medium the camera is in.
     pub(super) medium: Option<Spanned<String>>,
+    /// A spherical camera's layout: "equalarea" or "equirectangular".
+    pub(super) spherical: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]

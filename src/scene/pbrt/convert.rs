@@ -443,19 +443,36 @@ impl<'a> Conv<'a> {
         let cam = &scene.camera;
         let cam_loc = cam.loc.clone().unwrap_or_else(|| self.default_loc());
         let orthographic = cam.ty == "orthographic";
-        if cam.ty != "perspective" && !orthographic {
+        if !["perspective", "orthographic", "spherical"].contains(&cam.ty.as_str()) {
             self.problem(
                 Kind::Other,
                 &cam_loc,
                 format!(
-                    "Camera \"{}\" is not supported (only \"perspective\" and \"orthographic\")",
+                    "Camera \"{}\" is not supported (only \"perspective\", \"orthographic\" and \"spherical\")",
                     cam.ty
                 ),
             );
         }
         let cp = &cam.params;
-        // An orthographic camera has no field of view (pbrt-v4 reads none).
-        let fov = if orthographic { 90.0 } else { cp.get_float("fov", 90.0)? };
+        let spherical = if cam.ty == "spherical" {
+            let name = cp.get_string_or("mapping", "equalarea")?;
+            let Some(m) = crate::camera::SphericalMapping::parse(&name) else {
+                return Err(located(
+                    place(cp, "mapping", &cam_loc),
+                    format!("Camera \"spherical\": unknown mapping \"{name}\" (\"equalarea\" or \"equirectangular\")"),
+                ));
+            };
+            Some(m)
+        } else {
+            None
+        };
+        // Orthographic and spherical cameras have no field of view (pbrt-v4
+        // reads none).
+        let fov = if orthographic || spherical.is_some() {
+            90.0
+        } else {
+            cp.get_float("fov", 90.0)?
+        };
         if !(fov > 0.0 && fov < 180.0) {
             return Err(located(
                 &cam_loc,
@@ -471,10 +488,12 @@ impl<'a> Conv<'a> {
         };
         // A window of the file's own (an off-centre or stretched projection),
         // else the film's, which follows the image's shape when resized.
-        let own_window = window
-            .iter()
-            .zip(default)
-            .any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0));
+        // pbrt-v4's spherical camera reads a window and ignores it.
+        let own_window = spherical.is_none()
+            && window
+                .iter()
+                .zip(default)
+                .any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0));
         if own_window && !(window.iter().all(|v| v.is_finite()) && window[0] != window[1] && window[2] != window[3]) {
             let p = if cp.has("screenwindow") {
                 "screenwindow"
@@ -504,7 +523,12 @@ impl<'a> Conv<'a> {
                 format!("Camera: lensradius {lens_radius} must be >= 0 (0: a pinhole)"),
             ));
         }
-        let lens_radius = if orthographic { 0.0 } else { lens_radius };
+        // pbrt-v4's spherical camera reads a lens and ignores it too.
+        let lens_radius = if orthographic || spherical.is_some() {
+            0.0
+        } else {
+            lens_radius
+        };
         if lens_radius > 0.0 && !(lens_radius.is_finite() && focal_distance > 0.0 && focal_distance.is_finite()) {
             return Err(located(
                 place(cp, "focaldistance", &cam_loc),
@@ -601,6 +625,7 @@ impl<'a> Conv<'a> {
                 window,
                 lens,
                 orthographic,
+                spherical,
             },
             mirror,
             crop,
@@ -2763,6 +2788,46 @@ mod tests {
         assert!(e.contains("Camera \"orthographic\": a lens"), "{e}");
         let lenient = convert_text(&text(wide, "\"float lensradius\" 0.1"), true).unwrap();
         assert_eq!(lenient.desc.camera.lens, None);
+    }
+
+    #[test]
+    fn a_spherical_camera_is_read_with_its_mapping() {
+        let text = |cam: &str| {
+            format!(
+                "LookAt 0 0 0  0 0 1  0 1 0\n{cam}\n\
+                 Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n"
+            )
+        };
+        let c = ok(&text(
+            "Camera \"spherical\" \"string mapping\" \"equirectangular\" \"float lensradius\" 0.5",
+        ));
+        assert_eq!(
+            c.desc.camera.spherical,
+            Some(crate::camera::SphericalMapping::Equirectangular)
+        );
+        // pbrt-v4 reads a lens and ignores it; no field of view is read.
+        assert_eq!(c.desc.camera.lens, None);
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        let cam = Scene::build(c.desc.clone()).unwrap().camera;
+        // The column a quarter across the middle row looks along the view.
+        assert!((cam.generate_ray(10.0, 10.0).d - Vec3::Z).length() < 1e-5);
+        let c = ok(&text("Camera \"spherical\""));
+        assert_eq!(
+            c.desc.camera.spherical,
+            Some(crate::camera::SphericalMapping::EqualArea)
+        );
+        let fov = ok(&text("Camera \"spherical\" \"float fov\" 30"));
+        assert!(
+            fov.warnings.iter().any(|w| w.contains("\"float fov\" is not used")),
+            "{:?}",
+            fov.warnings
+        );
+        let e = convert_text(&text("Camera \"spherical\" \"string mapping\" \"cube\""), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("dir/main.pbrt:2:"), "{e}");
+        assert!(e.contains("unknown mapping \"cube\""), "{e}");
+        assert!(!e.contains('\n'));
     }
 
     #[test]
