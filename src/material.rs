@@ -547,6 +547,17 @@ mod tests {
         }
     }
 
+    /// The shading geometry of the plane z = 0 parametrised by x and y.
+    fn flat_geometry() -> ShadingGeometry {
+        ShadingGeometry {
+            n: Vec3::Z,
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        }
+    }
+
     #[test]
     fn a_bump_maps_bumps_finer_than_the_footprint_do_not_tilt_the_normal() {
         // 16 x 16 texels of 0 and 0.01 over the unit square of a plane.
@@ -562,13 +573,7 @@ mod tests {
             std::sync::Arc::new(img),
             &opts,
         )));
-        let flat = ShadingGeometry {
-            n: Vec3::Z,
-            dpdu: Vec3::X,
-            dpdv: Vec3::Y,
-            dndu: Vec3::ZERO,
-            dndv: Vec3::ZERO,
-        };
+        let flat = flat_geometry();
         // Between two texels' centres.
         let sp = SurfacePoint {
             uv: Vec2::new(2.0 / 16.0, 2.5 / 16.0),
@@ -652,13 +657,7 @@ mod tests {
 
     #[test]
     fn a_bump_map_tilts_the_shading_normal_as_the_displaced_surface_does() {
-        let flat = ShadingGeometry {
-            n: Vec3::Z,
-            dpdu: Vec3::X,
-            dpdv: Vec3::Y,
-            dndu: Vec3::ZERO,
-            dndv: Vec3::ZERO,
-        };
+        let flat = flat_geometry();
         let sp = SurfacePoint {
             uv: Vec2::new(0.5, 0.3),
             shading: Some(flat),

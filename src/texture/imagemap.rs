@@ -605,12 +605,7 @@ impl ImageTexture {
     pub fn evaluate(&self, uv: Vec2) -> Vec3 {
         let st = self.mapping.map(uv);
         // Images are stored top row first; v grows upwards (pbrt-v4 flips t).
-        let v = self.image.bilerp(Vec2::new(st.x, 1.0 - st.y), self.wrap) * self.scale;
-        if self.invert {
-            (Vec3::ONE - v).max(Vec3::ZERO)
-        } else {
-            v.max(Vec3::ZERO)
-        }
+        self.finish(self.image.bilerp(Vec2::new(st.x, 1.0 - st.y), self.wrap) * self.scale)
     }
 
     /// The value at `uv` for a lookup whose (u, v) changes by `footprint`
@@ -618,12 +613,7 @@ impl ImageTexture {
     pub fn evaluate_filtered(&self, uv: Vec2, footprint: &Footprint) -> Vec3 {
         match self.filter_width(footprint) {
             None => self.evaluate(uv),
-            Some(width) => {
-                let st = self.mapping.map(uv);
-                let st = Vec2::new(st.x, 1.0 - st.y);
-                let v = self.image.filter(st, width, self.filter, self.wrap, false) * self.scale;
-                self.finish(v)
-            }
+            Some(width) => self.finish(self.filtered(uv, width, false)),
         }
     }
 
@@ -631,17 +621,16 @@ impl ImageTexture {
     pub fn evaluate_scalar_filtered(&self, uv: Vec2, footprint: &Footprint) -> f32 {
         match self.filter_width(footprint) {
             None => self.evaluate_scalar(uv),
-            Some(width) => {
-                let st = self.mapping.map(uv);
-                let st = Vec2::new(st.x, 1.0 - st.y);
-                let v = self.image.filter(st, width, self.filter, self.wrap, true).x * self.scale;
-                if self.invert {
-                    (1.0 - v).max(0.0)
-                } else {
-                    v.max(0.0)
-                }
-            }
+            Some(width) => self.finish(self.filtered(uv, width, true)).x,
         }
+    }
+
+    /// The MIP map's value for a filter `width`, scaled (a float lookup's in
+    /// every channel with `scalar`).
+    fn filtered(&self, uv: Vec2, width: f32, scalar: bool) -> Vec3 {
+        let st = self.mapping.map(uv);
+        let st = Vec2::new(st.x, 1.0 - st.y);
+        self.image.filter(st, width, self.filter, self.wrap, scalar) * self.scale
     }
 
     /// The width in (s, t) pbrt-v4's MIP map filter takes for a footprint:
