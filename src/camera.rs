@@ -568,12 +568,13 @@ mod tests {
         // The plane z = 0 faces the camera 3 units away: a pixel there is
         // 2 tan(fov / 2) 3 / 512 wide, along +x (image right) and +y (down).
         let pixel = 2.0 * 0.5 * 3.0 / 512.0;
-        let (dx, dy) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, true);
+        let cam_rays = fp.camera_differentials(&c, Vec3::ZERO);
+        let (dx, dy) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, cam_rays.as_ref());
         assert!((dx - Vec3::X * pixel * 0.125).length() < 1e-3 * pixel, "{dx}");
         assert!((dy - Vec3::Y * pixel * 0.125).length() < 1e-3 * pixel, "{dy}");
         // Tilted 60 degrees about x, the plane stretches y's footprint twice.
         let n = Vec3::new(0.0, 60f32.to_radians().sin(), -60f32.to_radians().cos());
-        let (tx, ty) = fp.dp_dxy(&c, Vec3::ZERO, n, true);
+        let (tx, ty) = fp.dp_dxy(&c, Vec3::ZERO, n, cam_rays.as_ref());
         assert!((tx.length() / dx.length() - 1.0).abs() < 1e-3);
         assert!(
             (ty.length() / dy.length() - 2.0).abs() < 1e-2,
@@ -584,13 +585,13 @@ mod tests {
         // Away from camera rays, pbrt-v4's approximation: the image's
         // smallest pixel (its corners', 0.53 of its centre's here) at the
         // point's distance, on its plane; a point twice as far, twice as big.
-        let (ax, ay) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, false);
+        let (ax, ay) = fp.dp_dxy(&c, Vec3::ZERO, -Vec3::Z, None);
         for a in [ax, ay] {
             let ratio = a.length() / dx.length();
             assert!(ratio > 0.5 && ratio < 0.75, "{ratio}");
             assert!(a.dot(Vec3::Z).abs() < 1e-6 * a.length());
         }
-        let (fx, _) = fp.dp_dxy(&c, Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, false);
+        let (fx, _) = fp.dp_dxy(&c, Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, None);
         assert!((fx.length() / ax.length() - 2.0).abs() < 1e-3);
     }
 
@@ -603,7 +604,13 @@ mod tests {
         // its plane with it) and, for camera rays, anywhere.
         for (from_camera, x, y) in [(true, 0.5, 0.25), (false, 0.0, 0.0)] {
             for z in [0.0, 5.0] {
-                let (dx, dy) = fp.dp_dxy(&c, Vec3::new(x, y, z), -Vec3::Z, from_camera);
+                let p = Vec3::new(x, y, z);
+                let rays = if from_camera {
+                    fp.camera_differentials(&c, p)
+                } else {
+                    None
+                };
+                let (dx, dy) = fp.dp_dxy(&c, p, -Vec3::Z, rays.as_ref());
                 assert!(
                     (dx.length() - 0.04).abs() < 1e-5 && (dy.length() - 0.04).abs() < 1e-5,
                     "{dx} {dy}"
@@ -618,10 +625,9 @@ mod tests {
 /// exactly for a camera ray's hit (its ray differentials), and for any other
 /// hit from the camera's smallest differentials at the point's distance
 /// (`Camera::Approximate_dp_dxy`), both scaled by max(1/8, 1/sqrt(spp)), the
-/// spacing of a pixel's samples. Two departures: a camera ray's
-/// differentials are those of the pinhole through the lens' centre, and a
-/// specular bounce does not carry differentials on (its hit takes the
-/// approximation).
+/// spacing of a pixel's samples; `Scene::specular_differentials` carries a
+/// camera ray's on through specular bounces. One departure: a camera ray's
+/// differentials are those of the pinhole through the lens' centre.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelFootprint {
     min_pos: [Vec3; 2],
@@ -629,34 +635,47 @@ pub struct PixelFootprint {
     scale: f32,
 }
 
+/// A ray's differentials (pbrt-v4's `RayDifferential`): the rays one pixel
+/// over in x and in y, already scaled by the sample spacing.
+#[derive(Clone, Copy, Debug)]
+pub struct Differentials {
+    pub rx: Ray,
+    pub ry: Ray,
+}
+
+impl Differentials {
+    /// dp/dx and dp/dy of the point `p` of the plane through it with normal
+    /// `n`: where the two rays meet that plane (`None` where one misses it).
+    pub fn on_plane(&self, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
+        let meet = |r: &Ray| {
+            let t = n.dot(p - r.o) / n.dot(r.d);
+            let q = r.at(t) - p;
+            (t.is_finite() && q.is_finite()).then_some(q)
+        };
+        Some((meet(&self.rx)?, meet(&self.ry)?))
+    }
+}
+
 impl PixelFootprint {
-    /// dp/dx and dp/dy at the point `p` of a surface with normal `n`
-    /// (zero where they cannot be found).
-    pub fn dp_dxy(&self, cam: &Camera, p: Vec3, n: Vec3, from_camera: bool) -> (Vec3, Vec3) {
-        if from_camera {
-            if let Some(d) = self.exact(cam, p, n) {
-                return d;
-            }
-        }
-        self.approximate(cam, p, n)
+    /// dp/dx and dp/dy at the point `p` of a surface with normal `n`: from
+    /// the differentials of the ray that found it, or the camera's
+    /// approximation at its distance (zero where neither can be found).
+    pub fn dp_dxy(&self, cam: &Camera, p: Vec3, n: Vec3, along: Option<&Differentials>) -> (Vec3, Vec3) {
+        along
+            .and_then(|d| d.on_plane(p, n))
+            .unwrap_or_else(|| self.approximate(cam, p, n))
     }
 
-    /// The camera ray's own differentials through the pixel position `p`
-    /// projects to, met on the tangent plane.
-    fn exact(&self, cam: &Camera, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
+    /// The differentials of the camera ray through the image point where
+    /// `p` projects, scaled by the sample spacing as pbrt-v4 scales them.
+    pub fn camera_differentials(&self, cam: &Camera, p: Vec3) -> Option<Differentials> {
         let (x, y) = cam.project(p)?;
         let ray = cam.generate_ray(x, y);
-        let on_plane = |r: Ray| {
-            let o = ray.o + (r.o - ray.o) * self.scale;
-            let d = ray.d + (r.d - ray.d) * self.scale;
-            let cos = n.dot(d);
-            let t = n.dot(p - o) / cos;
-            (cos != 0.0 && t.is_finite()).then(|| o + d * t - p)
-        };
-        Some((
-            on_plane(cam.generate_ray(x + 1.0, y))?,
-            on_plane(cam.generate_ray(x, y + 1.0))?,
-        ))
+        let scaled = |r: Ray| Ray::new(ray.o + (r.o - ray.o) * self.scale, ray.d + (r.d - ray.d) * self.scale);
+        Some(Differentials {
+            rx: scaled(cam.generate_ray(x + 1.0, y)),
+            ry: scaled(cam.generate_ray(x, y + 1.0)),
+        })
     }
 
     fn approximate(&self, cam: &Camera, p: Vec3, n: Vec3) -> (Vec3, Vec3) {

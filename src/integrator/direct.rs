@@ -75,6 +75,9 @@ pub fn walk_camera_path(
     let mut beta = Vec3::ONE;
     // How the last direction was chosen: `None` when specular (or the camera's).
     let mut from: Option<(Vec3, f32)> = None;
+    // The ray's differentials, while it has any: the camera's, carried
+    // through specular bounces.
+    let mut diffs = None;
     for depth in 0..=MAX_SPECULAR_DEPTH {
         if depth > 0 {
             stats.other_rays += 1;
@@ -90,7 +93,10 @@ pub fn walk_camera_path(
         }
         let m = scene.material(hit.material);
         l += beta * m.le();
-        let sp = scene.surface_seen(&hit, depth == 0);
+        if depth == 0 {
+            diffs = scene.camera_differentials(&hit);
+        }
+        let sp = scene.surface_seen(&hit, diffs.as_ref());
         let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();
@@ -123,6 +129,9 @@ pub fn walk_camera_path(
             break;
         }
         from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
+            scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
+        });
         ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
     }
     l

@@ -80,6 +80,9 @@ impl RadianceEstimator for PathTracer {
         // Where the last non-specular bounce left from and its density; `None`
         // after a specular bounce or for the camera ray (no light sample competed).
         let mut from: Option<(Vec3, f32)> = None;
+        // The ray's differentials, while it has any: the camera's, carried
+        // through specular bounces (texture footprints).
+        let mut diffs = None;
         // Emission found by a BSDF-sampled ray: MIS-weighted, or all or nothing.
         let weigh = |from: Option<(Vec3, f32)>| match (from, self.light_sampling) {
             (None, _) | (_, LightSampling::Mis) => (from, 1.0),
@@ -106,7 +109,10 @@ impl RadianceEstimator for PathTracer {
             let wo = -ray.d;
             depth += 1;
             // The camera ray's hit has the ray's own texture footprint.
-            let sp = scene.surface_seen(&hit, depth == 1);
+            if depth == 1 {
+                diffs = scene.camera_differentials(&hit);
+            }
+            let sp = scene.surface_seen(&hit, diffs.as_ref());
             let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
             let flags = bsdf.flags();
@@ -131,6 +137,9 @@ impl RadianceEstimator for PathTracer {
                 eta_scale *= bs.eta * bs.eta;
             }
             from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+            diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
+                scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
+            });
             if depth >= ROULETTE_DEPTH {
                 let q = (beta * eta_scale).max_element().min(MAX_SURVIVAL);
                 if sampler.next_f32() >= q {

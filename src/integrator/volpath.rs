@@ -56,8 +56,10 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     let mut from: Option<(Vec3, f32)> = None;
     let mut crossings = 0;
     // Whether `ray` is still the camera's (passing through media boundaries
-    // keeps it): its hit then has the ray's own texture footprint.
+    // keeps it), and the differentials it carries: the camera's at its
+    // first surface, carried through specular bounces (texture footprints).
     let mut camera_ray = true;
+    let mut diffs = None;
     let weigh = |from: Option<(Vec3, f32)>| match (from, pt.light_sampling) {
         (None, _) | (_, LightSampling::Mis) => (from, 1.0),
         (Some(_), LightSampling::Bsdf) => (None, 1.0),
@@ -99,6 +101,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                     stats.other_rays += 1;
                     ray = Ray::new(p, wi);
                     camera_ray = false;
+                    diffs = None;
                     continue;
                 }
             }
@@ -132,7 +135,11 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         }
         let wo = -ray.d;
         depth += 1;
-        let sp = scene.surface_seen(&hit, camera_ray);
+        if camera_ray {
+            diffs = scene.camera_differentials(&hit);
+            camera_ray = false;
+        }
+        let sp = scene.surface_seen(&hit, diffs.as_ref());
         let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
         let flags = bsdf.flags();
@@ -163,13 +170,15 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
             eta_scale *= bs.eta * bs.eta;
         }
         from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
+            scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
+        });
         if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
             break;
         }
         stats.other_rays += 1;
         medium = scene.medium_after(&hit, medium, bs.wi);
         ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
-        camera_ray = false;
     }
     l
 }

@@ -10,7 +10,7 @@ pub mod transform;
 
 use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
-use crate::camera::PixelFootprint;
+use crate::camera::{Differentials, PixelFootprint};
 use crate::error::{Error, Result};
 use crate::geometry::triangle::TriHit;
 use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
@@ -774,6 +774,7 @@ pub struct Scene {
     /// shading geometry (`Material::is_bumped`), its texture footprint
     /// (`Material::needs_footprint`).
     differentials: Vec<(bool, bool)>,
+    any_footprints: bool,
     footprint: PixelFootprint,
 }
 
@@ -956,6 +957,7 @@ impl Scene {
             interfaces,
             dropped_triangles: dropped,
             differentials: vec![],
+            any_footprints: false,
             footprint,
             desc,
             bvh_build_seconds,
@@ -965,6 +967,7 @@ impl Scene {
             .iter()
             .map(|m| (m.is_bumped(), m.needs_footprint()))
             .collect();
+        scene.any_footprints = scene.differentials.iter().any(|&(_, f)| f);
         // Lights at infinity reach the scene through its bounding sphere.
         let bounds = scene.bounds();
         let world = if bounds.is_empty() {
@@ -1243,26 +1246,93 @@ impl Scene {
     /// point, with the shading geometry a bump map needs when the material
     /// has one.
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
-        self.surface_seen(hit, false)
+        self.surface_seen(hit, None)
     }
 
-    /// [`Scene::surface`] of a hit, telling whether a camera ray made it:
-    /// its texture footprint is then that of the ray's own differentials,
-    /// where other hits take the camera's approximation at their distance
-    /// (as pbrt-v4 does).
-    pub fn surface_seen(&self, hit: &Hit, from_camera: bool) -> SurfacePoint {
+    /// [`Scene::surface`] of a hit found by a ray with differentials (a
+    /// camera ray's, or one's carried through specular bounces): its
+    /// texture footprint is where they meet the surface, where other hits
+    /// take the camera's approximation at their distance (as pbrt-v4 does).
+    pub fn surface_seen(&self, hit: &Hit, along: Option<&Differentials>) -> SurfacePoint {
         let mut sp = hit.surface();
         let (shaded, footprinted) = self.differentials[hit.material as usize];
         if shaded || footprinted {
             if let Some((g, [dpdu, dpdv])) = self.shading_geometry(hit) {
                 sp.shading = shaded.then_some(g);
                 if footprinted {
-                    let (dpdx, dpdy) = self.footprint.dp_dxy(&self.camera, hit.p, hit.ng, from_camera);
+                    let (dpdx, dpdy) = self.footprint.dp_dxy(&self.camera, hit.p, hit.ng, along);
                     sp.footprint = uv_footprint(dpdu, dpdv, dpdx, dpdy);
                 }
             }
         }
         sp
+    }
+
+    /// Whether any material looks up images or bumps: only then do rays
+    /// carry differentials.
+    pub fn has_footprints(&self) -> bool {
+        self.any_footprints
+    }
+
+    /// The differentials of the camera ray that found `hit` (`None` when no
+    /// material needs them).
+    pub fn camera_differentials(&self, hit: &Hit) -> Option<Differentials> {
+        if !self.has_footprints() {
+            return None;
+        }
+        self.footprint.camera_differentials(&self.camera, hit.p)
+    }
+
+    /// The differentials of the ray a specular bounce sends on from `hit`,
+    /// which a ray with differentials `d` reached from direction `wo`, into
+    /// `wi` (a reflection, or a refraction into relative index `eta`), about
+    /// the shading normal `n`: pbrt-v4's `SurfaceInteraction::SpawnRay`,
+    /// the change of the reflected or refracted direction with the incoming
+    /// one and with the normal's turn across the footprint. One departure:
+    /// a refracted direction changes with the incoming one by 1 / eta, as
+    /// Snell's law differentiated gives, where pbrt-v4 multiplies by eta.
+    pub fn specular_differentials(
+        &self,
+        hit: &Hit,
+        d: &Differentials,
+        (wo, wi): (Vec3, Vec3),
+        transmission: bool,
+        eta: f32,
+        n: Vec3,
+    ) -> Option<Differentials> {
+        let (dpdx, dpdy) = d.on_plane(hit.p, hit.ng)?;
+        // The shading normal's turn across the footprint.
+        let (dndx, dndy) = match self.shading_geometry(hit) {
+            Some((g, [dpdu, dpdv])) => {
+                let f = uv_footprint(dpdu, dpdv, dpdx, dpdy);
+                let s = if g.n.dot(n) < 0.0 { -1.0 } else { 1.0 };
+                (
+                    (g.dndu * f.dudx + g.dndv * f.dvdx) * s,
+                    (g.dndu * f.dudy + g.dndv * f.dvdy) * s,
+                )
+            }
+            None => (Vec3::ZERO, Vec3::ZERO),
+        };
+        let (dwodx, dwody) = (-d.rx.d - wo, -d.ry.d - wo);
+        let bent = |dwo: Vec3, dn: Vec3| {
+            if !transmission {
+                let dcos = dwo.dot(n) + wo.dot(dn);
+                return wi - dwo + (dn * wo.dot(n) + n * dcos) * 2.0;
+            }
+            // Snell's law, wi = -wo / eta + mu n about the normal on wo's side.
+            let (n, dn) = if wo.dot(n) < 0.0 { (-n, -dn) } else { (n, dn) };
+            let dcos = dwo.dot(n) + wo.dot(dn);
+            let mu = wo.dot(n) / eta - wi.dot(n).abs();
+            let dmu = dcos * (1.0 / eta + wo.dot(n) / (eta * eta * wi.dot(n)));
+            wi - dwo / eta + dn * mu + n * dmu
+        };
+        let out = Differentials {
+            rx: Ray::new(hit.p + dpdx, bent(dwodx, dndx)),
+            ry: Ray::new(hit.p + dpdy, bent(dwody, dndy)),
+        };
+        // pbrt-v4's guard against differentials gone wild.
+        let sane = |r: &Ray| r.d.length_squared() <= 1e16 && r.o.length_squared() <= 1e16 && r.d.is_finite();
+        (sane(&out.rx) && sane(&out.ry)).then_some(out)
     }
 
     /// pbrt-v4's shading geometry at a hit on a triangle, sphere or disk
@@ -1642,6 +1712,114 @@ mod shading_tests {
         assert_eq!(uv_footprint(dpdu, dpdu, dpdu, dpdu), Footprint::NONE);
     }
 
+    /// A scene of big z-facing squares at the given depths (material 0 is
+    /// bumped: the scene carries differentials), seen by a 30-degree camera
+    /// 5 units before z = 0, looking along +z.
+    fn planes_at(zs: &[(f32, u32)]) -> Scene {
+        let mut d = SceneDesc::empty("planes", builtin::cornell().camera);
+        d.camera.position = Vec3::new(0.0, 0.0, -5.0);
+        d.camera.look_at = Vec3::ZERO;
+        d.camera.up = Vec3::Y;
+        d.camera.fov_y_deg = 30.0;
+        (d.camera.width, d.camera.height) = (100, 100);
+        let base = Box::new(Material::diffuse(0.5, 0.5, 0.5));
+        d.material(
+            "bumped",
+            Material::Bumped {
+                base,
+                displacement: Texture::from(Vec3::ZERO),
+            },
+        );
+        for &(z, material) in zs {
+            let c = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, z));
+            for t in [[c[0], c[1], c[2]], [c[0], c[2], c[3]]] {
+                d.triangles.push(TriangleDesc {
+                    vertices: t,
+                    normals: None,
+                    uvs: None,
+                    material,
+                });
+            }
+        }
+        Scene::build(d).unwrap()
+    }
+
+    #[test]
+    fn differentials_carried_through_a_mirror_see_the_unfolded_distance() {
+        // A mirror at z = 0 sends the centre ray back to a plane at z = -10:
+        // 15 units of path, where the point is 5 from the camera.
+        let scene = planes_at(&[(0.0, 0), (-10.0, 0)]);
+        let pixel = 2.0 * 15f32.to_radians().tan() / 100.0 * 0.125;
+        let ray = scene.camera.generate_ray(50.0, 50.0);
+        let mirror = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let d = scene.camera_differentials(&mirror).unwrap();
+        let (dx, _) = d.on_plane(mirror.p, mirror.ng).unwrap();
+        assert!(
+            (dx.length() / (5.0 * pixel) - 1.0).abs() < 1e-3,
+            "{}",
+            dx.length() / pixel
+        );
+        let (wo, wi) = (-ray.d, ray.d - mirror.ng * 2.0 * ray.d.dot(mirror.ng));
+        let out = scene
+            .specular_differentials(&mirror, &d, (wo, wi), false, 1.0, mirror.ng)
+            .unwrap();
+        let back = scene
+            .intersect(
+                &Ray::new(crate::math::offset_origin(mirror.p, mirror.ng, wi), wi),
+                0.0,
+                f32::INFINITY,
+            )
+            .unwrap();
+        assert!((back.p.z + 10.0).abs() < 1e-4);
+        let (bx, by) = out.on_plane(back.p, back.ng).unwrap();
+        for b in [bx, by] {
+            assert!(
+                (b.length() / (15.0 * pixel) - 1.0).abs() < 1e-3,
+                "{}",
+                b.length() / pixel
+            );
+        }
+        // Without them, pbrt-v4's approximation at the point's distance, 5.
+        let (ax, _) = scene.footprint.dp_dxy(&scene.camera, back.p, back.ng, None);
+        assert!(ax.length() < 6.0 * pixel, "{}", ax.length() / pixel);
+    }
+
+    #[test]
+    fn differentials_through_a_glass_slab_see_its_thickness_shortened_by_its_index() {
+        // Glass from z = 0 to z = 3, index 1.5, then a plane at z = 5: seen
+        // along the axis, the plane looks 5 - 3 + 3 / 1.5 = 4 units beyond
+        // z = 0, so its footprint is that of a plane 9 units from the camera.
+        let scene = planes_at(&[(0.0, 0), (3.0, 0), (5.0, 0)]);
+        let pixel = 2.0 * 15f32.to_radians().tan() / 100.0 * 0.125;
+        let eta = 1.5;
+        let ray = scene.camera.generate_ray(50.0, 50.0);
+        let front = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let d = scene.camera_differentials(&front).unwrap();
+        // Along the axis the refracted direction is the incoming one.
+        let (wo, wi) = (-ray.d, ray.d);
+        let inside = scene
+            .specular_differentials(&front, &d, (wo, wi), true, eta, -Vec3::Z)
+            .unwrap();
+        let back = scene
+            .intersect(&Ray::new(front.p + wi * 1e-3, wi), 0.0, f32::INFINITY)
+            .unwrap();
+        let out = scene
+            .specular_differentials(&back, &inside, (wo, wi), true, 1.0 / eta, -Vec3::Z)
+            .unwrap();
+        let plane = scene
+            .intersect(&Ray::new(back.p + wi * 1e-3, wi), 0.0, f32::INFINITY)
+            .unwrap();
+        assert!((plane.p.z - 5.0).abs() < 1e-4);
+        let (px, py) = out.on_plane(plane.p, plane.ng).unwrap();
+        for p in [px, py] {
+            assert!(
+                (p.length() / (9.0 * pixel) - 1.0).abs() < 2e-3,
+                "{}",
+                p.length() / pixel
+            );
+        }
+    }
+
     #[test]
     fn only_materials_that_look_up_images_or_bump_get_a_footprint() {
         let scene = scene_with(|d| {
@@ -1662,7 +1840,9 @@ mod shading_tests {
         let (bumped, plain) = (hit(0.0), hit(10.0));
         assert_eq!(scene.surface(&plain).footprint, Footprint::NONE);
         let approximate = scene.surface(&bumped).footprint;
-        let exact = scene.surface_seen(&bumped, true).footprint;
+        let exact = scene
+            .surface_seen(&bumped, scene.camera_differentials(&bumped).as_ref())
+            .footprint;
         assert_ne!(approximate, Footprint::NONE);
         assert_ne!(approximate, exact);
         // Both about an eighth of the pixel: the same order of size.
