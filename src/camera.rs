@@ -316,6 +316,166 @@ impl Camera {
     }
 }
 
+/// How far a surface point moves on its tangent plane from one pixel to the
+/// next, as pbrt-v4 estimates it for texture filtering and bump maps:
+/// exactly for a camera ray's hit (its ray differentials), and for any other
+/// hit from the camera's smallest differentials at the point's distance
+/// (`Camera::Approximate_dp_dxy`), both scaled by max(1/8, 1/sqrt(spp)), the
+/// spacing of a pixel's samples; `Scene::specular_differentials` carries a
+/// camera ray's on through specular bounces. One departure: a camera ray's
+/// differentials are those of the pinhole through the lens' centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelFootprint {
+    min_pos: [Vec3; 2],
+    min_dir: [Vec3; 2],
+    scale: f32,
+}
+
+/// A ray's differentials (pbrt-v4's `RayDifferential`): the rays one pixel
+/// over in x and in y, already scaled by the sample spacing.
+#[derive(Clone, Copy, Debug)]
+pub struct Differentials {
+    pub rx: Ray,
+    pub ry: Ray,
+}
+
+impl Differentials {
+    /// dp/dx and dp/dy of the point `p` of the plane through it with normal
+    /// `n`: where the two rays meet that plane (`None` where one misses it).
+    pub fn on_plane(&self, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
+        let meet = |r: &Ray| {
+            let t = n.dot(p - r.o) / n.dot(r.d);
+            let q = r.at(t) - p;
+            (t.is_finite() && q.is_finite()).then_some(q)
+        };
+        Some((meet(&self.rx)?, meet(&self.ry)?))
+    }
+}
+
+impl PixelFootprint {
+    /// dp/dx and dp/dy at the point `p` of a surface with normal `n`: from
+    /// the differentials of the ray that found it, or the camera's
+    /// approximation at its distance (zero where neither can be found).
+    pub fn dp_dxy(&self, cam: &Camera, p: Vec3, n: Vec3, along: Option<&Differentials>) -> (Vec3, Vec3) {
+        along
+            .and_then(|d| d.on_plane(p, n))
+            .unwrap_or_else(|| self.approximate(cam, p, n))
+    }
+
+    /// The differentials of the camera ray through the image point where
+    /// `p` projects, scaled by the sample spacing as pbrt-v4 scales them.
+    pub fn camera_differentials(&self, cam: &Camera, p: Vec3) -> Option<Differentials> {
+        let (x, y) = cam.project(p)?;
+        let ray = cam.generate_ray(x, y);
+        let scaled = |r: Ray| Ray::new(ray.o + (r.o - ray.o) * self.scale, ray.d + (r.d - ray.d) * self.scale);
+        Some(Differentials {
+            rx: scaled(cam.generate_ray(x + 1.0, y)),
+            ry: scaled(cam.generate_ray(x, y + 1.0)),
+        })
+    }
+
+    fn approximate(&self, cam: &Camera, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
+        let pc = cam.to_camera(p - cam.position);
+        let Some(dir) = pc.try_normalize() else {
+            return (Vec3::ZERO, Vec3::ZERO);
+        };
+        let r = rotate_from_to(dir, Vec3::Z);
+        let pd = r * pc;
+        let nd = r * cam.to_camera(n);
+        let d = nd.z * pd.z;
+        let at = |k: usize| {
+            let (o, dir) = (self.min_pos[k], Vec3::Z + self.min_dir[k]);
+            let t = -(nd.dot(o) - d) / nd.dot(dir);
+            let dp = cam.camera_to_world(r.transpose() * (o + dir * t - pd)) * self.scale;
+            if dp.is_finite() {
+                dp
+            } else {
+                Vec3::ZERO
+            }
+        };
+        (at(0), at(1))
+    }
+}
+
+/// The camera-space direction (x right, y up, z forward) of the point `uv`
+/// of a spherical camera's image (pbrt-v4's `SphericalCamera::GenerateRay`:
+/// the sphere's z axis is the camera's up, its x the camera's right).
+fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
+    let d = match mapping {
+        SphericalMapping::Equirectangular => {
+            let (sin_t, cos_t) = (std::f32::consts::PI * uv.y).sin_cos();
+            let (sin_p, cos_p) = (2.0 * std::f32::consts::PI * uv.x).sin_cos();
+            Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
+        }
+        SphericalMapping::EqualArea => equal_area_square_to_sphere(wrap_equal_area_square(uv)),
+    };
+    Vec3::new(d.x, d.z, d.y)
+}
+
+/// The image point of a unit camera-space direction: `spherical_direction`'s inverse.
+fn spherical_uv(mapping: SphericalMapping, c: Vec3) -> Vec2 {
+    let d = Vec3::new(c.x, c.z, c.y);
+    match mapping {
+        SphericalMapping::Equirectangular => {
+            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+            let theta = Vec2::new(d.x, d.y).length().atan2(d.z);
+            Vec2::new(phi / (2.0 * std::f32::consts::PI), theta / std::f32::consts::PI)
+        }
+        SphericalMapping::EqualArea => equal_area_sphere_to_square(d),
+    }
+}
+
+/// pbrt-v4's `WrapEqualAreaSquare`: a point beyond the square's edge folded
+/// back across it, where the octahedral map continues.
+fn wrap_equal_area_square(mut uv: Vec2) -> Vec2 {
+    if uv.x < 0.0 {
+        uv = Vec2::new(-uv.x, 1.0 - uv.y);
+    } else if uv.x > 1.0 {
+        uv = Vec2::new(2.0 - uv.x, 1.0 - uv.y);
+    }
+    if uv.y < 0.0 {
+        uv = Vec2::new(1.0 - uv.x, -uv.y);
+    } else if uv.y > 1.0 {
+        uv = Vec2::new(1.0 - uv.x, 2.0 - uv.y);
+    }
+    uv
+}
+
+/// pbrt-v4's `Frame::FromZ`: the unit vector `z` and two tangents, by
+/// `CoordinateSystem` (Duff et al. 2017).
+fn frame_from_z(z: Vec3) -> (Vec3, Vec3, Vec3) {
+    let sign = 1.0f32.copysign(z.z);
+    let a = -1.0 / (sign + z.z);
+    let b = z.x * z.y * a;
+    let x = Vec3::new(1.0 + sign * z.x * z.x * a, sign * b, -sign * z.x);
+    let y = Vec3::new(b, sign + z.y * z.y * a, -z.y);
+    (z, x, y)
+}
+
+/// pbrt-v4's `RotateFromTo`: a rotation taking the unit vector `from` to
+/// `to`, made of two reflections through an axis far from both.
+fn rotate_from_to(from: Vec3, to: Vec3) -> glam::Mat3 {
+    let refl = if from.x.abs() < 0.72 && to.x.abs() < 0.72 {
+        Vec3::X
+    } else if from.y.abs() < 0.72 && to.y.abs() < 0.72 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let (u, v) = (refl - from, refl - to);
+    let (uu, vv, uv) = (u.dot(u), v.dot(v), u.dot(v));
+    let m = |i: usize, j: usize| {
+        let delta = if i == j { 1.0 } else { 0.0 };
+        delta - 2.0 / uu * u[i] * u[j] - 2.0 / vv * v[i] * v[j] + 4.0 * uv / (uu * vv) * v[i] * u[j]
+    };
+    // Rows i, columns j.
+    glam::Mat3::from_cols(
+        Vec3::new(m(0, 0), m(1, 0), m(2, 0)),
+        Vec3::new(m(0, 1), m(1, 1), m(2, 1)),
+        Vec3::new(m(0, 2), m(1, 2), m(2, 2)),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -618,164 +778,4 @@ mod tests {
             }
         }
     }
-}
-
-/// How far a surface point moves on its tangent plane from one pixel to the
-/// next, as pbrt-v4 estimates it for texture filtering and bump maps:
-/// exactly for a camera ray's hit (its ray differentials), and for any other
-/// hit from the camera's smallest differentials at the point's distance
-/// (`Camera::Approximate_dp_dxy`), both scaled by max(1/8, 1/sqrt(spp)), the
-/// spacing of a pixel's samples; `Scene::specular_differentials` carries a
-/// camera ray's on through specular bounces. One departure: a camera ray's
-/// differentials are those of the pinhole through the lens' centre.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PixelFootprint {
-    min_pos: [Vec3; 2],
-    min_dir: [Vec3; 2],
-    scale: f32,
-}
-
-/// A ray's differentials (pbrt-v4's `RayDifferential`): the rays one pixel
-/// over in x and in y, already scaled by the sample spacing.
-#[derive(Clone, Copy, Debug)]
-pub struct Differentials {
-    pub rx: Ray,
-    pub ry: Ray,
-}
-
-impl Differentials {
-    /// dp/dx and dp/dy of the point `p` of the plane through it with normal
-    /// `n`: where the two rays meet that plane (`None` where one misses it).
-    pub fn on_plane(&self, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
-        let meet = |r: &Ray| {
-            let t = n.dot(p - r.o) / n.dot(r.d);
-            let q = r.at(t) - p;
-            (t.is_finite() && q.is_finite()).then_some(q)
-        };
-        Some((meet(&self.rx)?, meet(&self.ry)?))
-    }
-}
-
-impl PixelFootprint {
-    /// dp/dx and dp/dy at the point `p` of a surface with normal `n`: from
-    /// the differentials of the ray that found it, or the camera's
-    /// approximation at its distance (zero where neither can be found).
-    pub fn dp_dxy(&self, cam: &Camera, p: Vec3, n: Vec3, along: Option<&Differentials>) -> (Vec3, Vec3) {
-        along
-            .and_then(|d| d.on_plane(p, n))
-            .unwrap_or_else(|| self.approximate(cam, p, n))
-    }
-
-    /// The differentials of the camera ray through the image point where
-    /// `p` projects, scaled by the sample spacing as pbrt-v4 scales them.
-    pub fn camera_differentials(&self, cam: &Camera, p: Vec3) -> Option<Differentials> {
-        let (x, y) = cam.project(p)?;
-        let ray = cam.generate_ray(x, y);
-        let scaled = |r: Ray| Ray::new(ray.o + (r.o - ray.o) * self.scale, ray.d + (r.d - ray.d) * self.scale);
-        Some(Differentials {
-            rx: scaled(cam.generate_ray(x + 1.0, y)),
-            ry: scaled(cam.generate_ray(x, y + 1.0)),
-        })
-    }
-
-    fn approximate(&self, cam: &Camera, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
-        let pc = cam.to_camera(p - cam.position);
-        let Some(dir) = pc.try_normalize() else {
-            return (Vec3::ZERO, Vec3::ZERO);
-        };
-        let r = rotate_from_to(dir, Vec3::Z);
-        let pd = r * pc;
-        let nd = r * cam.to_camera(n);
-        let d = nd.z * pd.z;
-        let at = |k: usize| {
-            let (o, dir) = (self.min_pos[k], Vec3::Z + self.min_dir[k]);
-            let t = -(nd.dot(o) - d) / nd.dot(dir);
-            let dp = cam.camera_to_world(r.transpose() * (o + dir * t - pd)) * self.scale;
-            if dp.is_finite() {
-                dp
-            } else {
-                Vec3::ZERO
-            }
-        };
-        (at(0), at(1))
-    }
-}
-
-/// The camera-space direction (x right, y up, z forward) of the point `uv`
-/// of a spherical camera's image (pbrt-v4's `SphericalCamera::GenerateRay`:
-/// the sphere's z axis is the camera's up, its x the camera's right).
-fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
-    let d = match mapping {
-        SphericalMapping::Equirectangular => {
-            let (sin_t, cos_t) = (std::f32::consts::PI * uv.y).sin_cos();
-            let (sin_p, cos_p) = (2.0 * std::f32::consts::PI * uv.x).sin_cos();
-            Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
-        }
-        SphericalMapping::EqualArea => equal_area_square_to_sphere(wrap_equal_area_square(uv)),
-    };
-    Vec3::new(d.x, d.z, d.y)
-}
-
-/// The image point of a unit camera-space direction: `spherical_direction`'s inverse.
-fn spherical_uv(mapping: SphericalMapping, c: Vec3) -> Vec2 {
-    let d = Vec3::new(c.x, c.z, c.y);
-    match mapping {
-        SphericalMapping::Equirectangular => {
-            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
-            let theta = Vec2::new(d.x, d.y).length().atan2(d.z);
-            Vec2::new(phi / (2.0 * std::f32::consts::PI), theta / std::f32::consts::PI)
-        }
-        SphericalMapping::EqualArea => equal_area_sphere_to_square(d),
-    }
-}
-
-/// pbrt-v4's `WrapEqualAreaSquare`: a point beyond the square's edge folded
-/// back across it, where the octahedral map continues.
-fn wrap_equal_area_square(mut uv: Vec2) -> Vec2 {
-    if uv.x < 0.0 {
-        uv = Vec2::new(-uv.x, 1.0 - uv.y);
-    } else if uv.x > 1.0 {
-        uv = Vec2::new(2.0 - uv.x, 1.0 - uv.y);
-    }
-    if uv.y < 0.0 {
-        uv = Vec2::new(1.0 - uv.x, -uv.y);
-    } else if uv.y > 1.0 {
-        uv = Vec2::new(1.0 - uv.x, 2.0 - uv.y);
-    }
-    uv
-}
-
-/// pbrt-v4's `Frame::FromZ`: the unit vector `z` and two tangents, by
-/// `CoordinateSystem` (Duff et al. 2017).
-fn frame_from_z(z: Vec3) -> (Vec3, Vec3, Vec3) {
-    let sign = 1.0f32.copysign(z.z);
-    let a = -1.0 / (sign + z.z);
-    let b = z.x * z.y * a;
-    let x = Vec3::new(1.0 + sign * z.x * z.x * a, sign * b, -sign * z.x);
-    let y = Vec3::new(b, sign + z.y * z.y * a, -z.y);
-    (z, x, y)
-}
-
-/// pbrt-v4's `RotateFromTo`: a rotation taking the unit vector `from` to
-/// `to`, made of two reflections through an axis far from both.
-fn rotate_from_to(from: Vec3, to: Vec3) -> glam::Mat3 {
-    let refl = if from.x.abs() < 0.72 && to.x.abs() < 0.72 {
-        Vec3::X
-    } else if from.y.abs() < 0.72 && to.y.abs() < 0.72 {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    };
-    let (u, v) = (refl - from, refl - to);
-    let (uu, vv, uv) = (u.dot(u), v.dot(v), u.dot(v));
-    let m = |i: usize, j: usize| {
-        let delta = if i == j { 1.0 } else { 0.0 };
-        delta - 2.0 / uu * u[i] * u[j] - 2.0 / vv * v[i] * v[j] + 4.0 * uv / (uu * vv) * v[i] * u[j]
-    };
-    // Rows i, columns j.
-    glam::Mat3::from_cols(
-        Vec3::new(m(0, 0), m(1, 0), m(2, 0)),
-        Vec3::new(m(0, 1), m(1, 1), m(2, 1)),
-        Vec3::new(m(0, 2), m(1, 2), m(2, 2)),
-    )
 }
