@@ -1744,6 +1744,11 @@ mod shading_tests {
         Scene::build(d).unwrap()
     }
 
+    /// The first hit along a ray from `o` in direction `d`.
+    fn first_hit(scene: &Scene, o: Vec3, d: Vec3) -> Hit {
+        scene.intersect(&Ray::new(o, d), 0.0, f32::INFINITY).unwrap()
+    }
+
     #[test]
     fn differentials_carried_through_a_mirror_see_the_unfolded_distance() {
         // A mirror at z = 0 sends the centre ray back to a plane at z = -10:
@@ -1751,7 +1756,7 @@ mod shading_tests {
         let scene = planes_at(&[(0.0, 0), (-10.0, 0)]);
         let pixel = 2.0 * 15f32.to_radians().tan() / 100.0 * 0.125;
         let ray = scene.camera.generate_ray(50.0, 50.0);
-        let mirror = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let mirror = first_hit(&scene, ray.o, ray.d);
         let d = scene.camera_differentials(&mirror).unwrap();
         let (dx, _) = d.on_plane(mirror.p, mirror.ng).unwrap();
         assert!(
@@ -1763,13 +1768,7 @@ mod shading_tests {
         let out = scene
             .specular_differentials(&mirror, &d, (wo, wi), false, 1.0, mirror.ng)
             .unwrap();
-        let back = scene
-            .intersect(
-                &Ray::new(crate::math::offset_origin(mirror.p, mirror.ng, wi), wi),
-                0.0,
-                f32::INFINITY,
-            )
-            .unwrap();
+        let back = first_hit(&scene, crate::math::offset_origin(mirror.p, mirror.ng, wi), wi);
         assert!((back.p.z + 10.0).abs() < 1e-4);
         let (bx, by) = out.on_plane(back.p, back.ng).unwrap();
         for b in [bx, by] {
@@ -1793,22 +1792,18 @@ mod shading_tests {
         let pixel = 2.0 * 15f32.to_radians().tan() / 100.0 * 0.125;
         let eta = 1.5;
         let ray = scene.camera.generate_ray(50.0, 50.0);
-        let front = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+        let front = first_hit(&scene, ray.o, ray.d);
         let d = scene.camera_differentials(&front).unwrap();
         // Along the axis the refracted direction is the incoming one.
         let (wo, wi) = (-ray.d, ray.d);
         let inside = scene
             .specular_differentials(&front, &d, (wo, wi), true, eta, -Vec3::Z)
             .unwrap();
-        let back = scene
-            .intersect(&Ray::new(front.p + wi * 1e-3, wi), 0.0, f32::INFINITY)
-            .unwrap();
+        let back = first_hit(&scene, front.p + wi * 1e-3, wi);
         let out = scene
             .specular_differentials(&back, &inside, (wo, wi), true, 1.0 / eta, -Vec3::Z)
             .unwrap();
-        let plane = scene
-            .intersect(&Ray::new(back.p + wi * 1e-3, wi), 0.0, f32::INFINITY)
-            .unwrap();
+        let plane = first_hit(&scene, back.p + wi * 1e-3, wi);
         assert!((plane.p.z - 5.0).abs() < 1e-4);
         let (px, py) = out.on_plane(plane.p, plane.ng).unwrap();
         for p in [px, py] {

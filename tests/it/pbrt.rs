@@ -762,10 +762,17 @@ fn an_imagemaps_filter_is_read_and_an_unknown_one_refused_at_its_line() {
         .unwrap();
         path
     };
+    // A 2 x 2 checker of black and white filling the frame: every filter
+    // keeps the texture's mean, half of the white plane's.
+    let mean = |f: &Film| f.pixels.iter().map(|p| p.y).sum::<f32>() / f.pixels.len() as f32;
+    let mut means = vec![];
     for filter in ["point", "bilinear", "trilinear", "ewa"] {
         let out = dir.path().join(format!("{filter}.pfm"));
         let film = render_to(&scene(filter), &["--width", "16", "--height", "16", "--spp", "4"], &out);
-        assert!(film.pixels.iter().any(|p| p.y > 0.0), "{filter}");
+        means.push(mean(&film));
+    }
+    for m in &means {
+        assert!(*m > 0.0 && (m / means[1] - 1.0).abs() < 0.05, "{means:?}");
     }
     let out = dir.path().join("sharp.pfm");
     let bad = scene("sharp");
