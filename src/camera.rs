@@ -314,6 +314,32 @@ impl Camera {
             (1.0 - sy) * 0.5 * self.height as f32,
         ))
     }
+
+    /// A perspective camera without a lens: one point every ray leaves,
+    /// which light tracing can connect to.
+    pub fn is_pinhole(&self) -> bool {
+        !self.orthographic && self.spherical.is_none() && self.lens.is_none()
+    }
+
+    /// For a pinhole: the solid-angle density of camera rays towards the
+    /// unit direction `d`, for rays uniform over the whole image: 1 / (A
+    /// cos^3 theta), A the image's area on the plane one unit ahead (pbrt-v4's
+    /// `PerspectiveCamera::PDF_We`, whose importance We is this over cos
+    /// theta). Zero behind the camera or outside the image.
+    pub fn pdf_dir(&self, d: Vec3) -> f32 {
+        let cos = d.dot(self.forward);
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        match self.project(self.position + d) {
+            Some((x, y)) if x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32 => {
+                let t = self.tan_half_fov;
+                let area = 4.0 * t * t * self.half.x * self.half.y;
+                1.0 / (area * cos * cos * cos)
+            }
+            _ => 0.0,
+        }
+    }
 }
 
 /// How far a surface point moves on its tangent plane from one pixel to the

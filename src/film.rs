@@ -259,6 +259,13 @@ impl PixelSum {
         Vec3::new(r, g, b)
     }
 
+    /// The radiance sum itself, unweighted: light splatted by light tracing,
+    /// which the sample count divides.
+    pub fn total(&self) -> Vec3 {
+        let [r, g, b] = self.rgb.map(|c| (c as f64 / FIXED_ONE) as f32);
+        Vec3::new(r, g, b)
+    }
+
     /// The four numbers as a flat list (for checkpoints).
     pub fn to_array(&self) -> [i128; 4] {
         [self.rgb[0], self.rgb[1], self.rgb[2], self.weight]
@@ -359,6 +366,19 @@ impl Film {
             width,
             height,
             pixels: sums.iter().map(PixelSum::value).collect(),
+        }
+    }
+
+    /// `from_sums`, plus light-traced sums `light` (one a pixel) times `scale`.
+    pub fn from_sums_and_light(width: u32, height: u32, sums: &[PixelSum], light: &[PixelSum], scale: f32) -> Self {
+        Film {
+            width,
+            height,
+            pixels: sums
+                .iter()
+                .zip(light)
+                .map(|(s, l)| s.value() + l.total() * scale)
+                .collect(),
         }
     }
 

@@ -246,7 +246,11 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
             match settings.integrator {
                 integrator::IntegratorKind::Direct | integrator::IntegratorKind::Photon =>
                     format!(", {} shadow samples", settings.shadow_samples),
-                integrator::IntegratorKind::Path | integrator::IntegratorKind::Sppm => String::new(),
+                integrator::IntegratorKind::Path
+                | integrator::IntegratorKind::Bdpt
+                | integrator::IntegratorKind::Sppm => {
+                    String::new()
+                }
             },
             settings.integrator,
             out.seconds,

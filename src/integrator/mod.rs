@@ -7,6 +7,7 @@
 
 #[cfg(test)]
 pub(crate) mod analytic;
+pub mod bdpt;
 pub mod checkpoint;
 pub mod direct;
 pub mod path;
@@ -225,7 +226,7 @@ pub fn render_observed(
                 let (film, stats, done) = render_tiles(scene, settings, &est, on_tile);
                 (film, stats, done, None, None)
             }
-            IntegratorKind::Path => {
+            IntegratorKind::Path | IntegratorKind::Bdpt => {
                 let mut state = path::Progressive::new(scene, settings);
                 let passes = checkpoint::run(scene, settings, &mut state, on_tile)?;
                 let (film, stats) = state.finish(passes.0);
@@ -269,7 +270,7 @@ pub fn check_media(scene: &Scene, integrator: IntegratorKind) -> Result<()> {
 /// pass for progressive renders.
 pub fn progress_ticks(settings: &RenderSettings, width: u32, height: u32) -> u64 {
     let passes = match settings.integrator {
-        IntegratorKind::Path => path::Progressive::passes_for(settings.spp) as u64,
+        IntegratorKind::Path | IntegratorKind::Bdpt => path::Progressive::passes_for(settings.spp) as u64,
         _ => 1,
     };
     tile_count(width, height) * passes

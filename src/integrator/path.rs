@@ -35,9 +35,10 @@
 //! is the one-pass render bit for bit, and a render can be checkpointed
 //! between passes and resumed (`integrator::checkpoint`).
 
+use super::bdpt::{trace_light_pass, Bdpt};
 use super::checkpoint::{self, Buffer};
 use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, sample_direct};
-use super::{accumulate_tiles, merge_sums, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use super::{accumulate_tiles, merge_sums, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::Sampler;
@@ -157,12 +158,18 @@ impl RadianceEstimator for PathTracer {
 /// The path tracer's render in passes: the per-pixel sums of the samples so far.
 pub struct Progressive<'a> {
     settings: &'a RenderSettings,
-    est: PathTracer,
+    /// The path tracer, or the bidirectional one (which shares its passes).
+    est: Box<dyn RadianceEstimator>,
     rect: PixelRect,
     sums: Vec<PixelSum>,
     /// The pass in flight, zero between passes: merged into `sums` only
     /// when every tile is done.
     pass: Vec<PixelSum>,
+    /// The bidirectional path tracer's light tracing, when it has any: its
+    /// splatted light so far and the pass in flight's (empty otherwise).
+    light_tracer: Option<Bdpt>,
+    light: Vec<PixelSum>,
+    light_pass: Vec<PixelSum>,
     stats: RayStats,
 }
 
@@ -170,15 +177,29 @@ impl<'a> Progressive<'a> {
     pub fn new(scene: &Scene, settings: &'a RenderSettings) -> Self {
         let cam = &scene.camera;
         let rect = settings.crop.unwrap_or(PixelRect::full(cam.width, cam.height));
-        Progressive {
-            settings,
-            est: PathTracer {
+        let bdpt = || Bdpt {
+            max_depth: settings.max_depth,
+            light_tracing: cam.is_pinhole(),
+        };
+        let est: Box<dyn RadianceEstimator> = match settings.integrator {
+            IntegratorKind::Bdpt => Box::new(bdpt()),
+            _ => Box::new(PathTracer {
                 max_depth: settings.max_depth,
                 light_sampling: settings.light_sampling,
-            },
+            }),
+        };
+        let light_tracer = (settings.integrator == IntegratorKind::Bdpt && cam.is_pinhole()).then(bdpt);
+        let pixels = rect.width() as usize * rect.height() as usize;
+        let light_pixels = if light_tracer.is_some() { pixels } else { 0 };
+        Progressive {
+            settings,
+            est,
             rect,
-            sums: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
-            pass: vec![PixelSum::default(); rect.width() as usize * rect.height() as usize],
+            sums: vec![PixelSum::default(); pixels],
+            pass: vec![PixelSum::default(); pixels],
+            light_tracer,
+            light: vec![PixelSum::default(); light_pixels],
+            light_pass: vec![PixelSum::default(); light_pixels],
             stats: RayStats::default(),
         }
     }
@@ -198,8 +219,17 @@ impl<'a> Progressive<'a> {
 
     /// The image after `passes` passes (the filter-weighted mean of the
     /// samples so far) and the rays this run traced.
-    pub fn finish(self, _passes: u32) -> (Film, RayStats) {
-        let film = Film::from_sums(self.rect.width(), self.rect.height(), &self.sums);
+    pub fn finish(self, passes: u32) -> (Film, RayStats) {
+        let (w, h) = (self.rect.width(), self.rect.height());
+        let film = if self.light_tracer.is_some() {
+            // Light tracing's estimate of a pixel: its splats over the
+            // samples a pixel so far (each pixel and sample of the frame
+            // traced one particle).
+            let scale = 1.0 / self.samples_after(passes).max(1) as f32;
+            Film::from_sums_and_light(w, h, &self.sums, &self.light, scale)
+        } else {
+            Film::from_sums(w, h, &self.sums)
+        };
         (film, self.stats)
     }
 }
@@ -209,8 +239,9 @@ impl checkpoint::Progressive for Progressive<'_> {
         let s = self.settings;
         let r = self.rect;
         format!(
-            "integrator=path film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} sampler={} \
+            "integrator={} film=splat spp={} samples_per_pass={} max_depth={:?} light_sampling={} sampler={} \
              filter={:?} seed={} crop={},{},{},{}{}",
+            s.integrator.name(),
             s.spp,
             Self::samples_per_pass(s.spp),
             s.max_depth,
@@ -241,42 +272,69 @@ impl checkpoint::Progressive for Progressive<'_> {
         // the pass's own sums, merged when it is complete.
         let never = AtomicBool::new(false);
         let ntiles = super::tile_count(self.rect.width(), self.rect.height());
-        match accumulate_tiles(
+        let tiles = accumulate_tiles(
             scene,
             self.settings,
-            &self.est,
-            samples,
+            self.est.as_ref(),
+            samples.clone(),
             &mut self.pass,
             &never,
             on_tile,
-        ) {
-            Some((stats, done)) if done == ntiles => {
+        );
+        let traced = match (&tiles, &self.light_tracer) {
+            (Some((_, done)), Some(lt)) if *done == ntiles => {
+                trace_light_pass(lt, scene, self.settings, samples, &mut self.light_pass, on_tile)
+            }
+            _ => Some(RayStats::default()),
+        };
+        match (tiles, traced) {
+            (Some((stats, done)), Some(light_stats)) if done == ntiles => {
                 merge_sums(&mut self.sums, &mut self.pass);
+                merge_sums(&mut self.light, &mut self.light_pass);
                 self.stats.add(&stats);
+                self.stats.add(&light_stats);
                 true
             }
             _ => {
                 self.pass.fill(PixelSum::default());
+                self.light_pass.fill(PixelSum::default());
                 false
             }
         }
     }
 
     fn save(&self) -> Vec<(String, Buffer)> {
-        let flat = self.sums.iter().flat_map(|v| v.to_array()).collect();
-        vec![("sums".into(), Buffer::I128(flat))]
+        let flat = |sums: &[PixelSum]| Buffer::I128(sums.iter().flat_map(|v| v.to_array()).collect());
+        let mut buffers = vec![("sums".into(), flat(&self.sums))];
+        if self.light_tracer.is_some() {
+            buffers.push(("light".into(), flat(&self.light)));
+        }
+        buffers
     }
 
     fn restore(&mut self, buffers: Vec<(String, Buffer)>) -> std::result::Result<(), String> {
         let want = self.sums.len() * 4;
-        match &buffers[..] {
-            [(tag, Buffer::I128(v))] if tag == "sums" && v.len() == want => {
-                for (s, c) in self.sums.iter_mut().zip(v.chunks_exact(4)) {
-                    *s = PixelSum::from_array([c[0], c[1], c[2], c[3]]);
-                }
+        let fill = |sums: &mut [PixelSum], v: &[i128]| {
+            for (s, c) in sums.iter_mut().zip(v.chunks_exact(4)) {
+                *s = PixelSum::from_array([c[0], c[1], c[2], c[3]]);
+            }
+        };
+        match (&buffers[..], self.light_tracer.is_some()) {
+            ([(tag, Buffer::I128(v))], false) if tag == "sums" && v.len() == want => {
+                fill(&mut self.sums, v);
                 Ok(())
             }
-            _ => Err(format!("expected one i128 buffer 'sums' of {want} values")),
+            ([(tag, Buffer::I128(v)), (ltag, Buffer::I128(l))], true)
+                if tag == "sums" && ltag == "light" && v.len() == want && l.len() == want =>
+            {
+                fill(&mut self.sums, v);
+                fill(&mut self.light, l);
+                Ok(())
+            }
+            (_, false) => Err(format!("expected one i128 buffer 'sums' of {want} values")),
+            (_, true) => Err(format!(
+                "expected i128 buffers 'sums' and 'light' of {want} values each"
+            )),
         }
     }
 }

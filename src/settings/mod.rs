@@ -33,10 +33,13 @@ pub enum IntegratorKind {
     Path,
     /// Stochastic progressive photon mapping (consistent; refines over passes).
     Sppm,
+    /// Bidirectional path tracer (unbiased; finds light through glossy
+    /// reflections of small lights that the path tracer rarely does).
+    Bdpt,
 }
 
 impl IntegratorKind {
-    pub const ALL: [IntegratorKind; 4] = [Self::Direct, Self::Photon, Self::Path, Self::Sppm];
+    pub const ALL: [IntegratorKind; 5] = [Self::Direct, Self::Photon, Self::Path, Self::Sppm, Self::Bdpt];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -44,6 +47,7 @@ impl IntegratorKind {
             Self::Photon => "photon",
             Self::Path => "path",
             Self::Sppm => "sppm",
+            Self::Bdpt => "bdpt",
         }
     }
 
@@ -264,7 +268,7 @@ impl RenderSettings {
     /// Camera samples per pixel of the chosen integrator.
     pub fn samples_per_pixel(&self) -> u32 {
         match self.integrator {
-            IntegratorKind::Path => self.spp,
+            IntegratorKind::Path | IntegratorKind::Bdpt => self.spp,
             IntegratorKind::Sppm => self.passes,
             _ => self.ssaa * self.ssaa,
         }
@@ -795,14 +799,17 @@ fn check_combinations(s: &RenderSettings, origin: &dyn Fn(&str) -> Origin) -> Re
             ));
         }
     }
-    let progressive = matches!(s.integrator, IntegratorKind::Path | IntegratorKind::Sppm);
+    let progressive = matches!(
+        s.integrator,
+        IntegratorKind::Path | IntegratorKind::Bdpt | IntegratorKind::Sppm
+    );
     for (name, given) in [("checkpoint", &files.checkpoint), ("resume", &files.resume)] {
         if let Some(f) = given.as_ref().filter(|_| !progressive) {
             return Err(SettingError::new(
                 name,
                 &f.display(),
                 Origin::CommandLine,
-                "only progressive renders (integrator path or sppm) have checkpoints",
+                "only progressive renders (integrator path, bdpt or sppm) have checkpoints",
             ));
         }
     }

@@ -5,7 +5,7 @@
 
 use super::{DefaultValue, Kind, Spec};
 
-const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm"];
+const INTEGRATORS: &[&str] = &["direct", "photon", "path", "sppm", "bdpt"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const GATHER_FILTERS: &[&str] = &["none", "normal", "report"];
 const LIGHT_SAMPLING: &[&str] = &["mis", "light", "bsdf"];
@@ -20,7 +20,7 @@ pub const SETTINGS: &[Spec] = &[
         kind: Kind::Choice(INTEGRATORS),
         default: DefaultValue::Name("direct"),
         doc: "Light transport algorithm: direct (shadow rays only), photon (photon mapping), path (the reference \
-              path tracer), sppm (stochastic progressive photon mapping)",
+              path tracer), sppm (stochastic progressive photon mapping), bdpt (bidirectional path tracing)",
         in_scene_file: true,
         only_for: &[],
     },
@@ -54,7 +54,7 @@ pub const SETTINGS: &[Spec] = &[
         name: "spp",
         kind: Kind::Count { min: 1, max: MILLION },
         default: DefaultValue::Int(64),
-        doc: "Path tracer: samples per pixel (replaces ssaa)",
+        doc: "Path tracers (path, bdpt): samples per pixel (replaces ssaa)",
         in_scene_file: true,
         only_for: &[],
     },
@@ -62,7 +62,7 @@ pub const SETTINGS: &[Spec] = &[
         name: "max_depth",
         kind: Kind::Count { min: 0, max: 1 << 16 },
         default: DefaultValue::Unset("no limit: Russian roulette ends paths"),
-        doc: "Path tracer: most bounces: 0 = emitted light only, 1 = direct light only",
+        doc: "Path tracers (path, bdpt): most bounces: 0 = emitted light only, 1 = direct light only",
         in_scene_file: true,
         only_for: &[],
     },
@@ -98,7 +98,7 @@ pub const SETTINGS: &[Spec] = &[
               film (pbrt-v4's Film \"maxcomponentvalue\"; not SPPM, as there): fireflies go, at the price of darkening \
               what is bright",
         in_scene_file: true,
-        only_for: &["direct", "photon", "path"],
+        only_for: &["direct", "photon", "path", "bdpt"],
     },
     Spec {
         name: "white_balance",

@@ -101,10 +101,10 @@ fn errors_say_where_the_value_came_from() {
     );
     let e = l.set_text("alpha", "nan", Origin::CommandLine).unwrap_err();
     assert!(e.to_string().starts_with("--alpha nan: must be a number > 0"), "{e}");
-    let e = l.set_text("integrator", "bdpt", Origin::CommandLine).unwrap_err();
+    let e = l.set_text("integrator", "mlt", Origin::CommandLine).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "--integrator bdpt: expected one of direct, photon, path, sppm"
+        "--integrator mlt: expected one of direct, photon, path, sppm, bdpt"
     );
     assert_eq!(e.setting, "integrator");
     assert_eq!(e.origin, Origin::CommandLine);

@@ -193,7 +193,9 @@ pub fn view_integrator(settings: &RenderSettings) -> Box<dyn ViewIntegrator> {
     match settings.integrator {
         IntegratorKind::Photon => Box::new(PhotonView::new(settings)),
         // The path tracer's and SPPM's previews show their direct light only.
-        IntegratorKind::Direct | IntegratorKind::Path | IntegratorKind::Sppm => Box::new(DirectView::new(settings)),
+        IntegratorKind::Direct | IntegratorKind::Path | IntegratorKind::Bdpt | IntegratorKind::Sppm => {
+            Box::new(DirectView::new(settings))
+        }
     }
 }
 

@@ -196,6 +196,18 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             ),
         );
     }
+    if !desc.media.is_empty() && scene.integrator.ty == "bdpt" {
+        // Our bidirectional path tracer has no media; the path tracer renders them.
+        let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
+        c.warn(
+            &at,
+            "Integrator \"bdpt\": the scene has participating media, rendered here by the path tracer",
+        );
+        desc.settings
+            .scene_file
+            .set("integrator", Value::Name("path"), origin(&at))
+            .map_err(|e| located(&at, e.to_string()))?;
+    }
     if c.imaging_ratio != 1.0 {
         // The film scales what it records; the lights scaled instead give the
         // same image, and photon maps with it.
@@ -883,7 +895,8 @@ impl<'a> Conv<'a> {
         }
         match i.ty.as_str() {
             "path" | "volpath" | "bdpt" | "mlt" | "simplepath" | "simplevolpath" | "randomwalk" | "lightpath" => {
-                set(self, i.loc.as_ref(), "integrator", Value::Name("path"));
+                let ours = if i.ty == "bdpt" { "bdpt" } else { "path" };
+                set(self, i.loc.as_ref(), "integrator", Value::Name(ours));
                 set(
                     self,
                     depth_loc.as_ref().or(i.loc.as_ref()),
