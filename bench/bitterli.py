@@ -8,10 +8,12 @@ For each scene of ../shared/bitterli/:
 1. whether it loads (`raytracer info`); a refused scene is reported with the
    renderer's message and the bench goes on with the next;
 2. the path tracer at PATH_SPP samples a pixel: its wall time T is the budget;
-3. our photon integrators at the same wall time: `photon` with PHOTONS photons
-   (precomputed irradiance) and the N x N camera samples that fill T, `sppm`
-   with SPPM_PHOTONS photons a pass and the passes that fill T, both sized from
-   short calibration renders (time = fixed part + per-sample or per-pass part);
+3. our photon integrators and the bidirectional path tracer at the same wall
+   time: `photon` with PHOTONS photons (precomputed irradiance) and the N x N
+   camera samples that fill T, `sppm` with SPPM_PHOTONS photons a pass and the
+   passes that fill T, `bdpt` with the samples a pixel that fill T, each sized
+   from short calibration renders (time = fixed part + per-sample or per-pass
+   part);
 4. `raytracer compare --max-luminance 4` against the reference (box-averaged
    to the render's size here: `compare` takes equal sizes), and the same figure
    with the light's one-pixel border left out too (computed here with
@@ -191,6 +193,12 @@ def main():
         measure("sppm", f"{passes} passes x {int(SPPM_PHOTONS) // 1000}k photons", sargs + ["--passes", str(passes)],
                 "sppm")
 
+        # bdpt: the samples a pixel that fill the budget.
+        t8 = render(common + ["--integrator", "bdpt", "--spp", "8"], os.path.join(WORK, "calib.exr"))
+        per_sample = max((t8 - fixed) / 8, 1e-3)
+        spp = int(max(1, round((budget - fixed) / per_sample)))
+        measure("bdpt", f"{spp} spp", ["--spp", str(spp)], "bdpt")
+
         scene_rows = [r for r in rows if r["scene"] == scene and r.get("rel_mse") is not None]
         best = min(scene_rows, key=lambda r: r["rel_mse"])
         if WRITE_DOCS:
@@ -230,7 +238,7 @@ def write_benchmarks(table, notes):
     body = [START, "",
             f"Measured by `bench/bitterli.sh` on {time.strftime('%Y-%m-%d', time.gmtime())} "
             f"(load average {load[0]:.1f} at the end; wall times of the whole process, all cores; "
-            f"path tracer at {PATH_SPP} spp, the photon integrators sized to its time"
+            f"path tracer at {PATH_SPP} spp, the photon integrators and bdpt sized to its time"
             + (f"; filter {FILTER}" if FILTER else "; each file's pixel filter") + "):", ""]
     body += table + [""]
     body += [f"- {n}" for n in notes]

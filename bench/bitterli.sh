@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Bitterli's three pbrt-v4 scenes (../shared/bitterli/) against their reference
-# images: the path tracer and our photon integrators at equal wall time
-# (issue 13, "A bench").
+# images: the path tracer, and our photon integrators and bidirectional path
+# tracer at equal wall time (issue 13, "A bench").
 #
 #   bench/bitterli.sh                           # all three scenes, ~10 min on 2 cores
 #   SCENES=cornell-box PATH_SPP=64 WRITE_DOCS=0 bench/bitterli.sh   # a quick look

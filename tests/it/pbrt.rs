@@ -224,6 +224,7 @@ fn the_three_bitterli_scenes_render_with_their_references_mean() {
     for (scene, size, extra) in [
         ("cornell-box", (64, 64), &["--integrator", "path", "--spp", "64"][..]),
         ("veach-mis", (64, 36), &["--integrator", "path", "--spp", "256"][..]),
+        ("veach-mis", (64, 36), &["--integrator", "bdpt", "--spp", "64"][..]),
         (
             "water-caustic",
             (64, 64),

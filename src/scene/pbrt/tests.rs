@@ -1,6 +1,7 @@
 use super::lexer::{Lexer, TokenKind};
 use super::*;
 use crate::math::{Vec2, Vec3};
+use crate::settings::Value;
 use glam::{Mat4, Vec4};
 use std::collections::BTreeMap;
 use std::io::{Error as IoError, ErrorKind};
@@ -1786,6 +1787,22 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
     assert!(!ignored(&c), "{:?}", c.warnings);
     let c = converted(&format!("Integrator \"path\"\n{text}"), Files::default(), false).unwrap();
     assert!(ignored(&c), "{:?}", c.warnings);
+    // Our bidirectional path tracer has no media: the path tracer renders them.
+    let integrator = |c: &convert::Converted| c.desc.settings.scene_file.get("integrator").map(|v| v.0);
+    let c = converted(&format!("Integrator \"bdpt\"\n{text}"), Files::default(), false).unwrap();
+    assert_eq!(integrator(&c), Some(Value::Name("path")));
+    assert!(
+        c.warnings.iter().any(|w| w.contains("bdpt") && w.contains("media")),
+        "{:?}",
+        c.warnings
+    );
+    let plain = "Integrator \"bdpt\" \"integer maxdepth\" 7\nWorldBegin\nLightSource \"point\"\nShape \"sphere\"\n";
+    let c = converted(plain, Files::default(), false).unwrap();
+    assert_eq!(integrator(&c), Some(Value::Name("bdpt")));
+    assert_eq!(
+        c.desc.settings.scene_file.get("max_depth").map(|v| v.0),
+        Some(Value::Int(7))
+    );
 }
 
 #[test]
