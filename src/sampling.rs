@@ -321,6 +321,27 @@ impl Sampler {
         }
     }
 
+    /// Another sampler of the same sample: its own requests from the first
+    /// dimension on, keyed by `stream` (so that a second path of the sample,
+    /// as a bidirectional path tracer's light subpath, has dimensions of its
+    /// own, stratified over the pixel's samples like the first's, whatever
+    /// the first path's length).
+    pub fn stream(&self, stream: u64) -> Sampler {
+        let key = mix64(self.key ^ mix64(stream));
+        // The PCG32 stream's own state keys the new one too: a sampler made
+        // from a bare stream (`independent`) has no other key.
+        let mut rng = self.rng.clone();
+        let state = (rng.next_u32() as u64) << 32 | rng.next_u32() as u64;
+        Sampler {
+            sobol: self.sobol,
+            key,
+            rev_index: self.rev_index,
+            rev_global: self.rev_global,
+            dim: 0,
+            rng: Rng::keyed(key ^ state, stream, self.rev_global.unwrap_or(self.rev_index as u64)),
+        }
+    }
+
     /// A sampler that reads `rng` alone.
     pub fn independent(rng: Rng) -> Self {
         Sampler {
@@ -859,6 +880,36 @@ mod tests {
         let first = a.next_2d();
         assert_eq!(b.next_f32(), first.x);
         assert_ne!(a.next_2d(), first);
+    }
+
+    #[test]
+    fn a_samplers_stream_is_stratified_over_the_pixels_samples_whatever_came_before() {
+        let to_u32 = |v: Vec2| ((v.x as f64 * 4294967296.0) as u32, (v.y as f64 * 4294967296.0) as u32);
+        for (seed, pixel) in [(1, 5), (7, 1234)] {
+            // The stream's requests over 16 samples of a pixel, the parent
+            // having made 0 to 15 requests first (a camera path of any length).
+            let firsts: Vec<(u32, u32)> = (0..16u32)
+                .map(|i| {
+                    let mut parent = Sampler::new(true, seed, pixel, i);
+                    for _ in 0..i {
+                        parent.next_2d();
+                    }
+                    let mut light = parent.stream(42);
+                    to_u32(light.next_2d())
+                })
+                .collect();
+            assert!(is_02_net(&firsts, 4), "seed {seed}, pixel {pixel}");
+            // Another key, another point set; and not the parent's own.
+            let other = Sampler::new(true, seed, pixel, 3).stream(43).next_2d();
+            assert_ne!(to_u32(other), firsts[3]);
+            assert_ne!(to_u32(Sampler::new(true, seed, pixel, 3).next_2d()), firsts[3]);
+        }
+        // Independent samplers' streams differ by their stream's state.
+        let (a, b) = (
+            Sampler::independent(Rng::new(1, 2)),
+            Sampler::independent(Rng::new(3, 4)),
+        );
+        assert_ne!(a.stream(42).next_2d(), b.stream(42).next_2d());
     }
 
     #[test]

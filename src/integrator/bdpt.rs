@@ -686,20 +686,29 @@ impl RadianceEstimator for Bdpt {
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
         let mut cameras = Vec::with_capacity(8);
         let mut lights = Vec::with_capacity(8);
+        // The light subpath and the light samples draw from streams of their
+        // own: each request is then the same dimension in every sample of
+        // the pixel, stratified, whatever length the camera subpath had.
+        let mut light_sampler = sampler.stream(LIGHT_SUBPATH_STREAM);
+        let mut nee_sampler = sampler.stream(LIGHT_SAMPLE_STREAM);
         let mut l = self.camera_subpath(scene, ray, sampler, stats, &mut cameras);
-        self.light_subpath(scene, sampler, stats, &mut lights);
+        self.light_subpath(scene, &mut light_sampler, stats, &mut lights);
         let depth_ok = |s: usize, t: usize| self.max_depth.is_none_or(|d| s + t - 2 <= d as usize);
         for t in 2..=cameras.len() {
             // s = 1 samples a light afresh, with or without a light subpath.
             for s in 0..=lights.len().max(1) {
                 if depth_ok(s, t) {
-                    l += self.connect(scene, &lights, &cameras, s, t, sampler, stats);
+                    l += self.connect(scene, &lights, &cameras, s, t, &mut nee_sampler, stats);
                 }
             }
         }
         l
     }
 }
+
+/// Keys of a camera sample's light subpath and light samples (`Sampler::stream`).
+const LIGHT_SUBPATH_STREAM: u64 = 0x6c73_7562_7061_7468;
+const LIGHT_SAMPLE_STREAM: u64 = 0x6e65_655f_6c69_6768;
 
 /// Second key of the light-tracing samplers, apart from the camera samples'.
 const LIGHT_TRACING_SEED: u64 = 0x6c69_6768_745f_7472;
