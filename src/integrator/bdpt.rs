@@ -235,6 +235,41 @@ fn light_normal(light: &Light, p: Vec3, towards: Vec3) -> Vec3 {
     }
 }
 
+/// `sum` plus, over the strategies that take vertices `lowest..n` of one
+/// subpath from the other side, their densities' squared ratios to this
+/// strategy's (pbrt's `MISWeight` loops): walking from the joined end
+/// (`at(n - 1)`, whose and whose predecessor's reverse densities the join
+/// gives as `revs`) towards the subpath's start. A strategy counts unless
+/// it would join at a specular vertex, or at one whose predecessor is
+/// (`delta_before(i)`).
+fn ratio_sum<'a>(
+    mut sum: f32,
+    n: usize,
+    lowest: usize,
+    at: impl Fn(usize) -> &'a Vertex,
+    revs: (f32, f32),
+    delta_before: impl Fn(usize) -> bool,
+) -> f32 {
+    let mut ri = 1.0;
+    for i in (lowest..n).rev() {
+        let v = at(i);
+        let rev = if i + 1 == n {
+            revs.0
+        } else if i + 2 == n {
+            revs.1
+        } else {
+            v.pdf_rev
+        };
+        let r = remap0(rev) / remap0(v.pdf_fwd);
+        ri *= r * r;
+        let delta = i + 1 != n && v.delta;
+        if !delta && !delta_before(i) {
+            sum += ri;
+        }
+    }
+    sum
+}
+
 fn remap0(f: f32) -> f32 {
     if f != 0.0 {
         f
@@ -576,51 +611,16 @@ impl Bdpt {
             (Some(q), Some(qm)) => q.pdf(scene, Some(pt), qm),
             _ => 0.0,
         };
-        let ratio = |rev: f32, fwd: f32| {
-            let r = remap0(rev) / remap0(fwd);
-            r * r
-        };
-        let mut sum = 0.0;
         // Fewer camera vertices: down to t = 1 with light tracing, else t = 2.
         let first = if self.light_tracing { 1 } else { 2 };
-        let mut ri = 1.0;
-        for i in (first..t).rev() {
-            let v = camera_at(i);
-            let rev = if i == t - 1 {
-                pt_rev
-            } else if i + 2 == t {
-                pt_minus_rev
-            } else {
-                v.pdf_rev
-            };
-            ri *= ratio(rev, v.pdf_fwd);
-            let delta = i != t - 1 && v.delta;
-            if !delta && !camera_at(i - 1).delta {
-                sum += ri;
-            }
-        }
-        // Fewer light vertices, down to s = 0.
-        ri = 1.0;
-        for i in (0..s).rev() {
-            let v = light_at(i);
-            let rev = if i == s - 1 {
-                qs_rev
-            } else if i + 2 == s {
-                qs_minus_rev
-            } else {
-                v.pdf_rev
-            };
-            ri *= ratio(rev, v.pdf_fwd);
-            let delta = i != s - 1 && v.delta;
-            let delta_before = if i > 0 {
-                light_at(i - 1).delta
-            } else {
-                matches!(v.kind, Kind::Light(li) if scene.lights[li].is_delta())
-            };
-            if !delta && !delta_before {
-                sum += ri;
-            }
-        }
+        let sum = ratio_sum(0.0, t, first, camera_at, (pt_rev, pt_minus_rev), |i| {
+            camera_at(i - 1).delta
+        });
+        // Fewer light vertices, down to s = 0 (none where the light is a delta in position).
+        let sum = ratio_sum(sum, s, 0, light_at, (qs_rev, qs_minus_rev), |i| match i {
+            0 => matches!(light_at(0).kind, Kind::Light(li) if scene.lights[li].is_delta()),
+            _ => light_at(i - 1).delta,
+        });
         1.0 / (1.0 + sum)
     }
 
