@@ -227,7 +227,7 @@ pub struct StateFileArgs {
     /// --max-bounces and --seed) instead of tracing it.
     #[arg(long, value_name = "FILE")]
     pub load_photons: Option<PathBuf>,
-    /// Progressive renders (--integrator path or sppm): save the render's state to FILE between passes, every
+    /// Progressive renders (--integrator path, bdpt or sppm): save the render's state to FILE between passes, every
     /// --checkpoint-every minutes and when interrupted; --resume FILE continues it.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,

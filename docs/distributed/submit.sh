@@ -28,7 +28,7 @@
 #                  (parts)
 #   RESULT         the merged image (render.exr)
 #   SHARED_PHOTONS=1  one photon map for all the bands
-#   CHECKPOINT=1   progressive renders (--integrator path or sppm): each band
+#   CHECKPOINT=1   progressive renders (--integrator path, bdpt or sppm): each band
 #                  keeps a checkpoint (OUT/band-K.ckpt), is submitted with
 #                  --requeue --signal=TERM@120 (SBATCH_SIGNAL replaces the
 #                  signal), and resumes from its checkpoint when it finds one
