@@ -715,6 +715,9 @@ const LIGHT_TRACING_SEED: u64 = 0x6c69_6768_745f_7472;
 
 /// Frame rows a light-tracing work item takes.
 const LIGHT_ROWS: u32 = 8;
+/// Splats a work item holds before adding them to the pass's sums (24
+/// bytes each).
+const MAX_HELD_SPLATS: usize = 1 << 16;
 
 /// The light-tracing half of a pass of the bidirectional path tracer: one
 /// light subpath per pixel and sample of the whole frame (samples
@@ -746,33 +749,40 @@ pub fn trace_light_pass(
             let mut stats = RayStats::default();
             let mut splats: Vec<(usize, Vec3, f32)> = Vec::new();
             let mut weights: Vec<(u32, u32, f32)> = Vec::new();
-            let mut splat = |pos: Vec2, l: Vec3| {
-                let l = super::clamp_sample(l, settings.max_component);
-                film_weights(settings.filter, pos, (w, h), &mut weights);
-                let total: f32 = weights.iter().map(|&(.., wt)| wt).sum();
-                if total <= 0.0 || !l.is_finite() {
-                    return;
-                }
-                for &(px, py, wt) in &weights {
-                    if px >= rect.x0 && px < rect.x1 && py >= rect.y0 && py < rect.y1 {
-                        let k = (py - rect.y0) as usize * rect.width() as usize + (px - rect.x0) as usize;
-                        splats.push((k, l, wt / total));
-                    }
+            let flush = |splats: &mut Vec<(usize, Vec3, f32)>| {
+                let mut light = light.lock().unwrap_or_else(|e| e.into_inner());
+                for (k, l, wt) in splats.drain(..) {
+                    light[k].add(l, wt);
                 }
             };
             for y in item * LIGHT_ROWS..((item + 1) * LIGHT_ROWS).min(h) {
                 for x in 0..w {
+                    let mut splat = |pos: Vec2, l: Vec3| {
+                        let l = super::clamp_sample(l, settings.max_component);
+                        film_weights(settings.filter, pos, (w, h), &mut weights);
+                        let total: f32 = weights.iter().map(|&(.., wt)| wt).sum();
+                        if total <= 0.0 || !l.is_finite() {
+                            return;
+                        }
+                        for &(px, py, wt) in &weights {
+                            if px >= rect.x0 && px < rect.x1 && py >= rect.y0 && py < rect.y1 {
+                                let k = (py - rect.y0) as usize * rect.width() as usize + (px - rect.x0) as usize;
+                                splats.push((k, l, wt / total));
+                            }
+                        }
+                    };
                     for s in samples.clone() {
                         let seed = settings.seed ^ LIGHT_TRACING_SEED;
                         let mut sampler = super::camera_sampler(settings.sampler, seed, x, y, w, spp, s);
                         est.trace_light(scene, &mut sampler, &mut stats, &mut splat);
                     }
+                    // Bounded memory for wide frames and many samples a pass.
+                    if splats.len() >= MAX_HELD_SPLATS {
+                        flush(&mut splats);
+                    }
                 }
             }
-            let mut light = light.lock().unwrap_or_else(|e| e.into_inner());
-            for (k, l, wt) in splats {
-                light[k].add(l, wt);
-            }
+            flush(&mut splats);
             Some(stats)
         })
         .collect();
