@@ -3,7 +3,9 @@
 //! lenient, so that unsupported features are skipped rather than ending the
 //! run early), the film's crop at a few sizes, into a built scene (BVH
 //! included), and a few camera rays into that: hits, shadow tests, BSDFs,
-//! and in scenes with participating media a short path through them.
+//! and a short path of each: through participating media in scenes with
+//! them, else the bidirectional path tracer's (with a particle traced to
+//! the camera).
 //!
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
@@ -18,6 +20,7 @@ mod common;
 
 use libfuzzer_sys::fuzz_target;
 use raytracer::scene::mesh::FileSource;
+use raytracer::integrator::bdpt::Bdpt;
 use raytracer::integrator::path::PathTracer;
 use raytracer::integrator::{LightSampling, RadianceEstimator, RayStats};
 use raytracer::sampling::Sampler;
@@ -77,13 +80,23 @@ fuzz_target!(|data: &[u8]| {
                 let _ = scene.occluded(&ray, 0.0, hit.t);
                 let _ = scene.material(hit.material).bsdf(&scene.surface(&hit), -ray.d);
             }
+            let mut sampler = Sampler::new(true, 1, (x + w * y) as u64, 0);
             if scene.has_media() {
                 let pt = PathTracer {
                     max_depth: Some(6),
                     light_sampling: LightSampling::Mis,
                 };
-                let mut sampler = Sampler::new(true, 1, (x + w * y) as u64, 0);
                 let _ = pt.li(&scene, &ray, &mut sampler, &mut RayStats::default());
+            } else {
+                let bdpt = Bdpt {
+                    max_depth: Some(4),
+                    light_tracing: c.is_pinhole(),
+                };
+                let mut stats = RayStats::default();
+                let _ = bdpt.li(&scene, &ray, &mut sampler, &mut stats);
+                if bdpt.light_tracing {
+                    bdpt.trace_light(&scene, &mut sampler, &mut stats, &mut |_, _| {});
+                }
             }
         }
     }

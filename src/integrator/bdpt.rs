@@ -662,7 +662,7 @@ impl Bdpt {
 
     /// One sample's light tracing: a light subpath of its own, each vertex
     /// joined to the camera, handed to `splat` as film position and light.
-    fn trace_light(
+    pub fn trace_light(
         &self,
         scene: &Scene,
         sampler: &mut Sampler,
