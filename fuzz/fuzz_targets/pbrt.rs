@@ -19,11 +19,11 @@
 mod common;
 
 use libfuzzer_sys::fuzz_target;
-use raytracer::scene::mesh::FileSource;
 use raytracer::integrator::bdpt::Bdpt;
 use raytracer::integrator::path::PathTracer;
 use raytracer::integrator::{LightSampling, RadianceEstimator, RayStats};
 use raytracer::sampling::Sampler;
+use raytracer::scene::mesh::FileSource;
 use raytracer::scene::pbrt::{convert::convert, parse_bytes};
 use raytracer::scene::Scene;
 use std::io::{Error, ErrorKind};
