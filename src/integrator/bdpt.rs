@@ -856,6 +856,14 @@ mod tests {
         }
     }
 
+    /// `cornell-specular` (a mirror block, a glass ball) at `w` x `h`.
+    fn cornell_specular(w: u32, h: u32) -> Scene {
+        let mut d = crate::scene::builtin::cornell_specular();
+        d.camera.width = w;
+        d.camera.height = h;
+        Scene::build(d).unwrap()
+    }
+
     fn bits(f: &crate::Film) -> Vec<u32> {
         f.pixels.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect()
     }
@@ -902,10 +910,7 @@ mod tests {
         // cornell-specular: a mirror block and a glass sphere; the path tracer
         // is the reference (`assert_agrees`: both renders' noise); measured
         // with four times the samples each, every block within 1%.
-        let mut d = crate::scene::builtin::cornell_specular();
-        d.camera.width = 24;
-        d.camera.height = 24;
-        let scene = Scene::build(d).unwrap();
+        let scene = cornell_specular(24, 24);
         for depth in [Some(1), Some(3), None] {
             let path = render(&scene, &path_settings(4096, depth), &|| {}).unwrap().film;
             let bd = render(&scene, &bdpt(1024, depth), &|| {}).unwrap().film;
@@ -1036,10 +1041,7 @@ mod tests {
 
     #[test]
     fn images_are_the_same_for_any_thread_count_crop_and_interruption() {
-        let mut d = crate::scene::builtin::cornell_specular();
-        d.camera.width = 24;
-        d.camera.height = 16;
-        let scene = Scene::build(d).unwrap();
+        let scene = cornell_specular(24, 16);
         let one = RenderSettings {
             threads: Some(1),
             ..bdpt(8, Some(4))
