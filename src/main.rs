@@ -362,6 +362,9 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         scene.desc.spheres.len(),
         scene.desc.disks.len()
     );
+    if !scene.desc.curves.is_empty() {
+        println!("curve pieces: {}", scene.desc.curves.len());
+    }
     // Triangles, spheres and disks among sets of shapes.
     let count = |sets: &mut dyn Iterator<Item = &raytracer::scene::CutShapes>| {
         use raytracer::scene::CutShapes;

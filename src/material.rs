@@ -7,7 +7,7 @@
 //! towards the side it is seen from. A dielectric's frame keeps the surface's
 //! outward normal, because which side is inside decides its relative index.
 
-use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, TrowbridgeReitz};
+use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, TrowbridgeReitz};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
 use crate::texture::{Footprint, TexCoord, TexImage, Texture, WrapMode};
@@ -176,6 +176,18 @@ pub enum Material {
     DiffuseTransmission {
         reflectance: Texture,
         transmittance: Texture,
+    },
+    /// A hair fibre (pbrt-v4 `hair`, `bsdf::HairBxdf`), meant for curves:
+    /// the offset across the fibre is the surface's v (h = 2v - 1).
+    /// `sigma_a` is its absorption per unit of the fibre's diameter (from
+    /// pbrt-v4's `sigma_a`, `reflectance` or melanin concentrations, as the
+    /// file gave it).
+    Hair {
+        sigma_a: Vec3,
+        eta: f32,
+        beta_m: f32,
+        beta_n: f32,
+        alpha: f32,
     },
     /// One of two materials at each shading point, the second with
     /// probability `amount` (a float texture), as pbrt-v4's `mix`: the choice
@@ -389,7 +401,10 @@ impl Material {
         let fresnel = |f: &ConductorFresnel| matches!(f, ConductorFresnel::Reflectance(r) if r.has_image());
         match self {
             Material::Diffuse { reflectance } => reflectance.has_image(),
-            Material::Emissive { .. } | Material::ThinDielectric { .. } | Material::Interface => false,
+            Material::Emissive { .. }
+            | Material::ThinDielectric { .. }
+            | Material::Interface
+            | Material::Hair { .. } => false,
             Material::Conductor { fresnel: f, roughness } => fresnel(f) || roughness.has_image(),
             Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => roughness.has_image(),
             Material::CoatedDiffuse {
@@ -504,6 +519,21 @@ impl Material {
                 reflectance,
                 transmittance,
             } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
+            Material::Hair {
+                sigma_a,
+                eta,
+                beta_m,
+                beta_n,
+                alpha,
+            } => {
+                // The fibre's frame: x along it, z facing `wo` across it
+                // (the geometric normal: the hair's lobes leave on every
+                // side, and only the turn about x between wo and wi counts).
+                let h = -1.0 + 2.0 * sp.uv.y;
+                let bxdf = Bxdf::Hair(HairBxdf::new(h, *eta, *sigma_a, *beta_m, *beta_n, *alpha));
+                let ng = if sp.ng.dot(wo) < 0.0 { -sp.ng } else { sp.ng };
+                return Bsdf::new(bxdf, ng, sp.dpdu);
+            }
             // Resolved above; a black surface if not.
             Material::Mix { .. } | Material::Bumped { .. } | Material::NormalMapped { .. } => Bxdf::diffuse(Vec3::ZERO),
             // No lobes: integrators that do not pass through it see black.

@@ -127,6 +127,17 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
             }
         }
     }
+    // Curves came later still.
+    if !desc.curves.is_empty() {
+        h.bytes(b"curves");
+        h.u32(desc.curves.len() as u32);
+        for c in &desc.curves {
+            c.curve.cp.iter().for_each(|&p| h.vec3(p));
+            c.curve.u.iter().chain(&c.curve.width).for_each(|&v| h.f32(v));
+            h.u32(c.curve.kind as u32);
+            h.u32(c.material);
+        }
+    }
     h.u32(desc.lights.len() as u32);
     for l in &desc.lights {
         match *l {

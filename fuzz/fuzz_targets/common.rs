@@ -55,6 +55,7 @@ pub fn place_and_build(mesh: &Mesh) {
         triangles: vec![],
         spheres: vec![],
         disks: vec![],
+        curves: vec![],
         lights: vec![],
         cutouts: vec![],
         media: vec![],

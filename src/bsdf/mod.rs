@@ -15,6 +15,7 @@
 //! | [`DispersiveBxdf`] | `dispersive` | a dielectric per colour channel, one-sample MIS over the channels |
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`CoatedConductorBxdf`] | `layered` | pbrt-v4's `LayeredBxDF` random walk (Guo et al. 2018) for `f`; a deterministic mixture for sampling |
+//! | [`HairBxdf`] | `hair` | pbrt-v4 9.9 (Chiang et al. 2016) |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
 //! | Fresnel terms | `fresnel` | pbrt-v4 9.3-9.4 |
 //! | named metals | `metals` | pbrt-v4's `metal-*-eta/k` spectra, fitted to RGB |
@@ -36,6 +37,7 @@ mod diffuse;
 mod dispersive;
 mod frame;
 mod fresnel;
+mod hair;
 mod layered;
 mod metals;
 mod microfacet;
@@ -52,6 +54,7 @@ pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
 pub use dispersive::DispersiveBxdf;
 pub use frame::Frame;
 pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, reflect, refract};
+pub use hair::HairBxdf;
 pub use layered::CoatedConductorBxdf;
 pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
 pub use microfacet::TrowbridgeReitz;
@@ -237,6 +240,7 @@ pub enum Bxdf {
     ThinDielectric(ThinDielectricBxdf),
     CoatedDiffuse(CoatedDiffuseBxdf),
     CoatedConductor(CoatedConductorBxdf),
+    Hair(HairBxdf),
 }
 
 impl Bxdf {
@@ -307,6 +311,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
+            Bxdf::Hair(b) => b.f(wo, wi),
         }
     }
 
@@ -328,6 +333,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
+            Bxdf::Hair(b) => b.sample_f(wo, uc, u),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }
@@ -345,6 +351,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(_) => 0.0,
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
+            Bxdf::Hair(b) => b.pdf(wo, wi),
         }
     }
 
@@ -358,6 +365,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.flags(),
             Bxdf::CoatedDiffuse(b) => b.flags(),
             Bxdf::CoatedConductor(b) => b.flags(),
+            Bxdf::Hair(b) => b.flags(),
         }
     }
 }

@@ -1,13 +1,15 @@
-//! Shapes and the acceleration structures: triangles, spheres, disks, the
-//! triangle BVH and the BVH over the analytic shapes' boxes.
+//! Shapes and the acceleration structures: triangles, spheres, disks,
+//! curves, the triangle BVH and the BVH over the other shapes' boxes.
 
 pub mod bvh;
+pub mod curve;
 pub mod disk;
 pub mod sphere;
 pub mod subdivision;
 pub mod triangle;
 
 pub use bvh::{BoxBvh, Bvh, BvhStats};
+pub use curve::{Curve, CurveKind};
 pub use disk::Disk;
 pub use sphere::Sphere;
 pub use triangle::{Triangle, TriangleTest};

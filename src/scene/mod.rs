@@ -12,8 +12,9 @@ use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
 use crate::camera::{Differentials, PixelFootprint};
 use crate::error::{Error, Result};
+use crate::geometry::curve::CurveHit;
 use crate::geometry::triangle::TriHit;
-use crate::geometry::{BoxBvh, Bvh, Disk, Sphere, Triangle};
+use crate::geometry::{BoxBvh, Bvh, Curve, Disk, Sphere, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::material::{ShadingGeometry, SurfacePoint};
@@ -341,6 +342,14 @@ impl DiskDesc {
     }
 }
 
+/// A piece of a thin curve (`geometry::Curve`, world space) and its
+/// material. Curves emit no light and bound no media.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurveDesc {
+    pub curve: Curve,
+    pub material: u32,
+}
+
 /// Everything needed to build a scene, before any acceleration structure.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDesc {
@@ -350,6 +359,7 @@ pub struct SceneDesc {
     pub triangles: Vec<TriangleDesc>,
     pub spheres: Vec<SphereDesc>,
     pub disks: Vec<DiskDesc>,
+    pub curves: Vec<CurveDesc>,
     pub lights: Vec<Light>,
     /// Shapes cut out by alpha textures.
     pub cutouts: Vec<Cutout>,
@@ -377,6 +387,7 @@ impl SceneDesc {
             triangles: vec![],
             spheres: vec![],
             disks: vec![],
+            curves: vec![],
             lights: vec![],
             cutouts: vec![],
             media: vec![],
@@ -426,6 +437,7 @@ pub enum PrimKind {
     Triangle,
     Sphere,
     Disk,
+    Curve,
     Light,
 }
 
@@ -468,7 +480,8 @@ pub struct Hit {
     pub material: u32,
     /// Object id: the triangle's index in the description; triangle count +
     /// sphere index for spheres; triangle count + sphere count + disk index
-    /// for disks; for lights, triangle + sphere + disk count + light index.
+    /// for disks; for lights, triangle + sphere + disk count + light index;
+    /// for curves, triangle + sphere + disk + light count + curve index.
     pub object: u32,
     pub kind: PrimKind,
     /// Index into `Scene::lights` when the hit is on an emitter.
@@ -753,8 +766,9 @@ pub struct Scene {
     /// Spheres: the description's, then the lights'.
     spheres: Vec<SphereObject>,
     disks: Vec<DiskObject>,
-    /// The BVH over spheres and disks: id i < spheres.len() is sphere i,
-    /// the rest are disks.
+    curves: Vec<CurveDesc>,
+    /// The BVH over spheres, disks and curves: id i < spheres.len() is
+    /// sphere i, then come the disks, then the curves.
     shapes: BoxBvh,
     /// The cut-outs' alpha textures.
     alphas: Vec<Texture>,
@@ -929,7 +943,21 @@ impl Scene {
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
-        let shapes = shape_bvh(&spheres, &disks)?;
+        let curves = desc.curves.clone();
+        for (i, c) in curves.iter().enumerate() {
+            if c.material >= nmat {
+                return Err(Error::Scene(format!(
+                    "curve {i} names material {} of {nmat}",
+                    c.material
+                )));
+            }
+            if !c.curve.is_valid() {
+                return Err(Error::Scene(format!(
+                    "curve {i}: its control points must be finite and its widths finite and > 0"
+                )));
+            }
+        }
+        let shapes = shape_bvh(&spheres, &disks, &curves)?;
         let (media, object_interfaces, interfaces) = media_tables(&desc, lights.len())?;
         let footprint = camera.pixel_footprint(desc.texture_spp);
         let mut scene = Scene {
@@ -949,6 +977,7 @@ impl Scene {
             dpdus: vec![],
             spheres,
             disks,
+            curves,
             shapes,
             alphas,
             media,
@@ -1122,6 +1151,9 @@ impl Scene {
             });
         }
         let j = idx - self.spheres.len();
+        if j >= self.disks.len() {
+            return Some(self.curve_hit(j - self.disks.len(), ray, t_min, best_t));
+        }
         let d = &self.disks[j];
         let p = p - d.disk.normal * (p - d.disk.centre).dot(d.disk.normal);
         let (uv, dpdu) = d.disk.uv_dpdu(p);
@@ -1146,7 +1178,38 @@ impl Scene {
         })
     }
 
-    /// Shape `id` of `shapes` (a sphere, then a disk): its hit in (t_min,
+    /// The hit record of curve `k`, met by `ray` at `t` (its intersection
+    /// again, now with what shading needs).
+    #[inline(never)]
+    fn curve_hit(&self, k: usize, ray: &Ray, t_min: f32, t: f32) -> Hit {
+        let c = &self.curves[k];
+        let h = c.curve.intersect(ray, t_min, t).unwrap_or(CurveHit {
+            t,
+            u: c.curve.u[0],
+            v: 0.5,
+            dpdu: c.curve.cp[3] - c.curve.cp[0],
+            ng: -ray.d.normalize(),
+            ns: -ray.d.normalize(),
+        });
+        Hit {
+            t: h.t,
+            p: ray.at(h.t),
+            ng: h.ng,
+            ns: h.ns,
+            uv: Vec2::new(h.u, h.v),
+            dpdu: h.dpdu,
+            material: c.material,
+            object: (self.desc.triangles.len()
+                + self.desc.spheres.len()
+                + self.desc.disks.len()
+                + self.lights.len()
+                + k) as u32,
+            kind: PrimKind::Curve,
+            light: None,
+        }
+    }
+
+    /// Shape `id` of `shapes` (a sphere, a disk, then a curve): its hit in (t_min,
     /// t_max), passing through where it is cut out if `CUT` (when the scene
     /// has cut-outs: without, the test is the plain one it always was).
     #[inline(always)]
@@ -1160,7 +1223,10 @@ impl Scene {
                 }
             }
             None => {
-                let d = &self.disks[id as usize - self.spheres.len()];
+                let j = id as usize - self.spheres.len();
+                let Some(d) = self.disks.get(j) else {
+                    return Some(self.curves[j - self.disks.len()].curve.intersect(ray, t_min, t_max)?.t);
+                };
                 let t = d.disk.intersect(ray, t_min, t_max)?;
                 match d.alpha {
                     None => Some(t),
@@ -1238,7 +1304,7 @@ impl Scene {
     fn shape_light(&self, id: u32) -> Option<u32> {
         match self.spheres.get(id as usize) {
             Some(s) => s.light,
-            None => self.disks[id as usize - self.spheres.len()].light,
+            None => self.disks.get(id as usize - self.spheres.len()).and_then(|d| d.light),
         }
     }
 
@@ -1382,7 +1448,7 @@ impl Scene {
                 };
                 Some((g, [hit.dpdu, dpdv]))
             }
-            PrimKind::Light => None,
+            PrimKind::Curve | PrimKind::Light => None,
         }
     }
 
@@ -1580,7 +1646,7 @@ impl Scene {
             }
         }
         // The count is unchanged, so this cannot fail.
-        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks) {
+        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.curves) {
             self.shapes = shapes;
         }
     }
@@ -1598,6 +1664,9 @@ impl Scene {
         for d in &self.disks {
             b = b.union(&d.disk.bounds());
         }
+        for c in &self.curves {
+            b = b.union(&c.curve.bounds());
+        }
         for l in self.lights.iter().filter(|l| !l.is_infinite()) {
             b.grow(l.position());
         }
@@ -1605,16 +1674,18 @@ impl Scene {
     }
 }
 
-/// The BVH over the spheres' and the disks' boxes (ids: spheres, then disks).
-fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject]) -> Result<BoxBvh> {
+/// The BVH over the spheres', the disks' and the curves' boxes (ids:
+/// spheres, then disks, then curves).
+fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject], curves: &[CurveDesc]) -> Result<BoxBvh> {
     let boxes: Vec<crate::math::Aabb> = spheres
         .iter()
         .map(|s| s.sphere.bounds())
         .chain(disks.iter().map(|d| d.disk.bounds()))
+        .chain(curves.iter().map(|c| c.curve.bounds()))
         .collect();
     if boxes.len() > BoxBvh::MAX_BOXES {
         return Err(Error::Scene(format!(
-            "{} spheres and disks; the BVH holds at most {}",
+            "{} spheres, disks and curve pieces; the BVH holds at most {}",
             boxes.len(),
             BoxBvh::MAX_BOXES
         )));

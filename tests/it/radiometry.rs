@@ -35,6 +35,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         triangles: vec![],
         spheres: vec![],
         disks: vec![],
+        curves: vec![],
         lights: vec![light],
         cutouts: vec![],
         media: vec![],

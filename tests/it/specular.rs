@@ -46,6 +46,7 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
         triangles: vec![],
         spheres: vec![],
         disks: vec![],
+        curves: vec![],
         lights: vec![Light::Point {
             position: Vec3::new(1.5, 0.0, 2.0),
             power: Vec3::splat(power),
@@ -109,6 +110,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
         triangles: vec![],
         spheres: vec![],
         disks: vec![],
+        curves: vec![],
         lights: vec![Light::Sphere {
             sphere: raytracer::geometry::Sphere {
                 centre: Vec3::new(3.0, 0.0, 2.0),

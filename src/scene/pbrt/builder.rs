@@ -1244,6 +1244,10 @@ impl<'a> Builder<'a> {
             }
             "sphere" => Geometry::Sphere(shapes::sphere(&params, &t.loc, &mut found)?),
             "disk" => Geometry::Disk(shapes::disk(&params, &mut found)?),
+            "curve" => match shapes::curves(&params, &t.loc, &mut found)? {
+                Some(c) => Geometry::Curves(c),
+                None => Geometry::Other,
+            },
             _ if shapes::SHAPE_TYPES.contains(&ty.as_str()) => {
                 found.unsupported.push(format!("shape \"{ty}\" is not supported"));
                 Geometry::Other

@@ -40,18 +40,20 @@ use super::error::{Loc, PbrtError};
 use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
+use crate::bsdf::HairBxdf;
 use crate::error::{Error, Result};
-use crate::geometry::Sphere;
+use crate::geometry::curve::bezier_part;
+use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::medium::{Medium, MediumInterface};
 use crate::scene::mesh::MeshReport;
-use crate::scene::DiskDesc;
 use crate::scene::FilmCrop;
 use crate::scene::{
     Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
 };
+use crate::scene::{CurveDesc, DiskDesc};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -1559,6 +1561,49 @@ impl<'a> Conv<'a> {
                         desc.disks.push(disk);
                     }
                 }
+                Geometry::Curves(c) => {
+                    let Some((_, scale)) = similarity(m) else {
+                        self.problem(
+                            Kind::Shape,
+                            &shape.loc,
+                            "a curve under a transformation other than rotation, uniform scale and translation is not supported",
+                        );
+                        self.skip_shape(shape);
+                        continue;
+                    };
+                    if emission.is_some() {
+                        // pbrt-v4 cannot sample points on curves either.
+                        self.problem(Kind::Light, &shape.loc, "an area light on a curve is not supported");
+                        self.skipped_lights += 1;
+                        continue;
+                    }
+                    if alpha.is_some() || interface.is_some() {
+                        self.problem(
+                            Kind::Shape,
+                            &shape.loc,
+                            "a curve cut out by \"alpha\" or bounding a medium is not supported",
+                        );
+                        self.skip_shape(shape);
+                        continue;
+                    }
+                    let material = self.surface_material(desc, shape.material, no_surface)?;
+                    let pieces = 1u32 << c.split_depth;
+                    for (seg, w) in c.segments.iter().zip(&c.widths) {
+                        let world = seg.map(|q| m.transform_point3(q));
+                        for i in 0..pieces {
+                            let u = [i as f32 / pieces as f32, (i + 1) as f32 / pieces as f32];
+                            desc.curves.push(CurveDesc {
+                                curve: Curve {
+                                    cp: bezier_part(&world, u[0], u[1]),
+                                    u,
+                                    width: [w[0] * scale, w[1] * scale],
+                                    kind: c.kind,
+                                },
+                                material,
+                            });
+                        }
+                    }
+                }
                 _ => unreachable!("skipped above"),
             }
             self.read.push(p);
@@ -1951,8 +1996,79 @@ fn convert_surface(
                 transmittance,
             }))
         }
+        "hair" => hair(p),
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
     }
+}
+
+/// pbrt-v4's `hair` material (`HairMaterial::Create`): its absorption from
+/// `sigma_a`, else `reflectance` (or `color`), else the melanin
+/// concentrations, else brown hair (eumelanin 1.3); `eta` 1.55, `beta_m`
+/// and `beta_n` 0.3 (kept within [0.01, 1]), `alpha` 2 degrees. Constant
+/// values only.
+fn hair(p: &Params) -> Result<std::result::Result<Material, String>> {
+    for name in [
+        "sigma_a",
+        "reflectance",
+        "color",
+        "eumelanin",
+        "pheomelanin",
+        "eta",
+        "beta_m",
+        "beta_n",
+        "alpha",
+    ] {
+        if p.get_texture(name)?.is_some() {
+            return Ok(Err(format!("hair: a textured \"{name}\" is not supported")));
+        }
+    }
+    let beta_m = p.get_float("beta_m", 0.3)?.clamp(0.01, 1.0);
+    let beta_n = p.get_float("beta_n", 0.3)?.clamp(0.01, 1.0);
+    let eta = p.get_float("eta", 1.55)?;
+    let alpha = p.get_float("alpha", 2.0)?;
+    let rgb = |name: &str| -> Result<Option<std::result::Result<Vec3, String>>> {
+        Ok(p.get_spectrum(name)?.map(|v| {
+            reflectance_rgb(&v).ok_or_else(|| format!("hair: \"{name}\" given as this spectrum is not supported"))
+        }))
+    };
+    let (ce, cp) = (p.has("eumelanin"), p.has("pheomelanin"));
+    let sigma_a = if let Some(s) = rgb("sigma_a")? {
+        match s {
+            Ok(s) => s.max(Vec3::ZERO),
+            Err(why) => return Ok(Err(why)),
+        }
+    } else if let Some(c) = match rgb("reflectance")? {
+        None => rgb("color")?,
+        some => some,
+    } {
+        match c {
+            Ok(c) => HairBxdf::sigma_a_from_reflectance(c.clamp(Vec3::ZERO, Vec3::ONE), beta_n),
+            Err(why) => return Ok(Err(why)),
+        }
+    } else if ce || cp {
+        HairBxdf::sigma_a_from_concentration(
+            p.get_float("eumelanin", 0.0)?.max(0.0),
+            p.get_float("pheomelanin", 0.0)?.max(0.0),
+        )
+    } else {
+        HairBxdf::sigma_a_from_concentration(1.3, 0.0)
+    };
+    if !(eta.is_finite()
+        && eta > 0.0
+        && alpha.is_finite()
+        && sigma_a.is_finite()
+        && beta_m.is_finite()
+        && beta_n.is_finite())
+    {
+        return Ok(Err("hair: its parameters must be finite and \"eta\" > 0".into()));
+    }
+    Ok(Ok(Material::Hair {
+        sigma_a,
+        eta,
+        beta_m,
+        beta_n,
+        alpha,
+    }))
 }
 
 trait OrDefaultTexture {
@@ -2490,6 +2606,9 @@ fn reflect(desc: &mut SceneDesc) {
         d.centre = point(d.centre);
         d.normal = vector(d.normal);
         d.axes = d.axes.map(|a| a.map(vector));
+    }
+    for c in &mut desc.curves {
+        c.curve.cp = c.curve.cp.map(point);
     }
     for l in &mut desc.lights {
         match l {

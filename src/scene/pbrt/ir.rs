@@ -186,6 +186,17 @@ impl Sphere {
     }
 }
 
+/// A `curve` shape's cubic Bezier segments in object space (B-splines and
+/// quadratics turned into them, as pbrt-v4 does), each with its widths at
+/// its ends, split into 2^`split_depth` pieces when placed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curves {
+    pub segments: Vec<[Vec3; 4]>,
+    pub widths: Vec<[f32; 2]>,
+    pub kind: crate::geometry::CurveKind,
+    pub split_depth: u32,
+}
+
 /// A disk in the z = height plane, pbrt-v4's defaults: height 0, radius 1,
 /// innerradius 0, phimax 360 degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -209,8 +220,9 @@ pub enum Geometry {
     Mesh(Arc<TriMesh>),
     Sphere(Sphere),
     Disk(Disk),
-    /// A shape type the reader does not decode (`cylinder`, `curve`,
-    /// `loopsubdiv`, or not a pbrt-v4 type); listed in `PbrtScene::unsupported`.
+    Curves(Curves),
+    /// A shape type the reader does not decode (`cylinder`, a `ribbon`
+    /// curve, or not a pbrt-v4 type); listed in `PbrtScene::unsupported`.
     Other,
 }
 

@@ -1,11 +1,14 @@
 //! The shapes the reader decodes from their parameters (pbrt-v4 shapes.cpp):
-//! `trianglemesh`, `bilinearmesh`, `loopsubdiv`, `sphere`, `disk`; `plymesh` files are read
+//! `trianglemesh`, `bilinearmesh`, `loopsubdiv`, `sphere`, `disk`, `curve`; `plymesh` files are read
 //! by the builder (it owns file access) through [`super::ply`].
 
 use super::error::{Loc, PbrtError, Result};
-use super::ir::{Disk, Sphere, TriMesh};
+use super::ir::{Curves, Disk, Sphere, TriMesh};
 use super::params::Params;
+use crate::geometry::curve::{bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier};
 use crate::geometry::subdivision::loop_subdivide;
+use crate::geometry::CurveKind;
+use crate::math::Vec3;
 
 /// What decoding a shape found worth telling, besides errors.
 #[derive(Default)]
@@ -183,6 +186,114 @@ pub fn disk(params: &Params, found: &mut Findings) -> Result<Disk> {
             .push(format!("a partial disk (phimax {}) is not supported", d.phimax_deg));
     }
     Ok(d)
+}
+
+/// A `curve` (pbrt-v4's `Curve::Create`): its control points `P` as
+/// cubic Bezier segments, with `basis` "bezier" or "bspline", `degree` 2 or
+/// 3, `type` "flat" or "cylinder" ("ribbon" is unsupported: `None`),
+/// `width` (or `width0` and `width1`) and `splitdepth`.
+pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option<Curves>> {
+    let err = |m: String| Err(PbrtError::at(loc, format!("curve: {m}")));
+    let width = params.get_float("width", 1.0)?;
+    let width0 = params.get_float("width0", width)?;
+    let width1 = params.get_float("width1", width)?;
+    let degree = params.get_int("degree", 3)?;
+    if degree != 2 && degree != 3 {
+        return err(format!("degree {degree}: only 2 and 3 are supported"));
+    }
+    let degree = degree as usize;
+    let basis = params.get_string_or("basis", "bezier")?;
+    let kind = match params.get_string_or("type", "flat")?.as_str() {
+        "flat" => CurveKind::Flat,
+        "cylinder" => CurveKind::Cylinder,
+        "ribbon" => {
+            params.mark_used("N", super::params::ParamType::Normal);
+            found
+                .unsupported
+                .push("curve: \"ribbon\" curves (oriented by normals) are not supported".into());
+            return Ok(None);
+        }
+        other => {
+            // pbrt-v4 warns and takes a cylinder.
+            found
+                .warnings
+                .push(format!("curve: unknown type \"{other}\"; a cylinder is used"));
+            CurveKind::Cylinder
+        }
+    };
+    let split_depth = params.get_int("splitdepth", 3)?;
+    if !(0..=10).contains(&split_depth) {
+        return err(format!("splitdepth {split_depth} must be in [0, 10]"));
+    }
+    if !(width0 > 0.0 && width1 > 0.0 && width0.is_finite() && width1.is_finite()) {
+        return err(format!("widths {width0} and {width1} must be finite and > 0"));
+    }
+    let cp = params.get_point3s("P");
+    if let Some(bad) = cp.iter().find(|p| !p.is_finite()) {
+        return err(format!("control point {bad} is not finite"));
+    }
+    let segments: Vec<[Vec3; 4]> = match basis.as_str() {
+        "bezier" => {
+            if cp.len() < degree + 1 || !(cp.len() - 1 - degree).is_multiple_of(degree) {
+                return err(format!(
+                    "{} control points: a degree {degree} Bezier curve needs {} + n x {degree}",
+                    cp.len(),
+                    degree + 1
+                ));
+            }
+            (0..(cp.len() - 1) / degree)
+                .map(|i| {
+                    let p = &cp[i * degree..];
+                    if degree == 2 {
+                        elevate_quadratic(&[p[0], p[1], p[2]])
+                    } else {
+                        [p[0], p[1], p[2], p[3]]
+                    }
+                })
+                .collect()
+        }
+        "bspline" => {
+            if cp.len() < degree + 1 {
+                return err(format!(
+                    "{} control points: a degree {degree} B-spline needs at least {}",
+                    cp.len(),
+                    degree + 1
+                ));
+            }
+            (0..cp.len() - degree)
+                .map(|i| {
+                    let p = &cp[i..];
+                    if degree == 2 {
+                        elevate_quadratic(&quadratic_bspline_to_bezier(&[p[0], p[1], p[2]]))
+                    } else {
+                        bspline_to_bezier(&[p[0], p[1], p[2], p[3]])
+                    }
+                })
+                .collect()
+        }
+        other => {
+            return err(format!(
+                "basis \"{other}\": only \"bezier\" and \"bspline\" are supported"
+            ))
+        }
+    };
+    let n = segments.len() as f32;
+    let lerp = |t: f32| (1.0 - t) * width0 + t * width1;
+    let widths = (0..segments.len())
+        .map(|i| [lerp(i as f32 / n), lerp((i + 1) as f32 / n)])
+        .collect();
+    if params.has("N") {
+        params.mark_used("N", super::params::ParamType::Normal);
+        found
+            .warnings
+            .push("curve: normals \"N\" are only used by \"ribbon\" curves".into());
+    }
+    Ok(Some(Curves {
+        segments,
+        widths,
+        kind,
+        split_depth: split_depth as u32,
+    }))
 }
 
 /// pbrt-v4's shape types.
