@@ -1,6 +1,6 @@
 //! pbrt-v4 scenes through the binary: Bitterli's cornell box against its
 //! reference image (framing, orientation, brightness), and a scene with
-//! a material the renderer lacks (pbrt-v4's hair), refused with
+//! a material the renderer lacks (pbrt-v4's measured BSDFs), refused with
 //! one line naming the place, rendered with `--lenient`; a roughness
 //! texture that does not vary renders as its number does; a thin lens
 //! focuses; a film's crop window renders the pixels `--crop` does.
@@ -158,13 +158,13 @@ fn cornell_box_overlays_its_reference() {
 #[test]
 fn unsupported_materials_are_refused_in_one_line_unless_lenient() {
     let out = tempfile::tempdir().unwrap();
-    let image = out.path().join("hair.exr");
+    let image = out.path().join("measured.exr");
     let scene = out.path().join("scene.pbrt");
     std::fs::write(
         &scene,
         "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n\
          WorldBegin\nLightSource \"point\" \"rgb I\" [10 10 10] \"point3 from\" [0 0 -4]\n\
-         Material \"hair\"\nShape \"sphere\"\n",
+         Material \"measured\" \"string filename\" \"x.bsdf\"\nShape \"sphere\"\n",
     )
     .unwrap();
     let scene = scene.to_str().unwrap();
@@ -178,7 +178,7 @@ fn unsupported_materials_are_refused_in_one_line_unless_lenient() {
     let at = stderr.find("scene.pbrt:").expect("names the file");
     let line = &stderr[at + "scene.pbrt:".len()..];
     assert!(line.starts_with(|c: char| c.is_ascii_digit()), "{stderr}");
-    assert!(stderr.contains("hair") && stderr.contains("--lenient"), "{stderr}");
+    assert!(stderr.contains("measured") && stderr.contains("--lenient"), "{stderr}");
     assert!(run.stdout.is_empty() && !image.exists());
 
     args.push("--lenient");

@@ -2020,6 +2020,16 @@ fn malformed_curves_are_errors_at_their_place_and_ribbons_are_unsupported() {
         .unwrap_err();
         assert!(e.starts_with("scene/main.pbrt:2:1: curve: ") && e.contains(what), "{e}");
     }
+    // 16,400 B-spline spans of 1,024 pieces each: refused before they are made.
+    let points: String = (0..16_403).map(|i| format!("{i} 0 0 ")).collect();
+    let many = format!(
+        "WorldBegin\nShape \"curve\" \"string basis\" \"bspline\" \"integer splitdepth\" 10 \"point3 P\" [{points}]\n"
+    );
+    let e = converted(&many, Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:2: curve: 16400 segments of 1024 pieces") && e.contains("limit of 16777216"),
+        "{e}"
+    );
     let ribbon = "WorldBegin\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
                   \"normal N\" [0 0 1 0 0 1]\n";
     let e = converted(ribbon, Files::default(), false).unwrap_err();
