@@ -1244,6 +1244,7 @@ impl<'a> Builder<'a> {
             }
             "sphere" => Geometry::Sphere(shapes::sphere(&params, &t.loc, &mut found)?),
             "disk" => Geometry::Disk(shapes::disk(&params, &mut found)?),
+            "cylinder" => Geometry::Mesh(Arc::new(shapes::cylinder(&params, &t.loc)?)),
             "curve" => match shapes::curves(&params, &t.loc, &mut found)? {
                 Some(c) => Geometry::Curves(c),
                 None => Geometry::Other,

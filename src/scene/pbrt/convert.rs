@@ -3732,13 +3732,13 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"subsurface\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"cylinder\"\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
+             Shape \"sphere\" \"float phimax\" 90\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
         assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
         assert!(
-            e.contains("dir/main.pbrt:5: shape \"cylinder\"") && e.contains("and 1 more"),
+            e.contains("dir/main.pbrt:5: a partial sphere") && e.contains("and 1 more"),
             "{e}"
         );
         assert!(!e.contains('\n'));

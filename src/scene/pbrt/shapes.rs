@@ -1,5 +1,5 @@
 //! The shapes the reader decodes from their parameters (pbrt-v4 shapes.cpp):
-//! `trianglemesh`, `bilinearmesh`, `loopsubdiv`, `sphere`, `disk`, `curve`; `plymesh` files are read
+//! `trianglemesh`, `bilinearmesh`, `loopsubdiv`, `sphere`, `disk`, `cylinder`, `curve`; `plymesh` files are read
 //! by the builder (it owns file access) through [`super::ply`].
 
 use super::error::{Loc, PbrtError, Result};
@@ -186,6 +186,54 @@ pub fn disk(params: &Params, found: &mut Findings) -> Result<Disk> {
             .push(format!("a partial disk (phimax {}) is not supported", d.phimax_deg));
     }
     Ok(d)
+}
+
+/// Segments a whole turn of a `cylinder` is cut into: its silhouette is
+/// then within 8e-5 of its radius of the true one.
+const CYLINDER_SEGMENTS: f32 = 256.0;
+
+/// A `cylinder` (pbrt-v4's: `radius` 1, `zmin` -1, `zmax` 1, `phimax` 360
+/// degrees; open, about the object's z axis) as a triangle mesh: one row of
+/// quads around it, as many as a 256th of a turn each, with the surface's
+/// own normals at the vertices (outward, pbrt-v4's) and its texture
+/// coordinates, u = phi / phimax and v = (z - zmin) / (zmax - zmin). Exact
+/// along z; around it the mesh is a polygon whose shading follows the
+/// circle.
+pub fn cylinder(params: &Params, loc: &Loc) -> Result<TriMesh> {
+    let radius = params.get_float("radius", 1.0)?;
+    let z0 = params.get_float("zmin", -1.0)?;
+    let z1 = params.get_float("zmax", 1.0)?;
+    let phimax = params.get_float("phimax", 360.0)?.clamp(0.0, 360.0);
+    let (zmin, zmax) = (z0.min(z1), z0.max(z1));
+    if !(radius > 0.0 && radius.is_finite() && zmin.is_finite() && zmax.is_finite() && zmax > zmin && phimax > 0.0) {
+        return Err(PbrtError::at(
+            loc,
+            format!(
+                "cylinder: radius {radius} must be positive and finite, zmin {z0} and zmax {z1} finite and apart, phimax {phimax} > 0"
+            ),
+        ));
+    }
+    let n = (CYLINDER_SEGMENTS * phimax / 360.0).ceil().max(4.0) as u32;
+    let mut mesh = TriMesh::default();
+    let (mut normals, mut uvs) = (vec![], vec![]);
+    for i in 0..=n {
+        let u = i as f32 / n as f32;
+        let phi = (u * phimax).to_radians();
+        let (sin, cos) = phi.sin_cos();
+        for (z, v) in [(zmin, 0.0), (zmax, 1.0)] {
+            mesh.positions.push(Vec3::new(radius * cos, radius * sin, z));
+            normals.push(Vec3::new(cos, sin, 0.0));
+            uvs.push(crate::math::Vec2::new(u, v));
+        }
+    }
+    for i in 0..n {
+        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        mesh.triangles.push([a, c, d]);
+        mesh.triangles.push([a, d, b]);
+    }
+    mesh.normals = Some(normals);
+    mesh.uvs = Some(uvs);
+    Ok(mesh)
 }
 
 /// A `curve` (pbrt-v4's `Curve::Create`): its control points `P` as

@@ -881,7 +881,7 @@ fn meshes_spheres_and_disks_are_decoded() {
          Shape \"sphere\" \"float radius\" 2 \"float zmax\" 1\n\
          Shape \"disk\" \"float radius\" 3 \"float height\" 1\n\
          Shape \"disk\" \"float innerradius\" 0.5\n\
-         Shape \"cylinder\"\n\
+         Shape \"cylinder\" \"float phimax\" 90\n\
          Shape \"teapot\"\n",
     );
     let m = mesh(&s.shapes[0]);
@@ -916,13 +916,32 @@ fn meshes_spheres_and_disks_are_decoded() {
             phimax_deg: 360.0
         })
     );
-    assert_eq!(s.shapes[6].geometry, Geometry::Other);
+    // A quarter cylinder: 64 quads (a 256th of a turn each), its own
+    // normals and (u, v) = (phi / phimax, (z - zmin) / (zmax - zmin)).
+    let c = mesh(&s.shapes[6]);
+    assert_eq!((c.triangles.len(), c.positions.len()), (128, 130));
+    let (p, n, uv) = (
+        c.positions[129],
+        c.normals.as_ref().unwrap()[129],
+        c.uvs.as_ref().unwrap()[129],
+    );
+    assert!(
+        (p - Vec3::new(0.0, 1.0, 1.0)).length() < 1e-6 && (n - Vec3::Y).length() < 1e-6,
+        "{p} {n}"
+    );
+    assert_eq!(uv, Vec2::ONE);
+    for t in &c.triangles {
+        // Wound to face outwards, as the normals do.
+        let q = t.map(|i| c.positions[i as usize]);
+        let centre = (q[0] + q[1] + q[2]) / 3.0;
+        assert!((q[1] - q[0]).cross(q[2] - q[0]).dot(Vec3::new(centre.x, centre.y, 0.0)) > 0.0);
+    }
+    assert_eq!(s.shapes[7].geometry, Geometry::Other);
     let unsupported: Vec<_> = s.unsupported.iter().map(|n| (n.loc.line, n.message.as_str())).collect();
     assert_eq!(
         unsupported,
         [
             (5, "a partial sphere (zmin -2, zmax 1, phimax 360) is not supported"),
-            (8, "shape \"cylinder\" is not supported"),
             (9, "\"teapot\" is not a pbrt-v4 shape type"),
         ]
     );
@@ -940,7 +959,7 @@ fn meshes_spheres_and_disks_are_decoded() {
             ),
         ]
     );
-    assert_eq!(s.triangle_count(), 5);
+    assert_eq!(s.triangle_count(), 5 + 128);
     // A full sphere given its defaults explicitly is not partial.
     let s = parse(
         "WorldBegin\nShape \"sphere\" \"float radius\" 2 \"float zmin\" -2 \"float zmax\" 3 \"float phimax\" 360\n",
@@ -1633,7 +1652,7 @@ fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
 fn a_file_included_twice_lists_each_unsupported_place_once() {
     let files = Files::default().with(
         "scene/s.pbrt",
-        "Shape \"cylinder\"\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
+        "Shape \"sphere\" \"float zmax\" 0.5\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
     );
     // Moving shapes: two problems on each line of s.pbrt.
     let e = converted(
@@ -1643,7 +1662,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
         false,
     )
     .unwrap_err();
-    assert_eq!(e.matches("cylinder").count(), 1, "{e}");
+    assert_eq!(e.matches("a partial sphere").count(), 1, "{e}");
     assert_eq!(e.matches("\"ribbon\" curves").count(), 1, "{e}");
     assert_eq!(e.matches("ActiveTransform").count(), 2, "{e}");
 }
@@ -2094,4 +2113,31 @@ fn hair_that_absorbs_nothing_in_a_white_furnace_is_as_bright_as_the_furnace() {
     // Brown hair absorbs, blue most.
     let l = hair_in_a_furnace("\"float eumelanin\" 1.3", IntegratorKind::Path);
     assert!(l.x < 0.9 && l.x > l.y && l.y > l.z, "{l}");
+}
+
+#[test]
+fn cylinders_are_meshes_where_pbrts_quadric_is() {
+    use crate::math::Ray;
+    // pbrt-v4's cylinder of radius 0.5 about the world's y axis (object z,
+    // turned by the rotation) through (0, 0, 5), the half of it beyond z = 5
+    // (phi from object x to 180 degrees: object y is world z). Ours is
+    // mirrored x -> -x with the rest of the scene.
+    let text = "WorldBegin\nTranslate 0 0 5\nRotate 90 1 0 0\n\
+                Shape \"cylinder\" \"float radius\" 0.5 \"float phimax\" 180\n";
+    let c = converted(text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let scene = crate::Scene::build(c.desc).unwrap();
+    let hit = |x: f32, y: f32| scene.intersect(&Ray::new(Vec3::new(x, y, 0.0), Vec3::Z), 0.0, f32::INFINITY);
+    // Through the open near half to the far one, seen from inside.
+    let h = hit(-0.2, 0.0).unwrap();
+    let z = 5.0 + (0.25f32 - 0.04).sqrt();
+    assert!((h.t - z).abs() < 1e-4, "{h:?}");
+    assert!(h.ng.z > 0.9 && h.ns.dot(h.ng) > 0.99, "outward: {h:?}");
+    // u = phi / 180 degrees (phi = atan2(0.458, 0.2)), v = (z + 1) / 2 with object z = -world y.
+    let u = (z - 5.0).atan2(0.2).to_degrees() / 180.0;
+    assert!(
+        (h.uv.x - u).abs() < 1e-3 && (h.uv.y - 0.5).abs() < 1e-4,
+        "{h:?} against u {u}"
+    );
+    assert!((hit(-0.2, 0.6).unwrap().uv.y - 0.2).abs() < 1e-4);
+    assert!(hit(-0.2, 0.99).is_some() && hit(-0.2, 1.01).is_none() && hit(-0.55, 0.0).is_none());
 }
