@@ -21,19 +21,24 @@
 //!   particles bring it, and is the frame's own bit for bit;
 //! - t = 1 only for a pinhole camera (`Camera::is_pinhole`); with a lens, an
 //!   orthographic or a spherical camera the weights leave it out;
-//! - infinite and distant lights start no light subpath; paths ending on
-//!   them are weighed between s = 0 and s = 1 alone, as the path tracer does;
 //! - Russian roulette on each subpath from the path tracer's depth on, so
 //!   that the file's unlimited depths end (the weights use the densities
 //!   without it: every (s, t) keeps the same weights, which still sum to 1);
 //! - the path tracer's rule for shading normals: a connection is made only
 //!   where both normals at each end let light through that way.
 //!
+//! Infinite and distant lights take part as in pbrt-v4: a particle from
+//! one starts on a disk across the scene's bounding sphere, its first
+//! vertex at infinity, and a camera subpath that leaves the scene ends on a
+//! vertex at infinity standing for every infinite light (`Kind::Infinity`);
+//! so a distant light's caustics, which no camera subpath reaches, are
+//! found by light tracing.
+//!
 //! Emissive materials that are not lights count where a camera subpath
 //! finds them (no other strategy samples them), as in the path tracer.
 //! Scenes with participating media are refused (`check_media`).
 
-use super::direct::{escaped_radiance, power_heuristic, scatters_towards, unoccluded_light_sample};
+use super::direct::{scatters_towards, unoccluded_light_sample};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
 use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
@@ -59,6 +64,12 @@ enum Kind {
     /// A point on light `i`: a light subpath's first vertex, a light sample,
     /// or where a camera subpath hit an emitter.
     Light(usize),
+    /// Light at infinity (pbrt's infinite-light vertices): a light subpath
+    /// leaving infinite or distant light `Some(i)`, a light sample of one,
+    /// or, `None`, where a camera subpath left the scene (every infinite
+    /// light at once). Its `wo` is the direction towards the light; its
+    /// position, far along it, serves only to give directions.
+    Infinity(Option<usize>),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -121,13 +132,31 @@ impl Vertex {
         self.ng != Vec3::ZERO
     }
 
+    fn is_at_infinity(&self) -> bool {
+        matches!(self.kind, Kind::Infinity(_))
+    }
+
     /// A surface vertex whose BSDF has a lobe a connection can use.
     fn is_connectible(&self) -> bool {
         self.kind == Kind::Surface && self.bsdf.is_some_and(|b| b.flags().is_non_specular())
     }
 
-    /// A solid-angle density at this vertex towards `next`, in area measure there.
+    /// A solid-angle density at this vertex towards `next`, in area measure
+    /// there (pbrt's `ConvertDensity`). A vertex at infinity keeps the
+    /// solid-angle density: its "area" is the sphere of directions. From a
+    /// vertex at infinity, `pdf` is an area density across the direction of
+    /// travel (the disk a particle starts on), projected onto `next`.
     fn convert_density(&self, pdf: f32, next: &Vertex) -> f32 {
+        if next.is_at_infinity() {
+            return pdf;
+        }
+        if self.is_at_infinity() {
+            return if next.is_on_surface() {
+                pdf * next.ng.dot(self.wo).abs()
+            } else {
+                pdf
+            };
+        }
         let w = next.p - self.p;
         let d2 = w.length_squared();
         if d2 == 0.0 {
@@ -168,6 +197,7 @@ impl Vertex {
         };
         match self.kind {
             Kind::Light(li) => self.pdf_light(scene, li, next),
+            Kind::Infinity(_) => self.convert_density(disk_density(scene), next),
             Kind::Camera => self.convert_density(scene.camera.pdf_dir(wn), next),
             Kind::Surface => {
                 let (Some(hit), Some(bsdf), Some(prev)) = (&self.hit, &self.bsdf, prev) else {
@@ -193,8 +223,42 @@ impl Vertex {
         self.convert_density(pdf_dir, next)
     }
 
+    /// The density of a light subpath starting at this vertex, whichever
+    /// light it belongs to (pbrt's `PdfLightOrigin`): for a vertex at
+    /// infinity the density of its direction over every infinite light
+    /// (pbrt's `InfiniteLightDensity`; 0 for distant lights), else that of
+    /// the point on its light.
+    fn pdf_origin(&self, scene: &Scene) -> f32 {
+        match self.kind {
+            Kind::Light(li) => self.pdf_light_origin(scene, li),
+            Kind::Infinity(_) => scene
+                .infinite_lights()
+                .iter()
+                .map(|&i| scene.light_pmf(i as usize) * scene.lights[i as usize].pdf_li_escaped(self.p, self.wo))
+                .sum(),
+            _ => 0.0,
+        }
+    }
+
+    /// Whether this is a light vertex whose light is a delta in position
+    /// or direction: no path can end on it by chance.
+    fn is_delta_light(&self, scene: &Scene) -> bool {
+        match self.kind {
+            Kind::Light(li) | Kind::Infinity(Some(li)) => scene.lights[li].is_delta(),
+            _ => false,
+        }
+    }
+
+    /// A vertex at infinity in direction `towards` (unit) from `from`.
+    fn at_infinity(light: Option<usize>, scene: &Scene, from: Vec3, towards: Vec3, mode: TransportMode) -> Vertex {
+        let far = 2.0 * world_radius(scene) + from.length();
+        let mut v = Vertex::endpoint(Kind::Infinity(light), from + towards * far, Vec3::ZERO, mode);
+        v.wo = towards;
+        v
+    }
+
     /// The area density of choosing light `li` and this point on it as a
-    /// light subpath's start (pbrt's `PdfLightOrigin`): 0 for point and spot lights.
+    /// light subpath's start: 0 for point and spot lights.
     fn pdf_light_origin(&self, scene: &Scene, li: usize) -> f32 {
         let light = &scene.lights[li];
         if light.is_delta() {
@@ -232,6 +296,29 @@ fn light_normal(light: &Light, p: Vec3, towards: Vec3) -> Vec3 {
         -n
     } else {
         n
+    }
+}
+
+/// Radius of the scene's bounding sphere, as lights at infinity know it.
+fn world_radius(scene: &Scene) -> f32 {
+    scene
+        .lights
+        .iter()
+        .find_map(|l| match l {
+            Light::Infinite { world, .. } | Light::Distant { world, .. } => Some(world.radius),
+            _ => None,
+        })
+        .unwrap_or(0.0)
+}
+
+/// The area density of a particle's start on the disk across the scene
+/// that lights at infinity emit from (pbrt's planar density).
+fn disk_density(scene: &Scene) -> f32 {
+    let r = world_radius(scene);
+    if r > 0.0 {
+        1.0 / (std::f32::consts::PI * r * r)
+    } else {
+        0.0
     }
 }
 
@@ -300,8 +387,6 @@ impl Bdpt {
         let mut beta = Vec3::ONE;
         let mut roulette = Vec3::ONE;
         let mut pdf_fwd = scene.camera.pdf_dir(ray.d);
-        // The solid-angle density of the last BSDF sample, for escaped rays' MIS.
-        let mut last_pdf = 0.0;
         let mut diffs: Option<Differentials> = None;
         let max_vertices = self.limit(1);
         path.push(Vertex::endpoint(
@@ -312,8 +397,14 @@ impl Bdpt {
         ));
         loop {
             let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
-                let prev = path.last().filter(|v| v.kind == Kind::Surface && !v.delta);
-                l += beta * escaped_radiance(scene, &ray, prev.map(|v| (v.p, last_pdf)));
+                // Into the environment: a vertex at infinity, weighed as
+                // any light vertex is.
+                if !scene.infinite_lights().is_empty() {
+                    let mut v = Vertex::at_infinity(None, scene, ray.o, ray.d, TransportMode::Radiance);
+                    v.beta = beta;
+                    v.pdf_fwd = path[path.len() - 1].convert_density(pdf_fwd, &v);
+                    path.push(v);
+                }
                 break;
             };
             if let Some(li) = hit.light {
@@ -344,7 +435,6 @@ impl Bdpt {
                 break;
             };
             pdf_fwd = next;
-            last_pdf = bs.pdf;
             diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
                 scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
             });
@@ -430,8 +520,9 @@ impl Bdpt {
         (beta.is_finite() && beta.max_element() > 0.0).then_some(fwd)
     }
 
-    /// The light subpath: a light chosen by power (none for lights at
-    /// infinity), a particle leaving it and its bounces.
+    /// The light subpath: a light chosen by power, a particle leaving it
+    /// and its bounces. A particle from a light at infinity starts on a
+    /// disk across the scene, its first vertex at infinity.
     fn light_subpath(&self, scene: &Scene, sampler: &mut Sampler, stats: &mut RayStats, path: &mut Vec<Vertex>) {
         let u = sampler.next_2d();
         let u2 = sampler.next_2d();
@@ -439,20 +530,34 @@ impl Bdpt {
             return;
         };
         let light = &scene.lights[li];
-        if light.is_infinite() {
-            return;
-        }
         let le = light.sample_le_flux(Vec2::new(ux, u.y), u2);
         let (pdf_pos, pdf_dir) = light.pdf_le(&le.ray, le.n);
-        let mut v0 = Vertex::endpoint(Kind::Light(li), le.ray.o, le.n, TransportMode::Importance);
-        v0.pdf_fwd = if light.is_delta() { 0.0 } else { pmf * pdf_pos };
+        // The next vertex's density: from a light at infinity, the start's
+        // on the disk (projected by `convert_density`); else the direction's.
+        let (v0, pdf_next) = if light.is_infinite() {
+            let mut v0 = Vertex::endpoint(
+                Kind::Infinity(Some(li)),
+                le.ray.o,
+                Vec3::ZERO,
+                TransportMode::Importance,
+            );
+            v0.wo = -le.ray.d;
+            v0.pdf_fwd = v0.pdf_origin(scene);
+            // A distant light's direction is a delta: only the start varies.
+            let ok = light.is_delta() || pdf_dir > 0.0;
+            (v0, if ok { pdf_pos } else { 0.0 })
+        } else {
+            let mut v0 = Vertex::endpoint(Kind::Light(li), le.ray.o, le.n, TransportMode::Importance);
+            v0.pdf_fwd = if light.is_delta() { 0.0 } else { pmf * pdf_pos };
+            (v0, pdf_dir)
+        };
         path.push(v0);
         let mut beta = le.flux / pmf;
-        if pdf_dir <= 0.0 || !beta.is_finite() || beta.max_element() <= 0.0 {
+        if pdf_next <= 0.0 || !beta.is_finite() || beta.max_element() <= 0.0 {
             return;
         }
         let mut roulette = Vec3::ONE;
-        let mut pdf_fwd = pdf_dir;
+        let mut pdf_fwd = pdf_next;
         let mut ray = le.ray;
         let max_vertices = self.limit(0);
         if max_vertices == 0 {
@@ -491,14 +596,24 @@ impl Bdpt {
     ) -> Vec3 {
         let pt = &cameras[t - 1];
         if s == 0 {
-            let Kind::Light(li) = pt.kind else {
-                return Vec3::ZERO;
+            let l = match pt.kind {
+                Kind::Light(li) => {
+                    let prev = &cameras[t - 2];
+                    let Some(w) = (prev.p - pt.p).try_normalize() else {
+                        return Vec3::ZERO;
+                    };
+                    pt.beta * scene.lights[li].le(w)
+                }
+                Kind::Infinity(_) => {
+                    let le: Vec3 = scene
+                        .infinite_lights()
+                        .iter()
+                        .map(|&i| scene.lights[i as usize].le_escaped(pt.wo))
+                        .sum();
+                    pt.beta * le
+                }
+                _ => return Vec3::ZERO,
             };
-            let prev = &cameras[t - 2];
-            let Some(w) = (prev.p - pt.p).try_normalize() else {
-                return Vec3::ZERO;
-            };
-            let l = pt.beta * scene.lights[li].le(w);
             if l == Vec3::ZERO {
                 return l;
             }
@@ -519,20 +634,15 @@ impl Bdpt {
                 return Vec3::ZERO;
             };
             let light = &scene.lights[li];
-            let (f, pdf_bsdf) = bsdf.f_pdf(pt.wo, ls.wi, TransportMode::Radiance);
+            let f = bsdf.f(pt.wo, ls.wi, TransportMode::Radiance);
             let l = pt.beta * f * (ls.wi.dot(bsdf.frame.z).abs() / pmf) * ls.weight;
             if l == Vec3::ZERO {
                 return l;
             }
             if light.is_infinite() {
-                // Lights at infinity start no light subpath: weighed against
-                // the camera subpath's own BSDF sample alone.
-                let w = if light.is_delta() {
-                    1.0
-                } else {
-                    power_heuristic(pmf * ls.pdf, pdf_bsdf)
-                };
-                return l * w;
+                let mut sampled = Vertex::at_infinity(Some(li), scene, pt.p, ls.wi, TransportMode::Importance);
+                sampled.pdf_fwd = sampled.pdf_origin(scene);
+                return l * self.mis_weight(scene, lights, cameras, Some(&sampled), s, t);
             }
             let q = pt.p + ls.wi * ls.dist;
             let mut sampled = Vertex::endpoint(
@@ -601,14 +711,13 @@ impl Bdpt {
         let qs = (s > 0).then(|| light_at(s - 1));
         let qs_minus = (s > 1).then(|| light_at(s - 2));
         // The reverse densities the connection gives the four vertices at its ends.
-        let pt_rev = match (qs, pt.kind) {
-            (Some(q), _) => q.pdf(scene, qs_minus, pt),
-            (None, Kind::Light(li)) => pt.pdf_light_origin(scene, li),
-            (None, _) => 0.0,
+        let pt_rev = match qs {
+            Some(q) => q.pdf(scene, qs_minus, pt),
+            None => pt.pdf_origin(scene),
         };
         let pt_minus_rev = match (qs, pt.kind, pt_minus) {
             (Some(q), _, Some(pm)) => pt.pdf(scene, Some(q), pm),
-            (None, Kind::Light(li), Some(pm)) => pt.pdf_light(scene, li, pm),
+            (None, Kind::Light(_) | Kind::Infinity(_), Some(pm)) => pt.pdf(scene, None, pm),
             _ => 0.0,
         };
         let qs_rev = qs.map_or(0.0, |q| pt.pdf(scene, pt_minus, q));
@@ -623,7 +732,7 @@ impl Bdpt {
         });
         // Fewer light vertices, down to s = 0 (none where the light is a delta in position).
         let sum = ratio_sum(sum, s, 0, light_at, (qs_rev, qs_minus_rev), |i| match i {
-            0 => matches!(light_at(0).kind, Kind::Light(li) if scene.lights[li].is_delta()),
+            0 => light_at(0).is_delta_light(scene),
             _ => light_at(i - 1).delta,
         });
         1.0 / (1.0 + sum)
@@ -1028,9 +1137,70 @@ mod tests {
     }
 
     #[test]
+    fn sunlight_through_a_thin_pane_reaches_the_floor_only_by_light_tracing() {
+        use crate::scene::{CameraDesc, SceneDesc, TriangleDesc};
+        // A floor of albedo 0.2 under a distant light straight down (E = 2),
+        // a thin glass pane (transmittance (1 - R)^2 / (1 - R^2) = 12/13 at
+        // normal incidence, R = 0.04) above part of it. No shadow ray passes
+        // the pane: the floor beneath it is lit only by particles from the
+        // light at infinity, joined to the camera. Two bounces at most: the
+        // pane and the floor.
+        let camera = CameraDesc {
+            position: Vec3::new(0.0, -4.0, 1.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Z,
+            fov_y_deg: 40.0,
+            width: 48,
+            height: 48,
+            window: None,
+            lens: None,
+            orthographic: None,
+            spherical: None,
+        };
+        let mut d = SceneDesc::empty("sun-through-a-pane", camera);
+        let floor = d.material("floor", Material::diffuse(0.2, 0.2, 0.2));
+        let pane = d.material("pane", Material::ThinDielectric { eta: 1.5 });
+        let quad = |r: f32, z: f32| {
+            let c = [(-r, -r), (r, -r), (r, r), (-r, r)].map(|(x, y)| Vec3::new(x, y, z));
+            [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
+        };
+        for (vertices, material) in quad(2.0, 0.0)
+            .map(|v| (v, floor))
+            .into_iter()
+            .chain(quad(1.0, 1.5).map(|v| (v, pane)))
+        {
+            d.triangles.push(TriangleDesc {
+                vertices,
+                normals: None,
+                uvs: None,
+                material,
+            });
+        }
+        d.lights.push(Light::distant(-Vec3::Z, Vec3::splat(2.0)));
+        let scene = Scene::build(d).unwrap();
+        let film = render(&scene, &bdpt(128, Some(2)), &|| {}).unwrap().film;
+        let around = |p: Vec3| {
+            let (x, y) = scene.camera.project(p).unwrap();
+            film.mean(x as u32 - 2, y as u32 - 2, x as u32 + 3, y as u32 + 3).x
+        };
+        let lit = 0.2 / std::f32::consts::PI * 2.0;
+        let (under, beside) = (around(Vec3::ZERO), around(Vec3::new(0.0, -1.6, 0.0)));
+        assert!((beside - lit).abs() < 0.03 * lit, "in the sun: {beside} against {lit}");
+        let through = lit * 12.0 / 13.0;
+        assert!(
+            (under - through).abs() < 0.05 * through,
+            "under the pane: {under} against {through}"
+        );
+        // The path tracer sees the floor beneath the pane dark.
+        let path = render(&scene, &path_settings(16, Some(2)), &|| {}).unwrap().film;
+        let (x, y) = scene.camera.project(Vec3::ZERO).unwrap();
+        assert!(path.get(x as u32, y as u32).x < 0.01 * lit);
+    }
+
+    #[test]
     fn agrees_with_the_path_tracer_under_every_kind_of_light() {
         // The weights' special cases: delta positions (point, spot) and
-        // directions (distant), lights at infinity (no light subpath), one-
+        // directions (distant), lights at infinity (light subpaths from them), one-
         // and two-sided area lights, a sphere light; rough reflection,
         // transmission and a layered BSDF in between (`assert_agrees`).
         let scene = every_light();
