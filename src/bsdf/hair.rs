@@ -21,7 +21,7 @@
 //! where `wi` is on the side of `wo` (of the local z) and glossy
 //! transmission otherwise.
 
-use super::{BsdfSample, BxdfFlags};
+use super::{BsdfSample, BxdfFlags, TransportMode};
 use crate::math::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -166,7 +166,19 @@ impl HairBxdf {
         pmf
     }
 
-    pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+    /// The fibre's BSDF, or for importance its adjoint, f(wi, wo): the model
+    /// is not symmetric (its attenuation follows theta_o, its 1 / cos
+    /// theta_i), so particles from lights, which meet it with the
+    /// directions' roles swapped, must swap them back.
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        match mode {
+            TransportMode::Radiance => self.eval(wo, wi),
+            TransportMode::Importance => self.eval(wi, wo),
+        }
+    }
+
+    /// The BSDF for light arriving along `wi` and leaving along `wo`.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         let (sin_o, cos_o) = (wo.x, safe_sqrt(1.0 - sqr(wo.x)));
         let (sin_i, cos_i) = (wi.x, safe_sqrt(1.0 - sqr(wi.x)));
         let phi = wi.z.atan2(wi.y) - wo.z.atan2(wo.y);
@@ -189,7 +201,7 @@ impl HairBxdf {
         }
     }
 
-    pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let (sin_o, cos_o) = (wo.x, safe_sqrt(1.0 - sqr(wo.x)));
         let phi_o = wo.z.atan2(wo.y);
         let (gamma_t, ap) = self.attenuation(sin_o, cos_o);
@@ -229,7 +241,7 @@ impl HairBxdf {
             BxdfFlags::GLOSSY_TRANSMISSION
         };
         Some(BsdfSample {
-            f: self.f(wo, wi),
+            f: self.f(wo, wi, mode),
             wi,
             pdf,
             flags,
@@ -396,7 +408,7 @@ mod tests {
         let mut sum = Vec3::ZERO;
         for _ in 0..n {
             let wi = uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32()));
-            sum += b.f(wo, wi) * wi.z.abs();
+            sum += b.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
         }
         sum * (4.0 * PI / n as f32)
     }
@@ -434,7 +446,12 @@ mod tests {
             // The density sample_f reports is the one pdf() gives.
             for _ in 0..200 {
                 let bs = b
-                    .sample_f(wo, rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()))
+                    .sample_f(
+                        wo,
+                        rng.next_f32(),
+                        Vec2::new(rng.next_f32(), rng.next_f32()),
+                        TransportMode::Radiance,
+                    )
                     .unwrap();
                 let pdf = b.pdf(wo, bs.wi);
                 assert!((bs.pdf - pdf).abs() <= 1e-3 * pdf.max(1.0), "{} vs {pdf}", bs.pdf);
@@ -454,6 +471,31 @@ mod tests {
     }
 
     #[test]
+    fn importance_sees_the_adjoint() {
+        // The model is not symmetric, so light traced from the lights must
+        // evaluate it with the directions swapped (its adjoint).
+        let mut rng = Rng::new(11, 1);
+        let b = random_fibre(&mut rng, Vec3::new(0.3, 0.5, 0.9));
+        let (wo, wi) = (
+            Vec3::new(0.6, 0.3, 0.74).normalize(),
+            Vec3::new(-0.2, -0.9, 0.4).normalize(),
+        );
+        let (f, g) = (
+            b.f(wo, wi, TransportMode::Radiance),
+            b.f(wi, wo, TransportMode::Radiance),
+        );
+        assert!(
+            (f - g).abs().max_element() > 0.01 * f.max_element(),
+            "symmetric here: {f} {g}"
+        );
+        assert_eq!(b.f(wo, wi, TransportMode::Importance), g);
+        let bs = b
+            .sample_f(wo, 0.3, Vec2::new(0.4, 0.6), TransportMode::Importance)
+            .unwrap();
+        assert_eq!(bs.f, b.f(bs.wi, wo, TransportMode::Radiance));
+    }
+
+    #[test]
     fn sampled_directions_follow_the_pdf() {
         // The mean of f |cos| / pdf over sampled directions is the albedo
         // estimated by uniform directions (importance sampling is unbiased
@@ -465,7 +507,12 @@ mod tests {
             let n = 200_000;
             let mut sum = Vec3::ZERO;
             for _ in 0..n {
-                if let Some(bs) = b.sample_f(wo, rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32())) {
+                if let Some(bs) = b.sample_f(
+                    wo,
+                    rng.next_f32(),
+                    Vec2::new(rng.next_f32(), rng.next_f32()),
+                    TransportMode::Radiance,
+                ) {
                     sum += bs.f * (bs.wi.z.abs() / bs.pdf);
                 }
             }

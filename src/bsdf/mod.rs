@@ -311,7 +311,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
-            Bxdf::Hair(b) => b.f(wo, wi),
+            Bxdf::Hair(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -333,7 +333,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
-            Bxdf::Hair(b) => b.sample_f(wo, uc, u),
+            Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }

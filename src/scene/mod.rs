@@ -766,9 +766,9 @@ pub struct Scene {
     /// Spheres: the description's, then the lights'.
     spheres: Vec<SphereObject>,
     disks: Vec<DiskObject>,
-    curves: Vec<CurveDesc>,
     /// The BVH over spheres, disks and curves: id i < spheres.len() is
-    /// sphere i, then come the disks, then the curves.
+    /// sphere i, then come the disks, then the curves (`desc.curves`, not
+    /// copied: a scene of hair may hold millions).
     shapes: BoxBvh,
     /// The cut-outs' alpha textures.
     alphas: Vec<Texture>,
@@ -943,8 +943,7 @@ impl Scene {
         let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
         let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
         let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
-        let curves = desc.curves.clone();
-        for (i, c) in curves.iter().enumerate() {
+        for (i, c) in desc.curves.iter().enumerate() {
             if c.material >= nmat {
                 return Err(Error::Scene(format!(
                     "curve {i} names material {} of {nmat}",
@@ -957,7 +956,7 @@ impl Scene {
                 )));
             }
         }
-        let shapes = shape_bvh(&spheres, &disks, &curves)?;
+        let shapes = shape_bvh(&spheres, &disks, &desc.curves)?;
         let (media, object_interfaces, interfaces) = media_tables(&desc, lights.len())?;
         let footprint = camera.pixel_footprint(desc.texture_spp);
         let mut scene = Scene {
@@ -977,7 +976,6 @@ impl Scene {
             dpdus: vec![],
             spheres,
             disks,
-            curves,
             shapes,
             alphas,
             media,
@@ -1182,7 +1180,7 @@ impl Scene {
     /// again, now with what shading needs).
     #[inline(never)]
     fn curve_hit(&self, k: usize, ray: &Ray, t_min: f32, t: f32) -> Hit {
-        let c = &self.curves[k];
+        let c = &self.desc.curves[k];
         let h = c.curve.intersect(ray, t_min, t).unwrap_or(CurveHit {
             t,
             u: c.curve.u[0],
@@ -1225,7 +1223,12 @@ impl Scene {
             None => {
                 let j = id as usize - self.spheres.len();
                 let Some(d) = self.disks.get(j) else {
-                    return Some(self.curves[j - self.disks.len()].curve.intersect(ray, t_min, t_max)?.t);
+                    return Some(
+                        self.desc.curves[j - self.disks.len()]
+                            .curve
+                            .intersect(ray, t_min, t_max)?
+                            .t,
+                    );
                 };
                 let t = d.disk.intersect(ray, t_min, t_max)?;
                 match d.alpha {
@@ -1646,7 +1649,7 @@ impl Scene {
             }
         }
         // The count is unchanged, so this cannot fail.
-        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.curves) {
+        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.desc.curves) {
             self.shapes = shapes;
         }
     }
@@ -1664,7 +1667,7 @@ impl Scene {
         for d in &self.disks {
             b = b.union(&d.disk.bounds());
         }
-        for c in &self.curves {
+        for c in &self.desc.curves {
             b = b.union(&c.curve.bounds());
         }
         for l in self.lights.iter().filter(|l| !l.is_infinite()) {
