@@ -386,8 +386,15 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         );
     }
     for (name, m) in &scene.desc.media {
+        let kind = match &m.density {
+            None => "homogeneous".to_string(),
+            Some(g) => {
+                let [x, y, z] = g.resolution();
+                format!("a density grid of {x} x {y} x {z}, densities up to {}", g.max())
+            }
+        };
         println!(
-            "medium \"{name}\": homogeneous, sigma_a {}, sigma_s {}, g {}",
+            "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}",
             m.sigma_a, m.sigma_s, m.g
         );
     }

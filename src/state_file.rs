@@ -665,6 +665,7 @@ mod tests {
             sigma_a: Vec3::splat(0.1),
             sigma_s: Vec3::splat(0.2),
             g: 0.0,
+            density: None,
         };
         b.media.push(("fog".into(), fog));
         b.camera_medium = Some(0);
@@ -673,6 +674,20 @@ mod tests {
         let mut c = b.clone();
         c.media[0].1.g = 0.1;
         assert_ne!(scene_fingerprint(&c, false), fb);
+        // A density grid, and any one of its values.
+        let grid = |v: f32| {
+            let g =
+                crate::medium::DensityGrid::new([2, 1, 1], vec![1.0, v], Vec3::ZERO, Vec3::ONE, glam::Mat4::IDENTITY);
+            Some(std::sync::Arc::new(g.unwrap()))
+        };
+        let mut c = b.clone();
+        c.media[0].1.density = grid(2.0);
+        let fc = scene_fingerprint(&c, false);
+        assert_ne!(fc, fb);
+        c.media[0].1.density = grid(2.5);
+        assert_ne!(scene_fingerprint(&c, false), fc);
+        c.media[0].1.density = grid(2.0);
+        assert_eq!(scene_fingerprint(&c, false), fc);
         let mut c = b.clone();
         c.camera_medium = None;
         assert_ne!(scene_fingerprint(&c, false), fb);

@@ -599,7 +599,7 @@ fn media_tables(desc: &SceneDesc, lights: usize) -> Result<(Vec<Medium>, Vec<u32
         m.check()
             .map_err(|why| Error::Scene(format!("medium \"{name}\": {why}")))?;
     }
-    let media: Vec<Medium> = desc.media.iter().map(|(_, m)| *m).collect();
+    let media: Vec<Medium> = desc.media.iter().map(|(_, m)| m.clone()).collect();
     let valid = |m: Option<u32>| m.is_none_or(|i| (i as usize) < n);
     if !valid(desc.camera_medium) {
         return Err(Error::Scene(format!(
@@ -1579,7 +1579,7 @@ impl Scene {
                 hit.as_ref().map_or(0.0, |h| h.t)
             };
             if let Some(m) = medium {
-                tr *= self.media[m as usize].transmittance(seg);
+                tr *= self.media[m as usize].transmittance_along(o, d, seg);
             }
             if reached || tr == Vec3::ZERO {
                 return tr;

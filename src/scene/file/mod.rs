@@ -244,6 +244,7 @@ impl Media<'_> {
             sigma_a: m.sigma_a.map_or(Vec3::ZERO, RgbSpec::rgb),
             sigma_s: m.sigma_s.map_or(Vec3::ZERO, RgbSpec::rgb),
             g: m.g.map_or(0.0, |g| g.0),
+            density: None,
         };
         medium
             .check()

@@ -47,7 +47,7 @@ use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
-use crate::medium::{Medium, MediumInterface};
+use crate::medium::{DensityGrid, Medium, MediumInterface};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
@@ -1635,13 +1635,16 @@ const MAX_CURVE_PIECES: u64 = 1 << 24;
 /// cannot be.
 fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, String>> {
     let p = &m.params;
-    if m.ty != "homogeneous" {
-        return Ok(Err(format!(
-            "media of type \"{}\" are not supported (homogeneous ones are)",
-            m.ty
-        )));
-    }
-    if !p.get_string_or("preset", "")?.is_empty() {
+    let grid = match m.ty.as_str() {
+        "homogeneous" => false,
+        "uniformgrid" => true,
+        other => {
+            return Ok(Err(format!(
+                "media of type \"{other}\" are not supported (homogeneous and uniformgrid ones are)"
+            )))
+        }
+    };
+    if !grid && !p.get_string_or("preset", "")?.is_empty() {
         return Ok(Err("named scattering presets (\"preset\") are not supported".into()));
     }
     // An `rgb` coefficient as given (pbrt-v4's unbounded spectrum of it), a
@@ -1667,16 +1670,57 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
     if emits {
         return Ok(Err("emissive media (\"Le\") are not supported".into()));
     }
+    let density = if grid { grid_density(m)? } else { None };
     let scale = p.get_float("scale", 1.0)?;
     let medium = Medium {
         sigma_a: sigma_a * scale,
         sigma_s: sigma_s * scale,
         g: p.get_float("g", 0.0)?,
+        density,
     };
     medium
         .check()
         .map_err(|why| located(&m.loc, format!("MakeNamedMedium \"{}\": {why}", m.name)))?;
     Ok(Ok(medium))
+}
+
+/// A `uniformgrid` medium's density (pbrt-v4's `GridMedium::Create`:
+/// `density` of `nx` x `ny` x `nz` values, x fastest, over the box from `p0`
+/// (0, 0, 0) to `p1` (1, 1, 1) in the medium's space). A grid of
+/// temperatures (emission) is refused with the emissive media.
+fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<DensityGrid>>> {
+    let p = &m.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
+    let what = format!("MakeNamedMedium \"{}\"", m.name);
+    if !p.get_floats("temperature").is_empty() {
+        return Err(located(
+            at("temperature"),
+            format!("{what}: emissive media (\"temperature\") are not supported"),
+        ));
+    }
+    for name in ["temperatureoffset", "temperaturescale", "temperaturecutoff"] {
+        p.mark_used(name, super::ParamType::Float);
+    }
+    let values = p.get_floats("density");
+    if values.is_empty() {
+        return Err(located(&m.loc, format!("{what}: no \"density\" values for the grid")));
+    }
+    let mut n = [0usize; 3];
+    for (k, name) in ["nx", "ny", "nz"].into_iter().enumerate() {
+        let v = p.get_int(name, 1)?;
+        if v < 1 {
+            return Err(located(
+                at(name),
+                format!("{what}: \"{name}\" must be at least 1, not {v}"),
+            ));
+        }
+        n[k] = v as usize;
+    }
+    let p0 = p.get_point3("p0", Vec3::ZERO)?;
+    let p1 = p.get_point3("p1", Vec3::ONE)?;
+    let grid = DensityGrid::new(n, values.to_vec(), p0, p1, m.world_from_medium)
+        .map_err(|why| located(at("density"), format!("{what}: {why}")))?;
+    Ok(Some(std::sync::Arc::new(grid)))
 }
 
 fn located(loc: &Loc, message: impl Into<String>) -> Error {
@@ -2627,6 +2671,17 @@ fn reflect(desc: &mut SceneDesc) {
     }
     for c in &mut desc.curves {
         c.curve.cp = c.curve.cp.map(point);
+    }
+    let r = Mat4::from_cols(
+        vector(Vec3::X).extend(0.0),
+        vector(Vec3::Y).extend(0.0),
+        vector(Vec3::Z).extend(0.0),
+        point(Vec3::ZERO).extend(1.0),
+    );
+    for (_, m) in &mut desc.media {
+        if let Some(g) = &m.density {
+            m.density = Some(std::sync::Arc::new(g.reflected(r)));
+        }
     }
     for l in &mut desc.lights {
         match l {

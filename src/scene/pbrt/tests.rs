@@ -1747,6 +1747,73 @@ fn a_gbuffer_film_renders_its_rgb_image_and_a_spectral_one_is_refused() {
 }
 
 #[test]
+fn grid_media_are_placed_where_pbrt_places_them() {
+    // Three densities along x over the box [0, 3] x [0, 1] x [0, 1] of a
+    // medium space moved by Translate 10 0 0 and Scale 2: in pbrt's world
+    // the samples sit at x = 11, 13 and 15 (y = z = 1). Ours is pbrt's
+    // mirror image across the camera's vertical plane (x -> -x here).
+    let grid = |extra: &str| {
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+             Translate 10 0 0\nScale 2 2 2\n\
+             MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
+             \"rgb sigma_a\" [0.5 0.5 0.5] \"float scale\" 2 {extra}\nAttributeEnd\n\
+             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
+        )
+    };
+    let c = converted(&grid("\"float density\" [1 5 2]"), Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let (_, m) = &c.desc.media[0];
+    assert_eq!((m.sigma_a, m.sigma_s), (Vec3::ONE, Vec3::splat(2.0)));
+    let g = m.density.as_ref().expect("a density grid");
+    assert_eq!(g.resolution(), [3, 1, 1]);
+    for (x, d) in [
+        (-11.0, 1.0),
+        (-13.0, 5.0),
+        (-15.0, 2.0),
+        (-12.0, 3.0),
+        (13.0, 0.0),
+        (-17.5, 0.0),
+    ] {
+        let got = g.density(Vec3::new(x, 1.0, 1.0));
+        assert!((got - d).abs() < 1e-4, "x = {x}: {got} vs {d}");
+    }
+    // What pbrt-v4 refuses, and what we do not render, each at its place.
+    let e = converted(&grid("\"float density\" [1 5]"), Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:8:") && e.contains("2 density values for a grid of 3 x 1 x 1"),
+        "{e}"
+    );
+    let e = converted(&grid(""), Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:7:") && e.contains("no \"density\" values"),
+        "{e}"
+    );
+    let e = converted(&grid("\"float density\" [1 -5 2]"), Files::default(), false).unwrap_err();
+    assert!(e.contains("a density of -5"), "{e}");
+    let e = converted(
+        &grid("\"float density\" [1 5 2] \"integer ny\" 0"),
+        Files::default(),
+        false,
+    )
+    .unwrap_err();
+    assert!(e.contains("\"ny\" must be at least 1"), "{e}");
+    let e = converted(
+        &grid("\"float density\" [1 5 2] \"float temperature\" [900 1200 900]"),
+        Files::default(),
+        false,
+    )
+    .unwrap_err();
+    assert!(e.contains("emissive media (\"temperature\")"), "{e}");
+    let e = converted(
+        &grid("\"float density\" [1 5 2] \"point3 p0\" [0 1 0]"),
+        Files::default(),
+        false,
+    )
+    .unwrap_err();
+    assert!(e.contains("is empty"), "{e}");
+}
+
+#[test]
 fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
     use crate::material::Material;
     use crate::medium::{Medium, MediumInterface};
@@ -1769,6 +1836,7 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
         sigma_a: Vec3::new(0.2, 0.4, 0.6),
         sigma_s: Vec3::new(2.0, 4.0, 6.0),
         g: 0.25,
+        density: None,
     };
     assert_eq!(d.media, [("fog".to_string(), fog)]);
     assert_eq!(d.camera_medium, Some(0));
@@ -1926,14 +1994,18 @@ fn media_it_cannot_render_are_refused_at_their_place() {
     };
     for (params, what) in [
         (
-            "\"string type\" \"uniformgrid\"",
-            "media of type \"uniformgrid\" are not supported",
+            "\"string type\" \"nanovdb\" \"string filename\" \"smoke.nvdb\"",
+            "media of type \"nanovdb\" are not supported",
         ),
         (
             "\"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\"",
             "presets",
         ),
         ("\"string type\" \"homogeneous\" \"rgb Le\" [1 1 1]", "emissive media"),
+        (
+            "\"string type\" \"uniformgrid\" \"float density\" [1] \"rgb Le\" [1 1 1]",
+            "emissive media",
+        ),
     ] {
         let e = converted(&medium(params), Files::default(), false).unwrap_err();
         assert!(
