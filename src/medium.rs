@@ -69,9 +69,9 @@ impl std::fmt::Debug for DensityGrid {
 
 impl DensityGrid {
     /// A grid of `n[0] x n[1] x n[2]` values (x fastest) over the box from
-    /// `p0` to `p1` in the space `world_from_medium` places; `None` when the
-    /// count is not the product, a value is negative or not finite, or the
-    /// box or the transformation is degenerate.
+    /// `p0` to `p1` in the space `world_from_medium` places; an error saying
+    /// why when the count is not the product, a value is negative or not
+    /// finite, or the box or the transformation is degenerate.
     pub fn new(n: [usize; 3], values: Vec<f32>, p0: Vec3, p1: Vec3, world_from_medium: Mat4) -> Result<Self, String> {
         let count = n.iter().try_fold(1usize, |a, &k| a.checked_mul(k));
         if n.contains(&0) || count != Some(values.len()) {
