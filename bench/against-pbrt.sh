@@ -34,7 +34,13 @@ def put(name, ty, value, head):
     return head
 head = put("xresolution", "integer", w, head)
 head = put("yresolution", "integer", h, head)
-head = put("pixelsamples", "integer", spp, head)
+if '"integer pixelsamples"' in head:
+    head = put("pixelsamples", "integer", spp, head)
+elif re.search(r'\bSampler\s+"[^"]*"', head):
+    head = re.sub(r'(\bSampler\s+"[^"]*")', rf'\1 "integer pixelsamples" [ {spp} ]', head, count=1)
+else:
+    # pbrt-v4's default sampler, at the count asked for (not its default 16).
+    head += f'\nSampler "zsobol" "integer pixelsamples" [ {spp} ]\n'
 head = put("filename", "string", f'"{exr}"', head)
 if '"integer xresolution"' not in head:
     head += f'\nFilm "rgb" "integer xresolution" [ {w} ] "integer yresolution" [ {h} ] "string filename" [ "{exr}" ]\n'

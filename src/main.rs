@@ -388,10 +388,10 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     for (name, m) in &scene.desc.media {
         let kind = match &m.density {
             None => "homogeneous".to_string(),
-            Some(g) => {
-                let [x, y, z] = g.resolution();
-                format!("a density grid of {x} x {y} x {z}, densities up to {}", g.max())
-            }
+            Some(g) => match g.resolution() {
+                Some([x, y, z]) => format!("a density grid of {x} x {y} x {z}, densities up to {}", g.max()),
+                None => "a procedural cloud (pbrt-v4's), densities up to 1".to_string(),
+            },
         };
         println!(
             "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}",

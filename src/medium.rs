@@ -31,48 +31,93 @@ pub struct Medium {
     pub g: f32,
     /// The density that scales both coefficients (pbrt-v4's `uniformgrid`);
     /// `None`: one everywhere.
-    pub density: Option<Arc<DensityGrid>>,
+    pub density: Option<Arc<Density>>,
 }
 
-/// Densities on a regular grid over a box (pbrt-v4's `GridMedium` and its
-/// `SampledGrid`): sample (i, j, k) sits at the centre of its cell of the
-/// box, a point between samples takes their trilinear interpolation, and
-/// samples beyond the grid count as zero, so the density falls to zero
-/// over the box's outer half cells and is zero outside it.
+/// A density over a box that scales a medium's coefficients point by point:
+/// samples on a grid (pbrt-v4's `GridMedium` and its `SampledGrid`), or
+/// pbrt-v4's procedural `CloudMedium`. Zero outside the box.
 #[derive(Clone, PartialEq)]
-pub struct DensityGrid {
-    /// The unit cube of the grid in world space, and its inverse.
+pub struct Density {
+    /// The box as the unit cube in world space, and its inverse.
     world_from_grid: Mat4,
     grid_from_world: Mat4,
-    n: [usize; 3],
-    /// x fastest, then y, then z.
-    values: Vec<f32>,
-    /// The largest value: the majorant for tracking through the grid.
+    field: Field,
+    /// The largest density: the majorant for tracking through it.
     max: f32,
 }
 
-impl std::fmt::Debug for DensityGrid {
+#[derive(Clone, PartialEq)]
+enum Field {
+    /// Sample (i, j, k) sits at the centre of its cell of the box, a point
+    /// between samples takes their trilinear interpolation, and samples
+    /// beyond the grid count as zero, so the density falls to zero over the
+    /// box's outer half cells. Values x fastest, then y, then z.
+    Samples { n: [usize; 3], values: Vec<f32> },
+    /// pbrt-v4's cloud: octaves of Perlin noise at `frequency` a unit of
+    /// the medium's space, the lookup point perturbed by `wispiness`,
+    /// thinning with height; in [0, 1]. `lo` and `size`: the box in the
+    /// medium's space, where the noise lives.
+    Cloud {
+        density: f32,
+        wispiness: f32,
+        frequency: f32,
+        lo: Vec3,
+        size: Vec3,
+    },
+}
+
+impl std::fmt::Debug for Density {
     // Sizes, place and a digest of the values: scene fingerprints print
     // media, and a grid may hold millions of values.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let digest = self
-            .values
-            .iter()
-            .fold(0x9E37_79B9_7F4A_7C15u64, |h, v| mix64(h ^ v.to_bits() as u64));
-        write!(
-            f,
-            "DensityGrid {{ n: {:?}, world_from_grid: {:?}, max: {}, values: {digest:016x} }}",
-            self.n, self.world_from_grid, self.max
-        )
+        match &self.field {
+            Field::Samples { n, values } => {
+                let digest = values
+                    .iter()
+                    .fold(0x9E37_79B9_7F4A_7C15u64, |h, v| mix64(h ^ v.to_bits() as u64));
+                write!(
+                    f,
+                    "Density {{ n: {n:?}, world_from_grid: {:?}, max: {}, values: {digest:016x} }}",
+                    self.world_from_grid, self.max
+                )
+            }
+            Field::Cloud {
+                density,
+                wispiness,
+                frequency,
+                lo,
+                size,
+            } => write!(
+                f,
+                "Density {{ cloud: {density} {wispiness} {frequency} {lo} {size}, world_from_grid: {:?} }}",
+                self.world_from_grid
+            ),
+        }
     }
 }
 
-impl DensityGrid {
+/// The box from `p0` to `p1` in the space `world_from_medium` places, as
+/// the unit cube's image, with its corner and size; an error if it is empty.
+fn unit_box(p0: Vec3, p1: Vec3, world_from_medium: Mat4) -> Result<(Mat4, Vec3, Vec3), String> {
+    let (lo, hi) = (p0.min(p1), p0.max(p1));
+    let size = hi - lo;
+    if !(lo.is_finite() && hi.is_finite() && size.min_element() > 0.0) {
+        return Err(format!("the medium's box from {p0} to {p1} is empty"));
+    }
+    Ok((
+        world_from_medium * Mat4::from_translation(lo) * Mat4::from_scale(size),
+        lo,
+        size,
+    ))
+}
+
+impl Density {
     /// A grid of `n[0] x n[1] x n[2]` values (x fastest) over the box from
     /// `p0` to `p1` in the space `world_from_medium` places; an error saying
     /// why when the count is not the product, a value is negative or not
     /// finite, or the box or the transformation is degenerate.
-    pub fn new(n: [usize; 3], values: Vec<f32>, p0: Vec3, p1: Vec3, world_from_medium: Mat4) -> Result<Self, String> {
+    pub fn grid(n: [usize; 3], values: Vec<f32>, p0: Vec3, p1: Vec3, world_from_medium: Mat4) -> Result<Self, String> {
         let count = n.iter().try_fold(1usize, |a, &k| a.checked_mul(k));
         if n.contains(&0) || count != Some(values.len()) {
             return Err(format!(
@@ -86,27 +131,44 @@ impl DensityGrid {
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
             return Err(format!("a density of {v}: densities must be finite and not negative"));
         }
-        let (lo, hi) = (p0.min(p1), p0.max(p1));
-        let size = hi - lo;
-        if !(lo.is_finite() && hi.is_finite() && size.min_element() > 0.0) {
-            return Err(format!("the grid's box from {p0} to {p1} is empty"));
-        }
-        let world_from_grid = world_from_medium * Mat4::from_translation(lo) * Mat4::from_scale(size);
-        let grid = Self::placed(world_from_grid, n, values)?;
-        Ok(grid)
+        let (world_from_grid, _, _) = unit_box(p0, p1, world_from_medium)?;
+        let max = values.iter().fold(0.0f32, |a, &v| a.max(v));
+        Self::placed(world_from_grid, Field::Samples { n, values }, max)
     }
 
-    fn placed(world_from_grid: Mat4, n: [usize; 3], values: Vec<f32>) -> Result<Self, String> {
+    /// pbrt-v4's procedural cloud (`CloudMedium`) over the box from `p0` to
+    /// `p1`: `density` scales it before it is clamped to [0, 1].
+    pub fn cloud(
+        density: f32,
+        wispiness: f32,
+        frequency: f32,
+        p0: Vec3,
+        p1: Vec3,
+        world_from_medium: Mat4,
+    ) -> Result<Self, String> {
+        if ![density, wispiness, frequency].iter().all(|v| v.is_finite()) {
+            return Err("the cloud's density, wispiness and frequency must be finite".into());
+        }
+        let (world_from_grid, lo, size) = unit_box(p0, p1, world_from_medium)?;
+        let field = Field::Cloud {
+            density,
+            wispiness,
+            frequency,
+            lo,
+            size,
+        };
+        Self::placed(world_from_grid, field, 1.0)
+    }
+
+    fn placed(world_from_grid: Mat4, field: Field, max: f32) -> Result<Self, String> {
         let grid_from_world = world_from_grid.inverse();
         if !(grid_from_world.is_finite() && world_from_grid.determinant().abs() > 0.0) {
-            return Err("the grid's transformation is singular".into());
+            return Err("the medium's transformation is singular".into());
         }
-        let max = values.iter().fold(0.0f32, |a, &v| a.max(v));
-        Ok(DensityGrid {
+        Ok(Density {
             world_from_grid,
             grid_from_world,
-            n,
-            values,
+            field,
             max,
         })
     }
@@ -114,16 +176,19 @@ impl DensityGrid {
     /// The same grid moved by the reflection `r` (its own inverse), as the
     /// scene around it is reflected.
     pub fn reflected(&self, r: Mat4) -> Self {
-        DensityGrid {
+        Density {
             world_from_grid: r * self.world_from_grid,
             grid_from_world: self.grid_from_world * r,
             ..self.clone()
         }
     }
 
-    /// Samples along x, y and z.
-    pub fn resolution(&self) -> [usize; 3] {
-        self.n
+    /// Samples along x, y and z of a grid (`None` for a cloud).
+    pub fn resolution(&self) -> Option<[usize; 3]> {
+        match &self.field {
+            Field::Samples { n, .. } => Some(*n),
+            Field::Cloud { .. } => None,
+        }
     }
 
     /// The largest density.
@@ -131,25 +196,18 @@ impl DensityGrid {
         self.max
     }
 
-    /// The density at `q` in the grid's unit cube.
+    /// The density at `q` in the box's unit cube.
     fn lookup(&self, q: Vec3) -> f32 {
-        let s = q * Vec3::new(self.n[0] as f32, self.n[1] as f32, self.n[2] as f32) - 0.5;
-        let f = s.floor();
-        let d = s - f;
-        let (x, y, z) = (f.x as i64, f.y as i64, f.z as i64);
-        let at = |i: i64, j: i64, k: i64| -> f32 {
-            let [nx, ny, nz] = self.n.map(|v| v as i64);
-            if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
-                return 0.0;
-            }
-            self.values[((k * ny + j) * nx + i) as usize]
-        };
-        let lerp = |t: f32, a: f32, b: f32| (1.0 - t) * a + t * b;
-        let d00 = lerp(d.x, at(x, y, z), at(x + 1, y, z));
-        let d10 = lerp(d.x, at(x, y + 1, z), at(x + 1, y + 1, z));
-        let d01 = lerp(d.x, at(x, y, z + 1), at(x + 1, y, z + 1));
-        let d11 = lerp(d.x, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
-        lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+        match &self.field {
+            Field::Samples { n, values } => trilinear(*n, values, q),
+            Field::Cloud {
+                density,
+                wispiness,
+                frequency,
+                lo,
+                size,
+            } => cloud_density(*lo + q * *size, *density, *wispiness, *frequency),
+        }
     }
 
     /// The density at world point `p`: zero outside the grid's box (as in
@@ -306,7 +364,7 @@ impl Medium {
     /// Transmittance over [t0, t1] of the grid-space ray `go + t gd` by
     /// ratio tracking (Novak et al. 2014) against one majorant for all
     /// channels, with pbrt-v4's roulette once it is small.
-    fn ratio_track(&self, g: &DensityGrid, go: Vec3, gd: Vec3, t0: f32, t1: f32, rng: &mut Rng) -> Vec3 {
+    fn ratio_track(&self, g: &Density, go: Vec3, gd: Vec3, t0: f32, t1: f32, rng: &mut Rng) -> Vec3 {
         let st = self.sigma_t();
         let majorant = st.max_element() * g.max;
         if majorant <= 0.0 {
@@ -348,7 +406,7 @@ impl Medium {
     /// channels' one-sample MIS stays as in the homogeneous case, which a
     /// grid of constant density reproduces exactly. The first distance
     /// uses `u`, the rest a stream seeded by it and the ray.
-    fn sample_grid(&self, g: &DensityGrid, o: Vec3, d: Vec3, t_max: f32, hero: usize, u: f32) -> MediumEvent {
+    fn sample_grid(&self, g: &Density, o: Vec3, d: Vec3, t_max: f32, hero: usize, u: f32) -> MediumEvent {
         let Some((go, gd, t0, t1)) = g.clip(o, d, t_max) else {
             return MediumEvent::Pass {
                 beta: Vec3::ONE,
@@ -471,6 +529,126 @@ pub fn normalised(beta: Vec3, ratio: Vec3) -> (Vec3, Vec3) {
     } else {
         (beta, ratio)
     }
+}
+
+/// The samples' trilinear interpolation at `q` in the unit cube, zero
+/// beyond them (pbrt-v4's `SampledGrid::Lookup`).
+fn trilinear(n: [usize; 3], values: &[f32], q: Vec3) -> f32 {
+    let s = q * Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32) - 0.5;
+    let f = s.floor();
+    let d = s - f;
+    let (x, y, z) = (f.x as i64, f.y as i64, f.z as i64);
+    let [nx, ny, nz] = n.map(|v| v as i64);
+    let at = |i: i64, j: i64, k: i64| -> f32 {
+        if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
+            return 0.0;
+        }
+        values[((k * ny + j) * nx + i) as usize]
+    };
+    let lerp = |t: f32, a: f32, b: f32| (1.0 - t) * a + t * b;
+    let d00 = lerp(d.x, at(x, y, z), at(x + 1, y, z));
+    let d10 = lerp(d.x, at(x, y + 1, z), at(x + 1, y + 1, z));
+    let d01 = lerp(d.x, at(x, y, z + 1), at(x + 1, y, z + 1));
+    let d11 = lerp(d.x, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
+    lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+}
+
+/// pbrt-v4's cloud density at `p` in the medium's space: five octaves of
+/// noise (weights halving, frequencies 1.99 times each) at `frequency` p,
+/// first displaced twice along the noise's gradient by `wispiness`; then
+/// scaled by (1 - y) 4.5 `density`, clamped to [0, 1], with 2 (0.5 - y)
+/// added below y = 0.5, clamped again.
+fn cloud_density(p: Vec3, density: f32, wispiness: f32, frequency: f32) -> f32 {
+    let mut pp = p * frequency;
+    if wispiness > 0.0 {
+        let (mut omega, mut lambda) = (0.05 * wispiness, 10.0f32);
+        for _ in 0..2 {
+            pp += omega * noise_gradient(pp * lambda);
+            omega *= 0.5;
+            lambda *= 1.99;
+        }
+    }
+    let (mut d, mut omega, mut lambda) = (0.0f32, 0.5f32, 1.0f32);
+    for _ in 0..5 {
+        d += omega * noise(pp * lambda);
+        omega *= 0.5;
+        lambda *= 1.99;
+    }
+    let d = ((1.0 - p.y) * 4.5 * density * d).clamp(0.0, 1.0);
+    (d + 2.0 * (0.5 - p.y).max(0.0)).clamp(0.0, 1.0)
+}
+
+/// Ken Perlin's permutation of 0..256, the lattice hash of his noise (and
+/// of pbrt-v4's, whose pictures a cloud must reproduce).
+const PERLIN: [u8; 256] = [
+    151, 160, 137, 91, 90, 15, 131, 13, 201, 95, 96, 53, 194, 233, 7, 225, 140, 36, 103, 30, 69, 142, 8, 99, 37, 240,
+    21, 10, 23, 190, 6, 148, 247, 120, 234, 75, 0, 26, 197, 62, 94, 252, 219, 203, 117, 35, 11, 32, 57, 177, 33, 88,
+    237, 149, 56, 87, 174, 20, 125, 136, 171, 168, 68, 175, 74, 165, 71, 134, 139, 48, 27, 166, 77, 146, 158, 231, 83,
+    111, 229, 122, 60, 211, 133, 230, 220, 105, 92, 41, 55, 46, 245, 40, 244, 102, 143, 54, 65, 25, 63, 161, 1, 216,
+    80, 73, 209, 76, 132, 187, 208, 89, 18, 169, 200, 196, 135, 130, 116, 188, 159, 86, 164, 100, 109, 198, 173, 186,
+    3, 64, 52, 217, 226, 250, 124, 123, 5, 202, 38, 147, 118, 126, 255, 82, 85, 212, 207, 206, 59, 227, 47, 16, 58, 17,
+    182, 189, 28, 42, 223, 183, 170, 213, 119, 248, 152, 2, 44, 154, 163, 70, 221, 153, 101, 155, 167, 43, 172, 9, 129,
+    22, 39, 253, 19, 98, 108, 110, 79, 113, 224, 232, 178, 185, 112, 104, 218, 246, 97, 228, 251, 34, 242, 193, 238,
+    210, 144, 12, 191, 179, 162, 241, 81, 51, 145, 235, 249, 14, 239, 107, 49, 192, 214, 31, 181, 199, 106, 157, 184,
+    84, 204, 176, 115, 121, 50, 45, 127, 4, 150, 254, 138, 236, 205, 93, 222, 114, 67, 29, 24, 72, 243, 141, 128, 195,
+    78, 66, 215, 61, 156, 180,
+];
+
+/// Gradient noise at `p` (Perlin's, with pbrt-v4's choice of the twelve
+/// gradients and quintic fade), about zero, within [-1, 1].
+fn noise(p: Vec3) -> f32 {
+    // Coordinates past 2^30 wrap, as pbrt-v4's do, before the lattice
+    // indices are taken. Below that the floor is taken by conversion (the
+    // library's `floorf` and `fmodf` were a third of a cloud's time).
+    let limit = (1u32 << 30) as f32;
+    let wrap = |x: f32| if x.abs() < limit { x } else { x % limit };
+    let floor = |x: f32| {
+        let i = x as i64;
+        if (i as f32) > x {
+            i - 1
+        } else {
+            i
+        }
+    };
+    let (x, y, z) = (wrap(p.x), wrap(p.y), wrap(p.z));
+    let (fx, fy, fz) = (floor(x), floor(y), floor(z));
+    let d = Vec3::new(x - fx as f32, y - fy as f32, z - fz as f32);
+    let (ix, iy, iz) = ((fx & 255) as usize, (fy & 255) as usize, (fz & 255) as usize);
+    let perm = |i: usize| PERLIN[i & 255] as usize;
+    let grad = |x: usize, y: usize, z: usize, dx: f32, dy: f32, dz: f32| {
+        let h = perm(perm(perm(x) + y) + z) & 15;
+        let u = if h < 8 || h == 12 || h == 13 { dx } else { dy };
+        let v = if h < 4 || h == 12 || h == 13 { dy } else { dz };
+        (if h & 1 != 0 { -u } else { u }) + (if h & 2 != 0 { -v } else { v })
+    };
+    let fade = |t: f32| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+    let lerp = |t: f32, a: f32, b: f32| (1.0 - t) * a + t * b;
+    let (dx, dy, dz) = (d.x, d.y, d.z);
+    let w000 = grad(ix, iy, iz, dx, dy, dz);
+    let w100 = grad(ix + 1, iy, iz, dx - 1.0, dy, dz);
+    let w010 = grad(ix, iy + 1, iz, dx, dy - 1.0, dz);
+    let w110 = grad(ix + 1, iy + 1, iz, dx - 1.0, dy - 1.0, dz);
+    let w001 = grad(ix, iy, iz + 1, dx, dy, dz - 1.0);
+    let w101 = grad(ix + 1, iy, iz + 1, dx - 1.0, dy, dz - 1.0);
+    let w011 = grad(ix, iy + 1, iz + 1, dx, dy - 1.0, dz - 1.0);
+    let w111 = grad(ix + 1, iy + 1, iz + 1, dx - 1.0, dy - 1.0, dz - 1.0);
+    let (wx, wy, wz) = (fade(dx), fade(dy), fade(dz));
+    let y0 = lerp(wy, lerp(wx, w000, w100), lerp(wx, w010, w110));
+    let y1 = lerp(wy, lerp(wx, w001, w101), lerp(wx, w011, w111));
+    lerp(wz, y0, y1)
+}
+
+/// The noise's gradient by forward differences 0.01 apart (pbrt-v4's
+/// `DNoise`).
+fn noise_gradient(p: Vec3) -> Vec3 {
+    let delta = 0.01;
+    let n = noise(p);
+    let ahead = Vec3::new(
+        noise(p + Vec3::new(delta, 0.0, 0.0)),
+        noise(p + Vec3::new(0.0, delta, 0.0)),
+        noise(p + Vec3::new(0.0, 0.0, delta)),
+    );
+    (ahead - Vec3::splat(n)) / delta
 }
 
 /// Most steps of delta or ratio tracking along one segment.
@@ -613,8 +791,8 @@ mod tests {
     }
 
     /// A grid of `values` (x fastest) over the box [-1, 1]^3 moved by `m`.
-    fn grid(n: [usize; 3], values: &[f32], m: Mat4) -> Arc<DensityGrid> {
-        Arc::new(DensityGrid::new(n, values.to_vec(), Vec3::splat(-1.0), Vec3::ONE, m).unwrap())
+    fn grid(n: [usize; 3], values: &[f32], m: Mat4) -> Arc<Density> {
+        Arc::new(Density::grid(n, values.to_vec(), Vec3::splat(-1.0), Vec3::ONE, m).unwrap())
     }
 
     #[test]
@@ -647,12 +825,12 @@ mod tests {
         assert!((moved.density(Vec3::new(5.0, 0.0, 0.0)) - 4.0).abs() < 1e-5);
         assert!((moved.density(Vec3::new(5.0 + 4.0 / 3.0, 0.0, 0.0)) - 2.0).abs() < 1e-5);
         // The count must be the grid's, the values finite and not negative.
-        let bad = |n, v: Vec<f32>| DensityGrid::new(n, v, Vec3::ZERO, Vec3::ONE, Mat4::IDENTITY).is_err();
+        let bad = |n, v: Vec<f32>| Density::grid(n, v, Vec3::ZERO, Vec3::ONE, Mat4::IDENTITY).is_err();
         assert!(bad([2, 2, 1], vec![1.0; 3]));
         assert!(bad([usize::MAX, 2, 1], vec![1.0; 3]));
         assert!(bad([3, 1, 1], vec![1.0, -1.0, 0.0]));
         assert!(bad([3, 1, 1], vec![1.0, f32::NAN, 0.0]));
-        assert!(DensityGrid::new(
+        assert!(Density::grid(
             [1, 1, 1],
             vec![1.0],
             Vec3::ZERO,
@@ -777,5 +955,74 @@ mod tests {
                 (a, b) => panic!("{u}: {a:?} vs {b:?}"),
             }
         }
+    }
+
+    #[test]
+    #[allow(clippy::excessive_precision)] // as pbrt-v4 printed them
+    fn noise_is_pbrts() {
+        // Values of pbrt-v4's `Noise` and `DNoise` at these points, printed
+        // by a program linked against pbrt-v4: a cloud must be the same
+        // cloud. The lattice points are zero.
+        let cases = [
+            ((0.3, 0.7, 0.1), -0.0971815065, (-0.390984863, 0.379621238, 0.284908712)),
+            (
+                (1.5, -2.25, 3.75),
+                0.0182971954,
+                (0.0258257613, -0.146989524, -0.218405947),
+            ),
+            (
+                (12.34, 5.67, -8.9),
+                -0.0609646142,
+                (-1.54236937, 0.631544352, 0.511443973),
+            ),
+            (
+                (-0.6, 0.05, 0.95),
+                -0.102561414,
+                (0.917072594, -0.0869899988, 0.386118144),
+            ),
+            (
+                (100.1, 200.2, 300.3),
+                0.178256929,
+                (0.660148263, 1.1884228, -1.01561403),
+            ),
+        ];
+        for ((x, y, z), n, (gx, gy, gz)) in cases {
+            let p = Vec3::new(x, y, z);
+            assert!((noise(p) - n).abs() < 1e-6, "{p}: {} vs {n}", noise(p));
+            // The differences divide by 0.01: rounding is a hundred times larger.
+            let g = noise_gradient(p);
+            assert!((g - Vec3::new(gx, gy, gz)).abs().max_element() < 2e-4, "{p}: {g}");
+        }
+        assert_eq!(noise(Vec3::new(3.0, -7.0, 11.0)), 0.0);
+    }
+
+    #[test]
+    fn a_cloud_is_pbrts_cloud_in_its_box() {
+        // Dense below y = 0 (2 (0.5 - y) >= 1 there), in [0, 1] everywhere,
+        // zero outside its box, and moved with its medium.
+        let m = Mat4::from_translation(Vec3::new(0.0, -1.0, 0.0));
+        let c = Density::cloud(2.0, 1.0, 5.0, Vec3::splat(-2.0), Vec3::splat(2.0), m).unwrap();
+        let mut rng = Rng::new(3, 9);
+        let mut sum = 0.0;
+        for _ in 0..2000 {
+            let q = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0;
+            let d = c.density(q + Vec3::new(0.0, -1.0, 0.0));
+            assert!((0.0..=1.0).contains(&d), "{q}: {d}");
+            if q.y < 0.0 {
+                assert_eq!(d, 1.0, "{q}");
+            }
+            sum += d;
+        }
+        // Above, the noise leaves gaps and wisps: neither empty nor solid.
+        assert!(sum > 1000.0 && sum < 1900.0, "{sum}");
+        assert_eq!(c.density(Vec3::new(0.0, -3.5, 0.0)), 0.0);
+        assert_eq!(c.density(Vec3::new(0.0, 1.5, 0.0)), 0.0);
+        // Where pbrt-v4 would have it: the same formula at the medium-space point.
+        let p = Vec3::new(0.3, 0.8, -0.4);
+        assert_eq!(
+            c.density(p + Vec3::new(0.0, -1.0, 0.0)),
+            cloud_density(p, 2.0, 1.0, 5.0)
+        );
+        assert!(Density::cloud(f32::NAN, 1.0, 5.0, Vec3::ZERO, Vec3::ONE, Mat4::IDENTITY).is_err());
     }
 }

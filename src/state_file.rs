@@ -676,8 +676,7 @@ mod tests {
         assert_ne!(scene_fingerprint(&c, false), fb);
         // A density grid, and any one of its values.
         let grid = |v: f32| {
-            let g =
-                crate::medium::DensityGrid::new([2, 1, 1], vec![1.0, v], Vec3::ZERO, Vec3::ONE, glam::Mat4::IDENTITY);
+            let g = crate::medium::Density::grid([2, 1, 1], vec![1.0, v], Vec3::ZERO, Vec3::ONE, glam::Mat4::IDENTITY);
             Some(std::sync::Arc::new(g.unwrap()))
         };
         let mut c = b.clone();

@@ -337,7 +337,7 @@ mod tests {
         // Blue scatters about a hundred times before it leaves: Russian
         // roulette must not cut such paths short (see `roulette`).
         use crate::light::Light;
-        use crate::medium::DensityGrid;
+        use crate::medium::Density;
         use std::sync::Arc;
         // The medium fills a unit sphere of no surface around the camera.
         let mut d = closed_sphere_desc(Material::Interface, None, 16);
@@ -352,7 +352,7 @@ mod tests {
         let values: Vec<f32> = (0..64)
             .map(|i| [0.0, 3.0, 0.5, 8.0][i % 4] * (1 + i % 3) as f32)
             .collect();
-        let grid = DensityGrid::new([4, 4, 4], values, Vec3::splat(-1.0), Vec3::ONE, glam::Mat4::IDENTITY).unwrap();
+        let grid = Density::grid([4, 4, 4], values, Vec3::splat(-1.0), Vec3::ONE, glam::Mat4::IDENTITY).unwrap();
         d.media.push((
             "cloud".into(),
             Medium {

@@ -47,7 +47,7 @@ use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
-use crate::medium::{DensityGrid, Medium, MediumInterface};
+use crate::medium::{Density, Medium, MediumInterface};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
@@ -1635,16 +1635,17 @@ const MAX_CURVE_PIECES: u64 = 1 << 24;
 /// cannot be.
 fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, String>> {
     let p = &m.params;
-    let grid = match m.ty.as_str() {
-        "homogeneous" => false,
-        "uniformgrid" => true,
+    let (grid, cloud) = match m.ty.as_str() {
+        "homogeneous" => (false, false),
+        "uniformgrid" => (true, false),
+        "cloud" => (false, true),
         other => {
             return Ok(Err(format!(
-                "media of type \"{other}\" are not supported (homogeneous and uniformgrid ones are)"
+                "media of type \"{other}\" are not supported (homogeneous, uniformgrid and cloud ones are)"
             )))
         }
     };
-    if !grid && !p.get_string_or("preset", "")?.is_empty() {
+    if !grid && !cloud && !p.get_string_or("preset", "")?.is_empty() {
         return Ok(Err("named scattering presets (\"preset\") are not supported".into()));
     }
     // An `rgb` coefficient as given (pbrt-v4's unbounded spectrum of it), a
@@ -1670,8 +1671,15 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
     if emits {
         return Ok(Err("emissive media (\"Le\") are not supported".into()));
     }
-    let density = if grid { grid_density(m)? } else { None };
-    let scale = p.get_float("scale", 1.0)?;
+    let density = if grid {
+        grid_density(m)?
+    } else if cloud {
+        cloud_density(m)?
+    } else {
+        None
+    };
+    // pbrt-v4's cloud has no "scale" (left unread, it is reported unused).
+    let scale = if cloud { 1.0 } else { p.get_float("scale", 1.0)? };
     let medium = Medium {
         sigma_a: sigma_a * scale,
         sigma_s: sigma_s * scale,
@@ -1688,7 +1696,7 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
 /// `density` of `nx` x `ny` x `nz` values, x fastest, over the box from `p0`
 /// (0, 0, 0) to `p1` (1, 1, 1) in the medium's space). A grid of
 /// temperatures (emission) is refused with the emissive media.
-fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<DensityGrid>>> {
+fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<Density>>> {
     let p = &m.params;
     let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
     let what = format!("MakeNamedMedium \"{}\"", m.name);
@@ -1718,9 +1726,26 @@ fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<DensityGr
     }
     let p0 = p.get_point3("p0", Vec3::ZERO)?;
     let p1 = p.get_point3("p1", Vec3::ONE)?;
-    let grid = DensityGrid::new(n, values.to_vec(), p0, p1, m.world_from_medium)
+    let grid = Density::grid(n, values.to_vec(), p0, p1, m.world_from_medium)
         .map_err(|why| located(at("density"), format!("{what}: {why}")))?;
     Ok(Some(std::sync::Arc::new(grid)))
+}
+
+/// A `cloud` medium's density (pbrt-v4's `CloudMedium::Create`: `density`
+/// 1, `wispiness` 1, `frequency` 5, over the box from `p0` (0, 0, 0) to
+/// `p1` (1, 1, 1) in the medium's space).
+fn cloud_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<Density>>> {
+    let p = &m.params;
+    let cloud = Density::cloud(
+        p.get_float("density", 1.0)?,
+        p.get_float("wispiness", 1.0)?,
+        p.get_float("frequency", 5.0)?,
+        p.get_point3("p0", Vec3::ZERO)?,
+        p.get_point3("p1", Vec3::ONE)?,
+        m.world_from_medium,
+    )
+    .map_err(|why| located(&m.loc, format!("MakeNamedMedium \"{}\": {why}", m.name)))?;
+    Ok(Some(std::sync::Arc::new(cloud)))
 }
 
 fn located(loc: &Loc, message: impl Into<String>) -> Error {

@@ -1765,7 +1765,7 @@ fn grid_media_are_placed_where_pbrt_places_them() {
     let (_, m) = &c.desc.media[0];
     assert_eq!((m.sigma_a, m.sigma_s), (Vec3::ONE, Vec3::splat(2.0)));
     let g = m.density.as_ref().expect("a density grid");
-    assert_eq!(g.resolution(), [3, 1, 1]);
+    assert_eq!(g.resolution(), Some([3, 1, 1]));
     for (x, d) in [
         (-11.0, 1.0),
         (-13.0, 5.0),
@@ -1811,6 +1811,37 @@ fn grid_media_are_placed_where_pbrt_places_them() {
     )
     .unwrap_err();
     assert!(e.contains("is empty"), "{e}");
+}
+
+#[test]
+fn cloud_media_are_read_with_pbrts_defaults_and_place() {
+    // pbrt-v4's cloud over the default box [0, 1]^3 moved by Translate 4 0 0,
+    // density 1, wispiness 1, frequency 5 unless given; our world is pbrt's
+    // mirrored in x here. "scale" is no parameter of a cloud.
+    let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+                Translate 4 0 0\nMakeNamedMedium \"c\" \"string type\" \"cloud\" \"float density\" 2\n\
+                \"rgb sigma_s\" [3 3 3] \"float scale\" 7\nAttributeEnd\n\
+                MediumInterface \"c\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n";
+    let c = converted(text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let (_, m) = &c.desc.media[0];
+    assert_eq!((m.sigma_a, m.sigma_s), (Vec3::ONE, Vec3::splat(3.0)));
+    assert!(
+        c.warnings.iter().any(|w| w.contains("\"float scale\" is not used")),
+        "{:?}",
+        c.warnings
+    );
+    let d = m.density.as_ref().expect("a cloud");
+    assert_eq!(d.resolution(), None);
+    let expected = crate::medium::Density::cloud(2.0, 1.0, 5.0, Vec3::ZERO, Vec3::ONE, Mat4::IDENTITY).unwrap();
+    for p in [
+        Vec3::new(0.2, 0.6, 0.3),
+        Vec3::new(0.7, 0.9, 0.8),
+        Vec3::new(0.5, 0.3, 0.1),
+    ] {
+        let ours = d.density(Vec3::new(-(4.0 + p.x), p.y, p.z));
+        assert_eq!(ours, expected.density(p), "{p}");
+    }
+    assert_eq!(d.density(Vec3::new(4.5, 0.5, 0.5)), 0.0);
 }
 
 #[test]
