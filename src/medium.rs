@@ -53,18 +53,24 @@ enum Field {
     /// between samples takes their trilinear interpolation, and samples
     /// beyond the grid count as zero, so the density falls to zero over the
     /// box's outer half cells. Values x fastest, then y, then z.
-    Samples { n: [usize; 3], values: Vec<f32> },
-    /// pbrt-v4's cloud: octaves of Perlin noise at `frequency` a unit of
-    /// the medium's space, the lookup point perturbed by `wispiness`,
-    /// thinning with height; in [0, 1]. `lo` and `size`: the box in the
-    /// medium's space, where the noise lives.
-    Cloud {
-        density: f32,
-        wispiness: f32,
-        frequency: f32,
-        lo: Vec3,
-        size: Vec3,
+    Samples {
+        n: [usize; 3],
+        values: Vec<f32>,
     },
+    Cloud(Cloud),
+}
+
+/// pbrt-v4's cloud: octaves of Perlin noise at `frequency` a unit of the
+/// medium's space, the lookup point perturbed by `wispiness`, thinning with
+/// height; in [0, 1]. `lo` and `size`: the box in the medium's space, where
+/// the noise lives.
+#[derive(Clone, Debug, PartialEq)]
+struct Cloud {
+    density: f32,
+    wispiness: f32,
+    frequency: f32,
+    lo: Vec3,
+    size: Vec3,
 }
 
 impl std::fmt::Debug for Density {
@@ -82,17 +88,7 @@ impl std::fmt::Debug for Density {
                     self.world_from_grid, self.max
                 )
             }
-            Field::Cloud {
-                density,
-                wispiness,
-                frequency,
-                lo,
-                size,
-            } => write!(
-                f,
-                "Density {{ cloud: {density} {wispiness} {frequency} {lo} {size}, world_from_grid: {:?} }}",
-                self.world_from_grid
-            ),
+            Field::Cloud(c) => write!(f, "Density {{ {c:?}, world_from_grid: {:?} }}", self.world_from_grid),
         }
     }
 }
@@ -150,13 +146,13 @@ impl Density {
             return Err("the cloud's density, wispiness and frequency must be finite".into());
         }
         let (world_from_grid, lo, size) = unit_box(p0, p1, world_from_medium)?;
-        let field = Field::Cloud {
+        let field = Field::Cloud(Cloud {
             density,
             wispiness,
             frequency,
             lo,
             size,
-        };
+        });
         Self::placed(world_from_grid, field, 1.0)
     }
 
@@ -200,13 +196,7 @@ impl Density {
     fn lookup(&self, q: Vec3) -> f32 {
         match &self.field {
             Field::Samples { n, values } => trilinear(*n, values, q),
-            Field::Cloud {
-                density,
-                wispiness,
-                frequency,
-                lo,
-                size,
-            } => cloud_density(*lo + q * *size, *density, *wispiness, *frequency),
+            Field::Cloud(c) => cloud_density(c.lo + q * c.size, c.density, c.wispiness, c.frequency),
         }
     }
 
