@@ -327,7 +327,7 @@ mod tests {
 
     #[test]
     fn a_lossless_grid_medium_vanishes_under_a_uniform_sky() {
-        // Under a sky of radiance one, with nothing else in the scene, a
+        // Under a sky of radiance one, with no surface in the scene, a
         // medium that scatters without absorbing leaves radiance one
         // everywhere. Here it is an uneven density grid around the camera,
         // scattering each channel differently: paths scatter at null-tracked
