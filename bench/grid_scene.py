@@ -5,20 +5,40 @@ sky, for rendering with pbrt-v4 itself and with ours
 (`bench/against-pbrt.sh`). See BENCHMARKS.md, "Participating media".
 
     python3 bench/grid_scene.py OUT.pbrt [--homogeneous] [--absorbing] [N]
+    python3 bench/grid_scene.py OUT.pbrt --furnace
 
 N is the grid's samples along each axis (24 by default). --homogeneous
 writes the same scene with a homogeneous medium of half the coefficients
 instead (its twin, to tell the grid's share of a difference from the
-rest); --absorbing makes the smoke absorb without scattering.
+rest); --absorbing makes the smoke absorb without scattering. --furnace
+writes a white furnace instead: the camera inside a dense 4 x 4 x 4 grid
+that scatters without absorbing, under a sky of radiance 1 and nothing
+else, where every pixel's true value is 1 (Russian roulette in media).
 """
 import math
 import sys
 
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
 flags = {a for a in sys.argv[1:] if a.startswith("--")}
-if not args or flags - {"--homogeneous", "--absorbing"}:
+if not args or flags - {"--homogeneous", "--absorbing", "--furnace"}:
     sys.exit(__doc__)
 out = args[0]
+if "--furnace" in flags:
+    density = " ".join(str([0.0, 3.0, 0.5, 8.0][i % 4] * (1 + i % 3)) for i in range(64))
+    with open(out, "w") as f:
+        f.write(f'''LookAt 0 0 0.3  0 0 1  0 1 0
+MakeNamedMedium "cloud" "string type" "uniformgrid" "rgb sigma_a" [0 0 0] "rgb sigma_s" [0.3 0.8 2.0] "float g" 0.5
+  "integer nx" 4 "integer ny" 4 "integer nz" 4 "point3 p0" [-1.5 -1.5 -1.5] "point3 p1" [1.5 1.5 1.5]
+  "float density" [{density}]
+MediumInterface "" "cloud"
+Camera "perspective" "float fov" 60
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Sampler "halton" "integer pixelsamples" 256
+Integrator "volpath" "integer maxdepth" 60000
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+''')
+    sys.exit(0)
 n = int(args[1]) if len(args) > 1 else 24
 
 values = []
