@@ -1778,39 +1778,32 @@ fn grid_media_are_placed_where_pbrt_places_them() {
         assert!((got - d).abs() < 1e-4, "x = {x}: {got} vs {d}");
     }
     // What pbrt-v4 refuses, and what we do not render, each at its place.
-    let e = converted(&grid("\"float density\" [1 5]"), Files::default(), false).unwrap_err();
-    assert!(
-        e.starts_with("scene/main.pbrt:8:") && e.contains("2 density values for a grid of 3 x 1 x 1"),
-        "{e}"
-    );
-    let e = converted(&grid(""), Files::default(), false).unwrap_err();
-    assert!(
-        e.starts_with("scene/main.pbrt:7:") && e.contains("no \"density\" values"),
-        "{e}"
-    );
-    let e = converted(&grid("\"float density\" [1 -5 2]"), Files::default(), false).unwrap_err();
-    assert!(e.contains("a density of -5"), "{e}");
-    let e = converted(
-        &grid("\"float density\" [1 5 2] \"integer ny\" 0"),
-        Files::default(),
-        false,
-    )
-    .unwrap_err();
-    assert!(e.contains("\"ny\" must be at least 1"), "{e}");
-    let e = converted(
-        &grid("\"float density\" [1 5 2] \"float temperature\" [900 1200 900]"),
-        Files::default(),
-        false,
-    )
-    .unwrap_err();
-    assert!(e.contains("emissive media (\"temperature\")"), "{e}");
-    let e = converted(
-        &grid("\"float density\" [1 5 2] \"point3 p0\" [0 1 0]"),
-        Files::default(),
-        false,
-    )
-    .unwrap_err();
-    assert!(e.contains("is empty"), "{e}");
+    for (extra, place, what) in [
+        (
+            "\"float density\" [1 5]",
+            ":8:",
+            "2 density values for a grid of 3 x 1 x 1",
+        ),
+        ("", ":7:", "no \"density\" values"),
+        ("\"float density\" [1 -5 2]", ":8:", "a density of -5"),
+        (
+            "\"float density\" [1 5 2] \"integer ny\" 0",
+            ":8:",
+            "\"ny\" must be at least 1",
+        ),
+        (
+            "\"float density\" [1 5 2] \"float temperature\" [900 1200 900]",
+            ":8:",
+            "emissive media (\"temperature\")",
+        ),
+        ("\"float density\" [1 5 2] \"point3 p0\" [0 1 0]", ":8:", "is empty"),
+    ] {
+        let e = converted(&grid(extra), Files::default(), false).unwrap_err();
+        assert!(
+            e.starts_with(&format!("scene/main.pbrt{place}")) && e.contains(what),
+            "{e}"
+        );
+    }
 }
 
 #[test]
