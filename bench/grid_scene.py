@@ -4,13 +4,17 @@ in a box of no surface above a grey floor, lit by a disk light and a dim
 sky, for rendering with pbrt-v4 itself and with ours
 (`bench/against-pbrt.sh`). See BENCHMARKS.md, "Participating media".
 
-    python3 bench/grid_scene.py OUT.pbrt [--homogeneous] [--absorbing] [N]
+    python3 bench/grid_scene.py OUT.pbrt [--homogeneous] [--absorbing] [--emissive] [N]
     python3 bench/grid_scene.py OUT.pbrt --furnace
 
 N is the grid's samples along each axis (24 by default). --homogeneous
 writes the same scene with a homogeneous medium of half the coefficients
 instead (its twin, to tell the grid's share of a difference from the
-rest); --absorbing makes the smoke absorb without scattering. --furnace
+rest); --absorbing makes the smoke absorb without scattering; --emissive
+makes it glow: the grid by the blackbody of a temperature grid (hottest in
+the middle, with pbrt-v4's `temperatureoffset` and `temperaturescale`) times
+a grid of `Lescale`, the homogeneous twin by an RGB `Le` (with `Lescale`).
+--furnace
 writes a white furnace instead: the camera inside a dense 4 x 4 x 4 grid
 that scatters without absorbing, under a sky of radiance 1 and nothing
 else, where every pixel's true value is 1 (Russian roulette in media).
@@ -20,7 +24,7 @@ import sys
 
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
 flags = {a for a in sys.argv[1:] if a.startswith("--")}
-if not args or flags - {"--homogeneous", "--absorbing", "--furnace"}:
+if not args or flags - {"--homogeneous", "--absorbing", "--furnace", "--emissive"}:
     sys.exit(__doc__)
 out = args[0]
 if "--furnace" in flags:
@@ -41,7 +45,7 @@ LightSource "infinite" "rgb L" [1 1 1]
     sys.exit(0)
 n = int(args[1]) if len(args) > 1 else 24
 
-values = []
+values, temperatures, lescale = [], [], []
 for k in range(n):
     for j in range(n):
         for i in range(n):
@@ -49,18 +53,28 @@ for k in range(n):
             r = math.sqrt(x * x + 1.5 * y * y + z * z)
             d = max(0.0, 1 - r) * (1 + 0.5 * math.sin(7 * x) * math.cos(5 * z))
             values.append(f"{max(d, 0.0) * 4:.4f}")
+            # Kelvin after the offset (300) and scale (1.5): up to about 2100 K.
+            temperatures.append(f"{300 + 1400 * max(0.0, 1 - r):.2f}")
+            lescale.append(f"{1 + 0.5 * math.cos(3 * y):.4f}")
+emissive = "--emissive" in flags
 
 sigma_s = "[0 0 0]" if "--absorbing" in flags else "[2.5 2.0 1.5]"
 sigma_a = "[1.5 2.0 3.0]" if "--absorbing" in flags else "[0.5 0.6 0.8]"
 if "--homogeneous" in flags:
     medium = (f'MakeNamedMedium "smoke" "string type" "homogeneous" "rgb sigma_a" {sigma_a} '
               f'"rgb sigma_s" {sigma_s} "float scale" 0.5 "float g" 0.3')
+    if emissive:
+        medium += ' "rgb Le" [1.0 0.45 0.1] "float Lescale" 0.6'
 else:
     medium = (f'MakeNamedMedium "smoke" "string type" "uniformgrid" "rgb sigma_a" {sigma_a} '
               f'"rgb sigma_s" {sigma_s} "float g" 0.3\n'
               f'    "integer nx" {n} "integer ny" {n} "integer nz" {n} '
               f'"point3 p0" [-1 -1 -1] "point3 p1" [1 1 1]\n'
               f'    "float density" [{" ".join(values)}]')
+    if emissive:
+        medium += (f'\n    "float temperatureoffset" 300 "float temperaturescale" 1.5'
+                   f'\n    "float temperature" [{" ".join(temperatures)}]'
+                   f'\n    "float Lescale" [{" ".join(lescale)}]')
 
 # The box's triangles face into it, so its inside is pbrt-v4's "outside".
 scene = f'''LookAt 0 1.5 -5  0 0.2 0  0 1 0

@@ -393,8 +393,12 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
                 None => "a procedural cloud (pbrt-v4's), densities up to 1".to_string(),
             },
         };
+        let glow = m
+            .emission
+            .as_ref()
+            .map_or(String::new(), |e| format!(", {}", e.summary()));
         println!(
-            "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}",
+            "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}{glow}",
             m.sigma_a, m.sigma_s, m.g
         );
     }

@@ -12,7 +12,8 @@
 //! Coefficients are per RGB channel, in inverse scene units. Light travels
 //! through a distance d with transmittance exp(-sigma_t d), sigma_t =
 //! sigma_a + sigma_s, and a fraction sigma_s / sigma_t of what a medium
-//! stops is scattered, into directions the phase function gives.
+//! stops is scattered, into directions the phase function gives. A medium
+//! may also emit, sigma_a Le per unit length ([`Emission`]).
 
 use crate::math::{to_world, Vec2, Vec3};
 use crate::sampling::{mix64, Rng};
@@ -32,6 +33,181 @@ pub struct Medium {
     /// The density that scales both coefficients (pbrt-v4's `uniformgrid`);
     /// `None`: one everywhere.
     pub density: Option<Arc<Density>>,
+    /// Light the medium emits (pbrt-v4's `Le`); `None`: none.
+    pub emission: Option<Arc<Emission>>,
+}
+
+/// Light a medium emits, as pbrt-v4's media do: radiance Le per unit of
+/// absorption, so that sigma_a Le is emitted per unit length (and a medium
+/// that only absorbs, thick enough, looks Le bright).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Emission {
+    /// Le where the scale is one (linear RGB).
+    pub le: Vec3,
+    /// Grid media: the scale at each point (pbrt-v4's `Lescale`, samples on
+    /// the density's grid, looked up as the density is; by default one
+    /// sample of 1, which pbrt-v4's lookup fades towards the box's faces).
+    scale: Option<Field>,
+    /// Grid media: Le from the blackbody of each point's temperature instead.
+    temperature: Option<Temperature>,
+}
+
+/// Temperatures on a medium's grid: (value - offset) x scale kelvin, whose
+/// peak-normalised blackbody (pbrt-v4's `BlackbodySpectrum`) is Le where
+/// it is above 100 K (none below).
+#[derive(Clone, PartialEq)]
+struct Temperature {
+    field: Field,
+    offset: f32,
+    scale: f32,
+    /// The blackbody's RGB at `TABLE_LOW + i step` kelvin.
+    table: Vec<Vec3>,
+    step: f32,
+}
+
+impl std::fmt::Debug for Temperature {
+    // The table follows from the rest.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Temperature {{ {:?}, offset: {}, scale: {} }}",
+            self.field, self.offset, self.scale
+        )
+    }
+}
+
+/// A grid of temperatures as a scene file gives it: one value per grid
+/// point (x fastest), kelvin = (value - `offset`) x `scale`, and the colour
+/// `rgb` of the blackbody at a temperature.
+pub struct TemperatureGrid<'a> {
+    pub values: Vec<f32>,
+    pub offset: f32,
+    pub scale: f32,
+    pub rgb: &'a dyn Fn(f32) -> Vec3,
+}
+
+/// The lowest temperature that glows (pbrt-v4's cut-off).
+const TABLE_LOW: f32 = 100.0;
+/// Entries of a temperature's colour table.
+const TABLE_SIZE: usize = 4096;
+
+impl Emission {
+    /// A homogeneous medium's: `le` everywhere.
+    pub fn uniform(le: Vec3) -> Self {
+        Emission {
+            le,
+            scale: None,
+            temperature: None,
+        }
+    }
+
+    /// A grid medium's: `le` times the scale at each point (`scale`: one
+    /// sample per grid point, x fastest; `None`: pbrt-v4's single sample of
+    /// 1), or with `temperature` (values per grid point, the offset and scale
+    /// that turn them into kelvin, and the blackbody's RGB at a temperature)
+    /// the blackbody of each point's temperature times that scale.
+    pub fn grid(
+        n: [usize; 3],
+        le: Vec3,
+        scale: Option<Vec<f32>>,
+        temperature: Option<TemperatureGrid>,
+    ) -> Result<Self, String> {
+        let count = n.iter().product::<usize>();
+        let samples = |name: &str, values: Vec<f32>| -> Result<Field, String> {
+            if values.len() != count {
+                return Err(format!(
+                    "{} \"{name}\" values for a grid of {} values",
+                    values.len(),
+                    count
+                ));
+            }
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(format!("a \"{name}\" value of {v}"));
+            }
+            Ok(Field::Samples { n, values })
+        };
+        let scale = Some(match scale {
+            Some(v) => samples("Lescale", v)?,
+            None => Field::Samples {
+                n: [1, 1, 1],
+                values: vec![1.0],
+            },
+        });
+        let temperature = match temperature {
+            None => None,
+            Some(TemperatureGrid {
+                values,
+                offset,
+                scale: tscale,
+                rgb,
+            }) => {
+                if !(offset.is_finite() && tscale.is_finite()) {
+                    return Err("the temperature's offset and scale must be finite".into());
+                }
+                // Lookups interpolate between the values and zero.
+                let kelvin = |v: f32| (v - offset) * tscale;
+                let hottest = values.iter().fold(kelvin(0.0), |a, &v| a.max(kelvin(v)));
+                let step = ((hottest - TABLE_LOW) / (TABLE_SIZE - 1) as f32).max(f32::MIN_POSITIVE);
+                let table = (0..TABLE_SIZE).map(|i| rgb(TABLE_LOW + i as f32 * step)).collect();
+                Some(Temperature {
+                    field: samples("temperature", values)?,
+                    offset,
+                    scale: tscale,
+                    table,
+                    step,
+                })
+            }
+        };
+        Ok(Emission { le, scale, temperature })
+    }
+
+    /// Le at `q` in the grid's unit cube (anywhere, for a homogeneous medium).
+    fn at(&self, q: Vec3) -> Vec3 {
+        let s = self.scale.as_ref().map_or(1.0, |f| f.lookup(q));
+        if s <= 0.0 {
+            return Vec3::ZERO;
+        }
+        match &self.temperature {
+            None => self.le * s,
+            Some(t) => {
+                let k = (t.field.lookup(q) - t.offset) * t.scale;
+                if k.is_nan() || k <= TABLE_LOW {
+                    return Vec3::ZERO;
+                }
+                let x = ((k - TABLE_LOW) / t.step).min((TABLE_SIZE - 1) as f32);
+                let i = (x as usize).min(TABLE_SIZE - 2);
+                let f = x - i as f32;
+                (t.table[i] * (1.0 - f) + t.table[i + 1] * f) * s
+            }
+        }
+    }
+
+    /// What it emits, in a few words (for `info`).
+    pub fn summary(&self) -> String {
+        let scaled = match &self.scale {
+            Some(Field::Samples { n, .. }) if *n != [1, 1, 1] => " times a grid of Lescale",
+            _ => "",
+        };
+        match &self.temperature {
+            Some(t) => format!(
+                "emits the blackbody of a temperature grid (kelvin = (value - {}) x {}){scaled}",
+                t.offset, t.scale
+            ),
+            None => format!("emits Le {}{scaled}", self.le),
+        }
+    }
+
+    /// Whether the medium emits anything at all.
+    pub fn is_dark(&self) -> bool {
+        self.temperature.is_none() && self.le.max_element() <= 0.0
+    }
+}
+
+/// A path's weight: its throughput `beta` over the mean of its channels'
+/// densities relative to the hero's (`ratio`); see [`Medium::sample_distance`].
+#[inline(always)]
+pub fn path_weight(beta: Vec3, ratio: Vec3) -> Vec3 {
+    beta * (3.0 / ratio.element_sum())
 }
 
 /// A density over a box that scales a medium's coefficients point by point:
@@ -58,6 +234,31 @@ enum Field {
         values: Vec<f32>,
     },
     Cloud(Cloud),
+}
+
+impl std::fmt::Debug for Field {
+    // A digest of the values: scene fingerprints print media, and a grid
+    // may hold millions of values.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Field::Samples { n, values } => {
+                let digest = values
+                    .iter()
+                    .fold(0x9E37_79B9_7F4A_7C15u64, |h, v| mix64(h ^ v.to_bits() as u64));
+                write!(f, "Samples {{ n: {n:?}, values: {digest:016x} }}")
+            }
+            Field::Cloud(c) => write!(f, "{c:?}"),
+        }
+    }
+}
+
+impl Field {
+    fn lookup(&self, q: Vec3) -> f32 {
+        match self {
+            Field::Samples { n, values } => trilinear(*n, values, q),
+            Field::Cloud(c) => cloud_density(c.lo + q * c.size, c.density, c.wispiness, c.frequency),
+        }
+    }
 }
 
 /// pbrt-v4's cloud: octaves of Perlin noise at `frequency` a unit of the
@@ -194,10 +395,7 @@ impl Density {
 
     /// The density at `q` in the box's unit cube.
     fn lookup(&self, q: Vec3) -> f32 {
-        match &self.field {
-            Field::Samples { n, values } => trilinear(*n, values, q),
-            Field::Cloud(c) => cloud_density(c.lo + q * c.size, c.density, c.wispiness, c.frequency),
-        }
+        self.field.lookup(q)
     }
 
     /// The density at world point `p`: zero outside the grid's box (as in
@@ -292,6 +490,24 @@ impl Medium {
         Ok(())
     }
 
+    /// The Le the medium emits at world point `p` (sigma_a Le per unit
+    /// length): zero outside a grid's box.
+    pub fn le(&self, p: Vec3) -> Vec3 {
+        let Some(e) = &self.emission else {
+            return Vec3::ZERO;
+        };
+        match &self.density {
+            None => e.at(Vec3::ZERO),
+            Some(g) => {
+                let q = g.grid_from_world.transform_point3(p);
+                if q.cmplt(Vec3::ZERO).any() || q.cmpgt(Vec3::ONE).any() {
+                    return Vec3::ZERO;
+                }
+                e.at(q)
+            }
+        }
+    }
+
     /// Whether light is ever scattered (else it is only absorbed, and a
     /// path's throughput just takes the transmittance).
     pub fn scatters(&self) -> bool {
@@ -327,9 +543,31 @@ impl Medium {
     /// Media that only absorb never scatter: their transmittance is taken as
     /// it is, the ratios unchanged.
     pub fn sample_distance(&self, o: Vec3, d: Vec3, t_max: f32, hero: usize, u: f32) -> MediumEvent {
+        self.sample_distance_emitting(o, d, t_max, hero, u, None).0
+    }
+
+    /// [`Self::sample_distance`], and the light the medium emits along the
+    /// way towards a path whose throughput and channel ratios before the
+    /// segment are `path` (`None`: none is wanted), weighted as the path's
+    /// radiance is (add it to that). Emission is gathered where the tracking
+    /// stops to look (pbrt-v4's `VolPathIntegrator`): at the scattering point
+    /// in a homogeneous medium (sigma_a Le over sigma_t, the collision's
+    /// density having sampled it), at every tentative collision in a grid
+    /// (sigma_a Le over the majorant), exactly in a homogeneous medium that
+    /// only absorbs (Le (1 - transmittance)).
+    pub fn sample_distance_emitting(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        hero: usize,
+        u: f32,
+        path: Option<(Vec3, Vec3)>,
+    ) -> (MediumEvent, Vec3) {
+        let emit = self.emission.as_deref().filter(|e| !e.is_dark()).zip(path);
         match &self.density {
-            None => self.sample_homogeneous(t_max, hero, u),
-            Some(g) => self.sample_grid(g, o, d, t_max, hero, u),
+            None => self.sample_homogeneous(t_max, hero, u, emit),
+            Some(g) => self.sample_grid(g, o, d, t_max, hero, u, emit),
         }
     }
 
@@ -345,7 +583,7 @@ impl Medium {
                 None => Vec3::ONE,
                 Some((go, gd, t0, t1)) => {
                     let mut rng = Rng::keyed(0x7472_616E_736D, ray_key(o, d), dist.to_bits() as u64);
-                    self.ratio_track(g, go, gd, t0, t1, &mut rng)
+                    self.ratio_track(g, go, gd, t0, t1, &mut rng, None)
                 }
             },
         }
@@ -353,8 +591,21 @@ impl Medium {
 
     /// Transmittance over [t0, t1] of the grid-space ray `go + t gd` by
     /// ratio tracking (Novak et al. 2014) against one majorant for all
-    /// channels, with pbrt-v4's roulette once it is small.
-    fn ratio_track(&self, g: &Density, go: Vec3, gd: Vec3, t0: f32, t1: f32, rng: &mut Rng) -> Vec3 {
+    /// channels, with pbrt-v4's roulette once it is small. With `emitted`,
+    /// adds to it the light the medium emits on the way (at each tentative
+    /// collision, the transmittance so far times sigma_a Le over the
+    /// majorant: an estimate of its integral along the ray).
+    #[allow(clippy::too_many_arguments)]
+    fn ratio_track(
+        &self,
+        g: &Density,
+        go: Vec3,
+        gd: Vec3,
+        t0: f32,
+        t1: f32,
+        rng: &mut Rng,
+        mut emitted: Option<(&Emission, &mut Vec3)>,
+    ) -> Vec3 {
         let st = self.sigma_t();
         let majorant = st.max_element() * g.max;
         if majorant <= 0.0 {
@@ -367,7 +618,11 @@ impl Medium {
             if t >= t1 {
                 return tr;
             }
-            let density = g.lookup(go + gd * t);
+            let q = go + gd * t;
+            let density = g.lookup(q);
+            if let Some((e, sum)) = emitted.as_mut() {
+                **sum += tr * self.sigma_a * (density / majorant) * e.at(q);
+            }
             tr *= (Vec3::ONE - st * (density / majorant)).max(Vec3::ZERO);
             let m = tr.max_element();
             if m <= 0.0 {
@@ -396,19 +651,31 @@ impl Medium {
     /// channels' one-sample MIS stays as in the homogeneous case, which a
     /// grid of constant density reproduces exactly. The first distance
     /// uses `u`, the rest a stream seeded by it and the ray.
-    fn sample_grid(&self, g: &Density, o: Vec3, d: Vec3, t_max: f32, hero: usize, u: f32) -> MediumEvent {
+    #[allow(clippy::too_many_arguments)]
+    fn sample_grid(
+        &self,
+        g: &Density,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        hero: usize,
+        u: f32,
+        emit: Option<(&Emission, (Vec3, Vec3))>,
+    ) -> (MediumEvent, Vec3) {
         let Some((go, gd, t0, t1)) = g.clip(o, d, t_max) else {
-            return MediumEvent::Pass {
+            let pass = MediumEvent::Pass {
                 beta: Vec3::ONE,
                 ratio: Vec3::ONE,
             };
+            return (pass, Vec3::ZERO);
         };
         let mut rng = Rng::keyed(u.to_bits() as u64, ray_key(o, d), 0x0064_656C_7461);
         if !self.scatters() {
-            return MediumEvent::Pass {
-                beta: self.ratio_track(g, go, gd, t0, t1, &mut rng),
-                ratio: Vec3::ONE,
-            };
+            let mut sum = Vec3::ZERO;
+            let beta = self.ratio_track(g, go, gd, t0, t1, &mut rng, emit.map(|(e, _)| (e, &mut sum)));
+            let emitted = emit.map_or(Vec3::ZERO, |(_, (b, r))| path_weight(b, r) * sum);
+            let pass = MediumEvent::Pass { beta, ratio: Vec3::ONE };
+            return (pass, emitted);
         }
         let st = self.sigma_t();
         let majorant = st * g.max;
@@ -417,6 +684,7 @@ impl Medium {
         let (mut beta, mut ratio) = (Vec3::ONE, Vec3::ONE);
         let mut t = t0;
         let mut u = u;
+        let mut emitted = Vec3::ZERO;
         for _ in 0..MAX_TRACKING_STEPS {
             let step = if mh > 0.0 { -(1.0 - u).ln() / mh } else { f32::INFINITY };
             u = rng.next_f32();
@@ -425,11 +693,22 @@ impl Medium {
                 beta *= e / e[h];
                 ratio *= e / e[h];
                 let (beta, ratio) = normalised(beta, ratio);
-                return MediumEvent::Pass { beta, ratio };
+                return (MediumEvent::Pass { beta, ratio }, emitted);
             }
             t += step;
             let e = exp(-majorant * step);
-            let density = g.lookup(go + gd * t);
+            let q = go + gd * t;
+            let density = g.lookup(q);
+            if let Some((em, (b, r))) = emit {
+                // A tentative collision's density in each channel is its
+                // majorant's: the ratios take that, as pbrt-v4's r_e.
+                let p = mh * e[h];
+                let le = em.at(q);
+                emitted += path_weight(
+                    b * beta * e * self.sigma_a * density * le / p,
+                    r * ratio * majorant * e / p,
+                );
+            }
             let sigma_t = st * density;
             let sigma_n = (majorant - sigma_t).max(Vec3::ZERO);
             if sigma_n[h] <= 0.0 || rng.next_f32() * mh < sigma_t[h] {
@@ -437,7 +716,7 @@ impl Medium {
                 beta *= self.sigma_s * density * e / p;
                 ratio *= sigma_t * e / p;
                 let (beta, ratio) = normalised(beta, ratio);
-                return MediumEvent::Scatter { t, beta, ratio };
+                return (MediumEvent::Scatter { t, beta, ratio }, emitted);
             }
             let p = sigma_n[h] * e[h];
             beta *= sigma_n * e / p;
@@ -448,18 +727,31 @@ impl Medium {
         }
         // Beyond any sensible scene (a majorant far above the densities the
         // ray meets over a vast distance): the path ends.
-        MediumEvent::Pass {
+        let end = MediumEvent::Pass {
             beta: Vec3::ZERO,
             ratio: Vec3::ONE,
-        }
+        };
+        (end, emitted)
     }
 
-    fn sample_homogeneous(&self, t_max: f32, hero: usize, u: f32) -> MediumEvent {
+    fn sample_homogeneous(
+        &self,
+        t_max: f32,
+        hero: usize,
+        u: f32,
+        emit: Option<(&Emission, (Vec3, Vec3))>,
+    ) -> (MediumEvent, Vec3) {
         if !self.scatters() {
-            return MediumEvent::Pass {
-                beta: self.transmittance(t_max),
+            let tr = self.transmittance(t_max);
+            // sigma_t = sigma_a: the integral of sigma_a Le exp(-sigma_a t).
+            let emitted = emit.map_or(Vec3::ZERO, |(e, (b, r))| {
+                path_weight(b, r) * e.at(Vec3::ZERO) * (Vec3::ONE - tr)
+            });
+            let pass = MediumEvent::Pass {
+                beta: tr,
                 ratio: Vec3::ONE,
             };
+            return (pass, emitted);
         }
         let st = self.sigma_t();
         let sc = st[hero.min(2)];
@@ -468,18 +760,23 @@ impl Medium {
             let tr = self.transmittance(t);
             let p = st * tr;
             let ph = p[hero.min(2)];
-            return MediumEvent::Scatter {
+            let emitted = emit.map_or(Vec3::ZERO, |(e, (b, r))| {
+                path_weight(b * tr * self.sigma_a * e.at(Vec3::ZERO) / ph, r * p / ph)
+            });
+            let scatter = MediumEvent::Scatter {
                 t,
                 beta: self.sigma_s * tr / ph,
                 ratio: p / ph,
             };
+            return (scatter, emitted);
         }
         let tr = self.transmittance(t_max);
         let ph = tr[hero.min(2)];
-        MediumEvent::Pass {
+        let pass = MediumEvent::Pass {
             beta: tr / ph,
             ratio: tr / ph,
-        }
+        };
+        (pass, Vec3::ZERO)
     }
 
     /// The phase function's value for light travelling along `d` scattered
@@ -702,6 +999,7 @@ mod tests {
                 sigma_s: Vec3::ONE,
                 g,
                 density: None,
+                emission: None,
             };
             let mut rng = Rng::new(7, g.to_bits() as u64);
             let bins = 20;
@@ -745,6 +1043,7 @@ mod tests {
             sigma_s: Vec3::new(1.0, 0.2, 0.0),
             g: 0.0,
             density: None,
+            emission: None,
         };
         let t_max = 1.3;
         let mut rng = Rng::new(3, 4);
@@ -752,7 +1051,7 @@ mod tests {
         let (mut pass, mut scatter) = (Vec3::ZERO, Vec3::ZERO);
         for i in 0..n {
             let mean = |r: Vec3| r.element_sum() / 3.0;
-            match m.sample_homogeneous(t_max, i % 3, rng.next_f32()) {
+            match m.sample_homogeneous(t_max, i % 3, rng.next_f32(), None).0 {
                 MediumEvent::Pass { beta, ratio } => pass += beta / mean(ratio),
                 MediumEvent::Scatter { t, beta, ratio } => {
                     assert!(t < t_max);
@@ -774,7 +1073,7 @@ mod tests {
             sigma_s: Vec3::ZERO,
             ..m
         };
-        match a.sample_homogeneous(t_max, 1, 0.5) {
+        match a.sample_homogeneous(t_max, 1, 0.5, None).0 {
             MediumEvent::Pass { beta, ratio } => assert_eq!((beta, ratio), (a.transmittance(t_max), Vec3::ONE)),
             e => panic!("{e:?}"),
         }
@@ -843,6 +1142,7 @@ mod tests {
             sigma_s: Vec3::new(2.0, 0.4, 0.0),
             g: 0.0,
             density: Some(g.clone()),
+            emission: None,
         };
         let (o, d, t_max) = (Vec3::new(-1.6, 0.1, 0.2), Vec3::X, 2.9);
         let st = m.sigma_t();
@@ -913,9 +1213,11 @@ mod tests {
             sigma_s: Vec3::new(0.5, 1.0, 2.0),
             g: 0.2,
             density: None,
+            emission: None,
         };
         let m = Medium {
             density: Some(g),
+            emission: None,
             ..h.clone()
         };
         let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1.0);
@@ -923,7 +1225,7 @@ mod tests {
             let u = (k as f32 + 0.5) / 300.0;
             let (o, d) = (Vec3::new(-3.0, 1.0, 2.0), Vec3::new(1.0, 0.5, -0.2).normalize());
             match (
-                h.sample_homogeneous(4.0, k % 3, u),
+                h.sample_homogeneous(4.0, k % 3, u, None).0,
                 m.sample_distance(o, d, 4.0, k % 3, u),
             ) {
                 (MediumEvent::Pass { beta: b0, ratio: r0 }, MediumEvent::Pass { beta, ratio }) => {
@@ -1014,5 +1316,64 @@ mod tests {
             cloud_density(p, 2.0, 1.0, 5.0)
         );
         assert!(Density::cloud(f32::NAN, 1.0, 5.0, Vec3::ZERO, Vec3::ONE, Mat4::IDENTITY).is_err());
+    }
+
+    #[test]
+    fn temperatures_glow_as_their_table_says() {
+        // Two grid samples, at q = (0.25, 0.5, 0.5) and (0.75, 0.5, 0.5):
+        // 1300 and 2600 kelvin after the offset and scale, the first with a
+        // Lescale of 2. The colour of a temperature is read from a table
+        // between 100 K and the hottest; a stand-in colour (k / 1000)^2 per
+        // channel shows what its interpolation gives.
+        let rgb = |k: f32| Vec3::new(1.0, 0.5, 0.25) * (k / 1000.0).powi(2);
+        let e = Emission::grid(
+            [2, 1, 1],
+            Vec3::ONE,
+            Some(vec![2.0, 1.0]),
+            Some(TemperatureGrid {
+                values: vec![700.0, 1350.0],
+                offset: 50.0,
+                scale: 2.0,
+                rgb: &rgb,
+            }),
+        )
+        .unwrap();
+        for (q, expected) in [
+            (Vec3::new(0.25, 0.5, 0.5), rgb(1300.0) * 2.0),
+            (Vec3::new(0.75, 0.5, 0.5), rgb(2600.0)),
+            // Half way, the temperature and the scale interpolate.
+            (Vec3::new(0.5, 0.5, 0.5), rgb(1950.0) * 1.5),
+        ] {
+            let got = e.at(q);
+            assert!(
+                ((got - expected) / expected).abs().max_element() < 1e-4,
+                "{q}: {got} vs {expected}"
+            );
+        }
+        // On the box's face the samples count half (pbrt-v4's lookup): 350
+        // there, 600 K, and a Lescale of 1.
+        let face = e.at(Vec3::new(0.0, 0.5, 0.5));
+        assert!(((face - rgb(600.0)) / rgb(600.0)).abs().max_element() < 1e-4, "{face}");
+        // Below 100 K nothing glows: 20 K at the second sample here.
+        let cold = Some(TemperatureGrid {
+            values: vec![700.0, 60.0],
+            offset: 50.0,
+            scale: 2.0,
+            rgb: &rgb,
+        });
+        let e = Emission::grid([2, 1, 1], Vec3::ONE, None, cold).unwrap();
+        assert_eq!(e.at(Vec3::new(0.75, 0.5, 0.5)), Vec3::ZERO);
+        assert!(e.at(Vec3::new(0.25, 0.5, 0.5)).max_element() > 0.0);
+        // Errors name what is wrong.
+        let bad = Emission::grid([2, 1, 1], Vec3::ONE, Some(vec![1.0]), None).unwrap_err();
+        assert!(bad.contains("1 \"Lescale\" values for a grid of 2 values"), "{bad}");
+        let t = Some(TemperatureGrid {
+            values: vec![1.0, f32::NAN],
+            offset: 0.0,
+            scale: 1.0,
+            rgb: &rgb,
+        });
+        let bad = Emission::grid([2, 1, 1], Vec3::ONE, None, t).unwrap_err();
+        assert!(bad.contains("a \"temperature\" value of NaN"), "{bad}");
     }
 }

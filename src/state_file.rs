@@ -666,6 +666,7 @@ mod tests {
             sigma_s: Vec3::splat(0.2),
             g: 0.0,
             density: None,
+            emission: None,
         };
         b.media.push(("fog".into(), fog));
         b.camera_medium = Some(0);

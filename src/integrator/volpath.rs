@@ -13,14 +13,15 @@
 //! vertex (surface or medium) one light sample, its shadow ray taking the
 //! transmittance of the media it crosses (`Scene::transmittance`), combined
 //! with the phase function's or the BSDF's sample by the power heuristic, as
-//! in the path tracer. Russian roulette as there.
+//! in the path tracer. Russian roulette as there. Light a medium emits is
+//! gathered along each segment as `Medium::sample_distance_emitting` tracks it.
 
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, sample_bsdf, scatters_towards};
 use super::path::{PathTracer, ROULETTE_DEPTH};
 use super::{LightSampling, RayStats};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
-use crate::medium::{normalised, MediumEvent};
+use crate::medium::{normalised, path_weight, MediumEvent};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene, MAX_CROSSINGS};
 
@@ -47,8 +48,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     // Each channel's path density over the hero channel's.
     let mut ratio = Vec3::ONE;
     let hero = ((sampler.next_f32() * 3.0) as usize).min(2);
-    // The path's weight: beta over the mean of the channels' densities.
-    let weight = |beta: Vec3, ratio: Vec3| beta * (3.0 / ratio.element_sum());
+    let weight = path_weight;
     let mut ray = *camera_ray;
     let mut medium = scene.camera_medium;
     let mut depth = 0;
@@ -71,7 +71,11 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
             let med = &scene.media[m as usize];
             let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
             let u = if med.is_random() { sampler.next_f32() } else { 0.0 };
-            match med.sample_distance(ray.o, ray.d, t_max, hero, u) {
+            // Emitted light counts up to the last bounce, as in pbrt-v4.
+            let path = pt.max_depth.is_none_or(|d| depth < d).then_some((beta, ratio));
+            let (event, emitted) = med.sample_distance_emitting(ray.o, ray.d, t_max, hero, u, path);
+            l += emitted;
+            match event {
                 MediumEvent::Pass { beta: b, ratio: r } => {
                     beta *= b;
                     ratio *= r;
@@ -297,6 +301,7 @@ mod tests {
                 sigma_s: Vec3::new(0.7, 1.5, 4.0),
                 g: 0.6,
                 density: None,
+                emission: None,
             },
         ));
         d.camera_medium = Some(0);
@@ -315,6 +320,7 @@ mod tests {
                 sigma_s: Vec3::new(0.7, 1.5, 4.0),
                 g: 0.6,
                 density: None,
+                emission: None,
             },
         ));
         d.camera_medium = Some(0);
@@ -323,6 +329,84 @@ mod tests {
             .film;
         let dark = film.mean(0, 0, 16, 16);
         assert!((dark / expected).max_element() < 0.9, "{dark:?} vs {expected:?}");
+    }
+
+    #[test]
+    fn an_emissive_medium_inside_a_wall_of_its_radiance_glows_with_it() {
+        // Radiance Le everywhere solves the transfer equation in a medium
+        // that emits sigma_a Le, whatever it absorbs or scatters and however
+        // its density varies (-sigma_t Le + sigma_a Le + sigma_s Le = 0), and
+        // a black wall that emits Le closes it: every pixel is Le. Without
+        // the medium's emission the absorbing cases would be far darker, and
+        // wrong weights for the emission at a collision (the channels' MIS,
+        // the majorant's share in a grid) show in the coloured channels.
+        use crate::medium::{Density, Emission};
+        use std::sync::Arc;
+        let le = Vec3::new(1.0, 0.5, 0.25);
+        let wall = Material::Emissive { albedo: Vec3::ZERO, le };
+        let values: Vec<f32> = (0..64)
+            .map(|i| [0.0, 3.0, 0.5, 8.0][i % 4] * (1 + i % 3) as f32)
+            .collect();
+        // The box reaches beyond the wall, so that Lescale's fading to zero
+        // over the box's outer half cells stays outside it.
+        let grid = Density::grid(
+            [4, 4, 4],
+            values,
+            Vec3::splat(-2.0),
+            Vec3::splat(2.0),
+            glam::Mat4::IDENTITY,
+        )
+        .unwrap();
+        let grid = Some(Arc::new(grid));
+        let ones = Emission::grid([4, 4, 4], le, Some(vec![1.0; 64]), None).unwrap();
+        for (name, sigma_a, sigma_s, density, emission) in [
+            (
+                "homogeneous, scattering",
+                Vec3::new(0.5, 1.0, 0.2),
+                Vec3::new(0.7, 1.5, 4.0),
+                None,
+                Emission::uniform(le),
+            ),
+            (
+                "homogeneous, absorbing",
+                Vec3::new(0.5, 1.0, 2.0),
+                Vec3::ZERO,
+                None,
+                Emission::uniform(le),
+            ),
+            (
+                "grid, scattering",
+                Vec3::new(0.2, 0.5, 0.1),
+                Vec3::new(0.3, 0.8, 2.0),
+                grid.clone(),
+                ones.clone(),
+            ),
+            (
+                "grid, absorbing",
+                Vec3::new(0.3, 0.6, 1.0),
+                Vec3::ZERO,
+                grid.clone(),
+                ones,
+            ),
+        ] {
+            let mut d = closed_sphere_desc(wall.clone(), None, 16);
+            d.media.push((
+                "glow".into(),
+                Medium {
+                    sigma_a,
+                    sigma_s,
+                    g: 0.6,
+                    density,
+                    emission: Some(Arc::new(emission)),
+                },
+            ));
+            d.camera_medium = Some(0);
+            let film = render(&Scene::build(d).unwrap(), &path_settings(64, None), &|| {})
+                .unwrap()
+                .film;
+            let mean = film.mean(0, 0, 16, 16);
+            assert!(((mean - le) / le).abs().max_element() < 0.01, "{name}: {mean} vs {le}");
+        }
     }
 
     #[test]
@@ -360,6 +444,7 @@ mod tests {
                 sigma_s: Vec3::new(0.3, 0.8, 2.0),
                 g: 0.5,
                 density: Some(Arc::new(grid)),
+                emission: None,
             },
         ));
         d.camera_medium = Some(0);
@@ -448,6 +533,7 @@ mod tests {
                 sigma_s: Vec3::ZERO,
                 g: 0.0,
                 density: None,
+                emission: None,
             },
         ));
         Scene::build(d).unwrap()
@@ -533,6 +619,7 @@ mod tests {
             sigma_s: Vec3::ZERO,
             g: 0.0,
             density: None,
+            emission: None,
         });
         let n = 600;
         let mut integral = glam::DVec3::ZERO;
@@ -570,6 +657,7 @@ mod tests {
             sigma_s: Vec3::new(0.3, 0.6, 1.2),
             g: 0.5,
             density: None,
+            emission: None,
         });
         // Under the light, through the fog, to the floor.
         let ray = Ray::new(Vec3::new(-0.5, -0.5, 0.5), Vec3::new(1.0, 1.0, -0.5).normalize());

@@ -245,6 +245,7 @@ impl Media<'_> {
             sigma_s: m.sigma_s.map_or(Vec3::ZERO, RgbSpec::rgb),
             g: m.g.map_or(0.0, |g| g.0),
             density: None,
+            emission: None,
         };
         medium
             .check()

@@ -920,12 +920,14 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
             sigma_s: Vec3::ZERO,
             g: 0.0,
             density: None,
+            emission: None,
         },
         Medium {
             sigma_a: Vec3::new(0.1, 0.3, 0.6),
             sigma_s: Vec3::ZERO,
             g: 0.0,
             density: None,
+            emission: None,
         },
     );
     // Media in order of first use; the one nobody names is left out.

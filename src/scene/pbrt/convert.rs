@@ -47,7 +47,7 @@ use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
-use crate::medium::{Density, Medium, MediumInterface};
+use crate::medium::{Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
@@ -1663,20 +1663,24 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         (Ok(a), Ok(s)) => (a, s),
         (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
     };
-    let emits = match p.get_spectrum("Le")? {
-        None => false,
-        Some(v) => reflectance_rgb(&v).is_none_or(|c| c.max_element() > 0.0),
-    };
-    p.mark_used("Lescale", super::ParamType::Float);
-    if emits {
-        return Ok(Err("emissive media (\"Le\") are not supported".into()));
-    }
-    let density = if grid {
-        grid_density(m)?
-    } else if cloud {
-        cloud_density(m)?
-    } else {
+    // pbrt-v4's cloud emits nothing (its "Le" is left unread, and reported).
+    let le = if cloud {
         None
+    } else {
+        match medium_le(m)? {
+            Ok(le) => le,
+            Err(why) => return Ok(Err(why)),
+        }
+    };
+    let (density, emission) = if grid {
+        let density = grid_density(m)?;
+        let emission = grid_emission(m, &density, le)?;
+        (Some(std::sync::Arc::new(density)), emission)
+    } else if cloud {
+        (cloud_density(m)?, None)
+    } else {
+        let lescale = p.get_float("Lescale", 1.0)?;
+        (None, le.map(|c| MediumEmission::uniform(c * lescale)))
     };
     // pbrt-v4's cloud has no "scale" (left unread, it is reported unused).
     let scale = if cloud { 1.0 } else { p.get_float("scale", 1.0)? };
@@ -1685,6 +1689,7 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         sigma_s: sigma_s * scale,
         g: p.get_float("g", 0.0)?,
         density,
+        emission: emission.filter(|e| !e.is_dark()).map(std::sync::Arc::new),
     };
     medium
         .check()
@@ -1692,23 +1697,85 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
     Ok(Ok(medium))
 }
 
-/// A `uniformgrid` medium's density (pbrt-v4's `GridMedium::Create`:
-/// `density` of `nx` x `ny` x `nz` values, x fastest, over the box from `p0`
-/// (0, 0, 0) to `p1` (1, 1, 1) in the medium's space). A grid of
-/// temperatures (emission) is refused with the emissive media.
-fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<Density>>> {
+/// A medium's `Le` as the RGB radiance the film records (pbrt-v4 reads it
+/// as an illuminant and divides by its luminance, as for area lights), when
+/// it has one that is not black; `Err` when it is given as a spectrum we
+/// cannot read.
+fn medium_le(m: &super::ir::Medium) -> Result<std::result::Result<Option<Vec3>, String>> {
+    let p = &m.params;
+    let Some(v) = p.get_spectrum("Le")? else {
+        return Ok(Ok(None));
+    };
+    let rgb = match &v {
+        SpectrumValue::Named(n) if n == "stdillum-D65" => Some(Vec3::ONE),
+        _ => v.light_rgb(),
+    };
+    match rgb {
+        None => Ok(Err("\"Le\" given as this spectrum is not supported".into())),
+        Some(c) if !(c.is_finite() && c.min_element() >= 0.0) => Err(located(
+            p.loc_of("Le").unwrap_or(&m.loc),
+            format!(
+                "MakeNamedMedium \"{}\": \"Le\" {c}: must be finite and not negative",
+                m.name
+            ),
+        )),
+        Some(c) => Ok(Ok((c.max_element() > 0.0).then_some(c))),
+    }
+}
+
+/// A `uniformgrid` medium's emission (pbrt-v4's `GridMedium::Create`): `Le`
+/// times `Lescale` at each point (one value per grid point; by default a
+/// single 1), or instead of `Le` a grid of `temperature`s, in kelvin after
+/// `temperatureoffset` (or `temperaturecutoff`, 0) is taken off and
+/// `temperaturescale` (1) multiplies.
+fn grid_emission(m: &super::ir::Medium, density: &Density, le: Option<Vec3>) -> Result<Option<MediumEmission>> {
     let p = &m.params;
     let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
     let what = format!("MakeNamedMedium \"{}\"", m.name);
-    if !p.get_floats("temperature").is_empty() {
+    let temperature = p.get_floats("temperature");
+    let n = density.resolution().unwrap_or([1, 1, 1]);
+    let offset = p.get_float("temperatureoffset", p.get_float("temperaturecutoff", 0.0)?)?;
+    let tscale = p.get_float("temperaturescale", 1.0)?;
+    if p.has("Le") && !temperature.is_empty() {
         return Err(located(
             at("temperature"),
-            format!("{what}: emissive media (\"temperature\") are not supported"),
+            format!("{what}: both \"Le\" and \"temperature\" are given"),
         ));
     }
-    for name in ["temperatureoffset", "temperaturescale", "temperaturecutoff"] {
-        p.mark_used(name, super::ParamType::Float);
+    let lescale = p.get_floats("Lescale");
+    if le.is_none() && temperature.is_empty() {
+        return Ok(None);
     }
+    let rgb = |k: f32| super::spectrum::blackbody_film_rgb(k);
+    MediumEmission::grid(
+        n,
+        le.unwrap_or(Vec3::ZERO),
+        (!lescale.is_empty()).then(|| lescale.to_vec()),
+        (!temperature.is_empty()).then(|| TemperatureGrid {
+            values: temperature.to_vec(),
+            offset,
+            scale: tscale,
+            rgb: &rgb,
+        }),
+    )
+    .map(Some)
+    .map_err(|why| {
+        let name = if why.contains("Lescale") {
+            "Lescale"
+        } else {
+            "temperature"
+        };
+        located(at(name), format!("{what}: {why}"))
+    })
+}
+
+/// A `uniformgrid` medium's density (pbrt-v4's `GridMedium::Create`:
+/// `density` of `nx` x `ny` x `nz` values, x fastest, over the box from `p0`
+/// (0, 0, 0) to `p1` (1, 1, 1) in the medium's space).
+fn grid_density(m: &super::ir::Medium) -> Result<Density> {
+    let p = &m.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
+    let what = format!("MakeNamedMedium \"{}\"", m.name);
     let values = p.get_floats("density");
     if values.is_empty() {
         return Err(located(&m.loc, format!("{what}: no \"density\" values for the grid")));
@@ -1726,9 +1793,8 @@ fn grid_density(m: &super::ir::Medium) -> Result<Option<std::sync::Arc<Density>>
     }
     let p0 = p.get_point3("p0", Vec3::ZERO)?;
     let p1 = p.get_point3("p1", Vec3::ONE)?;
-    let grid = Density::grid(n, values.to_vec(), p0, p1, m.world_from_medium)
-        .map_err(|why| located(at("density"), format!("{what}: {why}")))?;
-    Ok(Some(std::sync::Arc::new(grid)))
+    Density::grid(n, values.to_vec(), p0, p1, m.world_from_medium)
+        .map_err(|why| located(at("density"), format!("{what}: {why}")))
 }
 
 /// A `cloud` medium's density (pbrt-v4's `CloudMedium::Create`: `density`

@@ -290,20 +290,19 @@ pub fn blackbody_rgb(kelvin: f32) -> Vec3 {
     xyz_to_linear_srgb(blackbody_xyz(kelvin))
 }
 
-/// One lobe of the Wyman-Sloan-Shirley fit: a Gaussian with different widths
-/// below and above its mean.
-fn lobe(lambda: f64, mean: f64, below: f64, above: f64) -> f64 {
-    let t = (lambda - mean) / if lambda < mean { below } else { above };
-    (-0.5 * t * t).exp()
+/// The linear sRGB pbrt-v4's film records for the peak-normalised blackbody
+/// where nothing normalised it (the temperature of a medium's grid): its
+/// XYZ sensor integrates S x̄ over nanometres without dividing by the
+/// integral of ȳ (106.86), which lights' spectra make up for by being
+/// normalised to that luminance.
+pub fn blackbody_film_rgb(kelvin: f32) -> Vec3 {
+    let y_integral: f64 = (LAMBDA_MIN..=LAMBDA_MAX).map(|l| cie_xyz_bar(l as f64)[1]).sum();
+    blackbody_rgb(kelvin) * y_integral as f32
 }
 
-/// CIE 1931 2° colour matching functions (x̄, ȳ, z̄), analytic fit.
+/// CIE 1931 2° colour matching functions (x̄, ȳ, z̄): the CIE's table.
 pub fn cie_xyz_bar(lambda: f64) -> [f64; 3] {
-    let x = 1.056 * lobe(lambda, 599.8, 37.9, 31.0) + 0.362 * lobe(lambda, 442.0, 16.0, 26.7)
-        - 0.065 * lobe(lambda, 501.1, 20.4, 26.2);
-    let y = 0.821 * lobe(lambda, 568.8, 46.9, 40.5) + 0.286 * lobe(lambda, 530.9, 16.3, 31.1);
-    let z = 1.217 * lobe(lambda, 437.0, 11.8, 36.0) + 0.681 * lobe(lambda, 459.0, 26.0, 13.8);
-    [x, y, z]
+    super::cie::cie_1931(lambda)
 }
 
 const LAMBDA_MIN: u32 = 360;

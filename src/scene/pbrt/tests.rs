@@ -835,12 +835,18 @@ fn blackbody_colours_are_on_the_planckian_locus() {
     // CIE 1931 chromaticities of the Planckian radiator: 6504 K (D65's CCT)
     // and 2856 K (illuminant A).
     let (x, y) = chromaticity(spectrum::blackbody_xyz(6504.0));
-    assert!((x - 0.3135).abs() < 0.003 && (y - 0.3236).abs() < 0.003, "{x} {y}");
+    assert!((x - 0.3135).abs() < 5e-4 && (y - 0.3236).abs() < 5e-4, "{x} {y}");
     let (x, y) = chromaticity(spectrum::blackbody_xyz(2856.0));
-    assert!((x - 0.4476).abs() < 0.003 && (y - 0.4074).abs() < 0.003, "{x} {y}");
-    // Near-white at 6504 K, red above blue at 3000 K.
+    assert!((x - 0.4476).abs() < 5e-4 && (y - 0.4074).abs() < 5e-4, "{x} {y}");
+    // A cool one too, whose light is mostly in the matching functions' red
+    // tail (Planck at 1500 K: x = 0.5857, y = 0.3931).
+    let (x, y) = chromaticity(spectrum::blackbody_xyz(1500.0));
+    assert!((x - 0.5857).abs() < 1e-3 && (y - 0.3931).abs() < 1e-3, "{x} {y}");
+    // Near-white at 6504 K, a little short of green (the Planckian locus
+    // passes below D65, sRGB's white: 0.3236 against 0.3290 in y); red
+    // above blue at 3000 K.
     let c = spectrum::blackbody_rgb(6504.0);
-    assert!((c.x / c.z - 1.0).abs() < 0.05 && (c.y / c.z - 1.0).abs() < 0.05, "{c}");
+    assert!((c.x / c.z - 1.0).abs() < 0.02 && (c.y / c.z - 0.95).abs() < 0.01, "{c}");
     let c = spectrum::blackbody_rgb(3000.0);
     assert!(c.x > c.y && c.y > c.z, "{c}");
     // pbrt's lights see unit luminance.
@@ -1792,9 +1798,29 @@ fn grid_media_are_placed_where_pbrt_places_them() {
             "\"ny\" must be at least 1",
         ),
         (
-            "\"float density\" [1 5 2] \"float temperature\" [900 1200 900]",
+            "\"float density\" [1 5 2] \"float temperature\" [900 1200]",
             ":8:",
-            "emissive media (\"temperature\")",
+            "2 \"temperature\" values for a grid of 3 values",
+        ),
+        (
+            "\"float density\" [1 5 2] \"rgb Le\" [1 1 1] \"float Lescale\" [1 2]",
+            ":8:",
+            "2 \"Lescale\" values for a grid of 3 values",
+        ),
+        (
+            "\"float density\" [1 5 2] \"rgb Le\" [1 1 1] \"float temperature\" [900 1200 900]",
+            ":8:",
+            "both \"Le\" and \"temperature\" are given",
+        ),
+        (
+            "\"float density\" [1 5 2] \"rgb Le\" [-1 1 1]",
+            ":8:",
+            "\"rgb Le\": a negative component",
+        ),
+        (
+            "\"float density\" [1 5 2] \"float temperature\" [900 nan 900]",
+            ":8:",
+            "nan",
         ),
         ("\"float density\" [1 5 2] \"point3 p0\" [0 1 0]", ":8:", "is empty"),
     ] {
@@ -1804,6 +1830,62 @@ fn grid_media_are_placed_where_pbrt_places_them() {
             "{e}"
         );
     }
+}
+
+#[test]
+fn emissive_media_glow_where_pbrt_makes_them_glow() {
+    use super::spectrum::blackbody_film_rgb as blackbody_rgb;
+    // The grid of `grid_media_are_placed_where_pbrt_places_them`: samples at
+    // x = -11, -13, -15 of our world, (y, z) = (1, 1).
+    let grid = |extra: &str| {
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+             Translate 10 0 0\nScale 2 2 2\n\
+             MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
+             \"float density\" [1 5 2] {extra}\nAttributeEnd\n\
+             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
+        )
+    };
+    let le_at = |text: &str, x: f32| {
+        let c = converted(text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        c.desc.media[0].1.le(Vec3::new(x, 1.0, 1.0))
+    };
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-3 * b.abs().max_element().max(1e-6);
+    // Temperatures (value - offset) x scale kelvin, times Lescale.
+    let t = grid(
+        "\"float temperature\" [900 1200 50] \"float temperatureoffset\" 100 \"float temperaturescale\" 2 \"float Lescale\" [1 0.5 2]",
+    );
+    for (x, expected) in [
+        (-11.0, blackbody_rgb(1600.0)),
+        (-13.0, blackbody_rgb(2200.0) * 0.5),
+        // Below 100 K nothing glows.
+        (-15.0, Vec3::ZERO),
+        (13.0, Vec3::ZERO),
+    ] {
+        let got = le_at(&t, x);
+        assert!(close(got, expected), "x = {x}: {got} vs {expected}");
+    }
+    assert!(blackbody_rgb(2200.0).max_element() > 0.01);
+    // "temperaturecutoff" is the offset's older name.
+    let old = grid("\"float temperature\" [900 1200 50] \"float temperaturecutoff\" 100");
+    assert!(close(le_at(&old, -13.0), blackbody_rgb(1100.0)));
+    // Le, with pbrt-v4's default Lescale: one sample of 1 in the box's
+    // middle, which its lookup fades towards the faces (two thirds of it at
+    // the first density sample, a sixth of the box in).
+    let le = Vec3::new(2.0, 1.0, 0.5);
+    let g = grid("\"rgb Le\" [2 1 0.5]");
+    assert!(close(le_at(&g, -13.0), le));
+    assert!(close(le_at(&g, -11.0), le * (2.0 / 3.0)));
+    // A homogeneous medium: Le times the one Lescale everywhere.
+    let h =
+        "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"rgb Le\" [2 1 0.5] \"float Lescale\" 3\n\
+             MediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\n";
+    assert!(close(le_at(h, 0.0), le * 3.0));
+    assert!(close(le_at(h, 100.0), le * 3.0));
+    // A black Le is no emission at all.
+    let c = converted(&grid("\"rgb Le\" [0 0 0]"), Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    assert!(c.desc.media[0].1.emission.is_none());
 }
 
 #[test]
@@ -1861,6 +1943,7 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
         sigma_s: Vec3::new(2.0, 4.0, 6.0),
         g: 0.25,
         density: None,
+        emission: None,
     };
     assert_eq!(d.media, [("fog".to_string(), fog)]);
     assert_eq!(d.camera_medium, Some(0));
@@ -2025,10 +2108,9 @@ fn media_it_cannot_render_are_refused_at_their_place() {
             "\"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\"",
             "presets",
         ),
-        ("\"string type\" \"homogeneous\" \"rgb Le\" [1 1 1]", "emissive media"),
         (
-            "\"string type\" \"uniformgrid\" \"float density\" [1] \"rgb Le\" [1 1 1]",
-            "emissive media",
+            "\"string type\" \"homogeneous\" \"spectrum Le\" \"metal-Cu-eta\"",
+            "\"Le\" given as this spectrum is not supported",
         ),
     ] {
         let e = converted(&medium(params), Files::default(), false).unwrap_err();
