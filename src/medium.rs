@@ -487,6 +487,9 @@ impl Medium {
         if !(self.g > -1.0 && self.g < 1.0) {
             return Err(format!("g {} must lie strictly between -1 and 1", self.g));
         }
+        if let Some(e) = self.emission.as_deref().filter(|e| !ok(e.le)) {
+            return Err(format!("le {} must be finite and not negative", e.le));
+        }
         Ok(())
     }
 

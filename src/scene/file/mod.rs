@@ -19,7 +19,7 @@ use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Vec2, Vec3};
-use crate::medium::{Medium, MediumInterface};
+use crate::medium::{Emission, Medium, MediumInterface};
 use crate::settings::{self, Kind, Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use std::collections::BTreeMap;
@@ -245,7 +245,11 @@ impl Media<'_> {
             sigma_s: m.sigma_s.map_or(Vec3::ZERO, RgbSpec::rgb),
             g: m.g.map_or(0.0, |g| g.0),
             density: None,
-            emission: None,
+            emission: m
+                .le
+                .map(RgbSpec::rgb)
+                .filter(|le| *le != Vec3::ZERO)
+                .map(|le| std::sync::Arc::new(Emission::uniform(le))),
         };
         medium
             .check()

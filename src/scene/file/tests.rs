@@ -887,6 +887,7 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         sigma_a = [0.0, 0.0, 0.0]
         [media.ink]
         sigma_a = [0.1, 0.3, 0.6]
+        le = [2, 1, 0]
         [media.unused]
         sigma_s = 1
         [materials.none]
@@ -927,7 +928,9 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
             sigma_s: Vec3::ZERO,
             g: 0.0,
             density: None,
-            emission: None,
+            emission: Some(std::sync::Arc::new(crate::medium::Emission::uniform(Vec3::new(
+                2.0, 1.0, 0.0,
+            )))),
         },
     );
     // Media in order of first use; the one nobody names is left out.
@@ -975,13 +978,20 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("test.toml:24: unknown medium 'inc' (defined: air, ink, unused)"),
+        e.starts_with("test.toml:25: unknown medium 'inc' (defined: air, ink, unused)"),
         "{e}"
     );
     let e = parse_str(&text.replace("sigma_a = [0.1, 0.3, 0.6]", "sigma_a = [0.1, -0.3, 0.6]"))
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("test.toml:12: medium 'ink': sigma_a"), "{e}");
+    let e = parse_str(&text.replace("le = [2, 1, 0]", "le = [2, -1, 0]"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:12: medium 'ink': le [2, -1, 0] must be finite"),
+        "{e}"
+    );
     let e = parse_str(&text.replace(
         "type = \"interface\"",
         "type = \"interface\"\n        displacement = 0.1",
@@ -994,7 +1004,7 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("test.toml:19: sphere shape: its material is an `interface`, no surface, so it must bound media"),
+        e.starts_with("test.toml:20: sphere shape: its material is an `interface`, no surface, so it must bound media"),
         "{e}"
     );
 }

@@ -88,6 +88,7 @@ pub(super) struct MediumSpec {
     pub(super) sigma_a: Option<RgbSpec>,
     pub(super) sigma_s: Option<RgbSpec>,
     pub(super) g: Option<Num>,
+    pub(super) le: Option<RgbSpec>,
 }
 
 /// A number for all three channels, or one each.
