@@ -410,6 +410,63 @@ mod tests {
     }
 
     #[test]
+    fn a_sky_lights_a_scene_of_no_surfaces_by_light_samples_too() {
+        // The camera in a lossless grid medium (the scene's only medium,
+        // zero beyond its box), under a sky of one: every pixel is one,
+        // whether the light is found by light samples, by the phase
+        // function's rays, or both. With no surface the scene has no bounds
+        // to give the sky a power by; it must still be chosen for light
+        // samples.
+        use crate::light::Light;
+        use crate::medium::Density;
+        use std::sync::Arc;
+        let camera = CameraDesc {
+            position: Vec3::ZERO,
+            look_at: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            width: 8,
+            height: 8,
+            window: None,
+            lens: None,
+            orthographic: None,
+            spherical: None,
+        };
+        let mut d = SceneDesc::empty("sky", camera);
+        d.lights.push(Light::infinite(Vec3::ONE, None, glam::Mat3::IDENTITY));
+        d.media.push((
+            "haze".into(),
+            Medium {
+                sigma_a: Vec3::ZERO,
+                sigma_s: Vec3::new(0.3, 0.6, 1.2),
+                g: 0.4,
+                density: Some(Arc::new(
+                    Density::grid(
+                        [1, 1, 2],
+                        vec![1.0, 2.0],
+                        Vec3::splat(-1.5),
+                        Vec3::splat(1.5),
+                        glam::Mat4::IDENTITY,
+                    )
+                    .unwrap(),
+                )),
+                emission: None,
+            },
+        ));
+        d.camera_medium = Some(0);
+        let scene = Scene::build(d).unwrap();
+        assert!(scene.bounds().is_empty());
+        for mode in [LightSampling::Mis, LightSampling::Light, LightSampling::Bsdf] {
+            let settings = super::super::RenderSettings {
+                light_sampling: mode,
+                ..path_settings(256, None)
+            };
+            let mean = render(&scene, &settings, &|| {}).unwrap().film.mean(0, 0, 8, 8);
+            assert!((mean - Vec3::ONE).abs().max_element() < 0.02, "{mode:?}: {mean}");
+        }
+    }
+
+    #[test]
     fn a_lossless_grid_medium_vanishes_under_a_uniform_sky() {
         // Under a sky of radiance one, with no surface in the scene, a
         // medium that scatters without absorbing leaves radiance one

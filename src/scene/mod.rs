@@ -995,12 +995,15 @@ impl Scene {
             .map(|m| (m.is_bumped(), m.needs_footprint()))
             .collect();
         scene.any_footprints = scene.differentials.iter().any(|&(_, f)| f);
-        // Lights at infinity reach the scene through its bounding sphere.
+        // Lights at infinity reach the scene through its bounding sphere. A
+        // scene of no surfaces (a medium around the camera under a sky) has
+        // none: a unit sphere stands in, so that such lights have a power
+        // to be chosen by (pbrt-v4 samples them apart from the others).
         let bounds = scene.bounds();
         let world = if bounds.is_empty() {
             Sphere {
                 centre: Vec3::ZERO,
-                radius: 0.0,
+                radius: 1.0,
             }
         } else {
             Sphere {
