@@ -4,7 +4,7 @@ in a box of no surface above a grey floor, lit by a disk light and a dim
 sky, for rendering with pbrt-v4 itself and with ours
 (`bench/against-pbrt.sh`). See BENCHMARKS.md, "Participating media".
 
-    python3 bench/grid_scene.py OUT.pbrt [--homogeneous] [--absorbing] [--emissive] [N]
+    python3 bench/grid_scene.py OUT.pbrt [--homogeneous | --rgb] [--absorbing] [--emissive] [N]
     python3 bench/grid_scene.py OUT.pbrt --furnace
 
 N is the grid's samples along each axis (24 by default). --homogeneous
@@ -14,6 +14,9 @@ rest); --absorbing makes the smoke absorb without scattering; --emissive
 makes it glow: the grid by the blackbody of a temperature grid (hottest in
 the middle, with pbrt-v4's `temperatureoffset` and `temperaturescale`) times
 a grid of `Lescale`, the homogeneous twin by an RGB `Le` (with `Lescale`).
+--rgb writes the smoke as an `rgbgrid` instead: the same densities times
+the same coefficients, sigma_s tinted from red to blue across x (its Le,
+with --emissive, an RGB grid hottest in the middle).
 --furnace
 writes a white furnace instead: the camera inside a dense 4 x 4 x 4 grid
 that scatters without absorbing, under a sky of radiance 1 and nothing
@@ -24,7 +27,7 @@ import sys
 
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
 flags = {a for a in sys.argv[1:] if a.startswith("--")}
-if not args or flags - {"--homogeneous", "--absorbing", "--furnace", "--emissive"}:
+if not args or flags - {"--homogeneous", "--absorbing", "--furnace", "--emissive", "--rgb"}:
     sys.exit(__doc__)
 out = args[0]
 if "--furnace" in flags:
@@ -45,7 +48,7 @@ LightSource "infinite" "rgb L" [1 1 1]
     sys.exit(0)
 n = int(args[1]) if len(args) > 1 else 24
 
-values, temperatures, lescale = [], [], []
+values, temperatures, lescale, rgb_a, rgb_s, rgb_le = [], [], [], [], [], []
 for k in range(n):
     for j in range(n):
         for i in range(n):
@@ -56,11 +59,26 @@ for k in range(n):
             # Kelvin after the offset (300) and scale (1.5): up to about 2100 K.
             temperatures.append(f"{300 + 1400 * max(0.0, 1 - r):.2f}")
             lescale.append(f"{1 + 0.5 * math.cos(3 * y):.4f}")
+            dv = max(d, 0.0) * 4
+            sa = (1.5, 2.0, 3.0) if "--absorbing" in flags else (0.5, 0.6, 0.8)
+            ss = (0.0, 0.0, 0.0) if "--absorbing" in flags else (2.5 * (1 + 0.5 * x), 2.0, 1.5 * (1 - 0.5 * x))
+            rgb_a.append(" ".join(f"{dv * c:.4f}" for c in sa))
+            rgb_s.append(" ".join(f"{dv * c:.4f}" for c in ss))
+            glow = 2 * max(0.0, 1 - r)
+            rgb_le.append(" ".join(f"{glow * c:.4f}" for c in (1.0, 0.45, 0.1)))
 emissive = "--emissive" in flags
 
 sigma_s = "[0 0 0]" if "--absorbing" in flags else "[2.5 2.0 1.5]"
 sigma_a = "[1.5 2.0 3.0]" if "--absorbing" in flags else "[0.5 0.6 0.8]"
-if "--homogeneous" in flags:
+if "--rgb" in flags:
+    medium = (f'MakeNamedMedium "smoke" "string type" "rgbgrid" "float g" 0.3\n'
+              f'    "integer nx" {n} "integer ny" {n} "integer nz" {n} '
+              f'"point3 p0" [-1 -1 -1] "point3 p1" [1 1 1]\n'
+              f'    "rgb sigma_a" [{" ".join(rgb_a)}]\n'
+              f'    "rgb sigma_s" [{" ".join(rgb_s)}]')
+    if emissive:
+        medium += f'\n    "rgb Le" [{" ".join(rgb_le)}] "float Lescale" 0.8'
+elif "--homogeneous" in flags:
     medium = (f'MakeNamedMedium "smoke" "string type" "homogeneous" "rgb sigma_a" {sigma_a} '
               f'"rgb sigma_s" {sigma_s} "float scale" 0.5 "float g" 0.3')
     if emissive:

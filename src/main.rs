@@ -386,6 +386,18 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         );
     }
     for (name, m) in &scene.desc.media {
+        let glow = m
+            .emission
+            .as_ref()
+            .map_or(String::new(), |e| format!(", {}", e.summary()));
+        if let Some((g, max)) = m.density.as_ref().and_then(|g| Some((g, g.rgb_majorant()?))) {
+            let [x, y, z] = g.resolution().unwrap_or([1, 1, 1]);
+            println!(
+                "medium \"{name}\": an RGB grid of {x} x {y} x {z} coefficients, sigma_t up to {max}, g {}{glow}",
+                m.g
+            );
+            continue;
+        }
         let kind = match &m.density {
             None => "homogeneous".to_string(),
             Some(g) => match g.resolution() {
@@ -393,10 +405,6 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
                 None => "a procedural cloud (pbrt-v4's), densities up to 1".to_string(),
             },
         };
-        let glow = m
-            .emission
-            .as_ref()
-            .map_or(String::new(), |e| format!(", {}", e.summary()));
         println!(
             "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}{glow}",
             m.sigma_a, m.sigma_s, m.g

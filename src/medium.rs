@@ -50,6 +50,8 @@ pub struct Emission {
     scale: Option<Field>,
     /// Grid media: Le from the blackbody of each point's temperature instead.
     temperature: Option<Temperature>,
+    /// `rgbgrid` media: Le per grid point instead (times `le`'s first channel).
+    grid: Option<([usize; 3], Vec<Vec3>)>,
 }
 
 /// Temperatures on a medium's grid: (value - offset) x scale kelvin, whose
@@ -98,7 +100,34 @@ impl Emission {
             le,
             scale: None,
             temperature: None,
+            grid: None,
         }
+    }
+
+    /// An `rgbgrid` medium's: `values` per grid point (x fastest, looked up
+    /// as its coefficients are) times `scale` (pbrt-v4's `Lescale`).
+    pub fn rgb_grid(n: [usize; 3], values: Vec<Vec3>, scale: f32) -> Result<Self, String> {
+        if values.len() != n.iter().product::<usize>() {
+            return Err(format!(
+                "{} \"Le\" values for a grid of {} x {} x {}",
+                values.len(),
+                n[0],
+                n[1],
+                n[2]
+            ));
+        }
+        if let Some(v) = values.iter().find(|v| !(v.is_finite() && v.min_element() >= 0.0)) {
+            return Err(format!("an \"Le\" of {v}: it must be finite and not negative"));
+        }
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!("an \"Lescale\" of {scale}"));
+        }
+        Ok(Emission {
+            le: Vec3::splat(scale),
+            scale: None,
+            temperature: None,
+            grid: Some((n, values)),
+        })
     }
 
     /// A grid medium's: `le` times the scale at each point (`scale`: one
@@ -158,11 +187,20 @@ impl Emission {
                 })
             }
         };
-        Ok(Emission { le, scale, temperature })
+        Ok(Emission {
+            le,
+            scale,
+            temperature,
+            grid: None,
+        })
     }
 
     /// Le at `q` in the grid's unit cube (anywhere, for a homogeneous medium).
     fn at(&self, q: Vec3) -> Vec3 {
+        if let Some((n, v)) = &self.grid {
+            let c = |k: usize| trilinear_by(*n, q, |i| v[i][k]);
+            return Vec3::new(c(0), c(1), c(2)) * self.le.x;
+        }
         let s = self.scale.as_ref().map_or(1.0, |f| f.lookup(q));
         if s <= 0.0 {
             return Vec3::ZERO;
@@ -188,6 +226,12 @@ impl Emission {
             Some(Field::Samples { n, .. }) if *n != [1, 1, 1] => " times a grid of Lescale",
             _ => "",
         };
+        if let Some((n, _)) = &self.grid {
+            return format!(
+                "emits Le from a grid of {} x {} x {} RGB values times {}",
+                n[0], n[1], n[2], self.le.x
+            );
+        }
         match &self.temperature {
             Some(t) => format!(
                 "emits the blackbody of a temperature grid (kelvin = (value - {}) x {}){scaled}",
@@ -200,6 +244,10 @@ impl Emission {
     /// Whether the medium emits anything at all.
     pub fn is_dark(&self) -> bool {
         self.temperature.is_none() && self.le.max_element() <= 0.0
+            || self
+                .grid
+                .as_ref()
+                .is_some_and(|(_, v)| v.iter().all(|c| c.max_element() <= 0.0))
     }
 }
 
@@ -221,6 +269,39 @@ pub struct Density {
     field: Field,
     /// The largest density: the majorant for tracking through it.
     max: f32,
+    /// pbrt-v4's `rgbgrid`: coefficients of their own at each grid point,
+    /// which take the place of the medium's scaled by `field`.
+    rgb: Option<RgbCoefficients>,
+}
+
+/// An `rgbgrid`'s coefficients: sigma_a and sigma_s per grid point (x
+/// fastest), looked up as densities are (trilinear, zero beyond the
+/// samples); one where a grid is not given (everywhere in the box), as in
+/// pbrt-v4. Already multiplied by the medium's scale.
+#[derive(Clone, PartialEq)]
+struct RgbCoefficients {
+    n: [usize; 3],
+    sigma_a: Option<Vec<Vec3>>,
+    sigma_s: Option<Vec<Vec3>>,
+    scale: f32,
+    /// The largest sigma_t and sigma_s in each channel (the majorant, and
+    /// whether it scatters at all).
+    max_t: Vec3,
+    max_s: Vec3,
+}
+
+impl RgbCoefficients {
+    /// (sigma_a, sigma_s) at `q` in the unit cube.
+    fn at(&self, q: Vec3) -> (Vec3, Vec3) {
+        let get = |g: &Option<Vec<Vec3>>| match g {
+            None => Vec3::splat(self.scale),
+            Some(v) => {
+                let c = |k: usize| trilinear_by(self.n, q, |i| v[i][k]);
+                Vec3::new(c(0), c(1), c(2)) * self.scale
+            }
+        };
+        (get(&self.sigma_a), get(&self.sigma_s))
+    }
 }
 
 #[derive(Clone, PartialEq)]
@@ -278,6 +359,24 @@ impl std::fmt::Debug for Density {
     // Sizes, place and a digest of the values: scene fingerprints print
     // media, and a grid may hold millions of values.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(c) = &self.rgb {
+            let digest = |g: &Option<Vec<Vec3>>| {
+                g.as_ref().map(|v| {
+                    v.iter().fold(0x9E37_79B9_7F4A_7C15u64, |h, c| {
+                        c.to_array().iter().fold(h, |h, x| mix64(h ^ x.to_bits() as u64))
+                    })
+                })
+            };
+            return write!(
+                f,
+                "RgbGrid {{ n: {:?}, world_from_grid: {:?}, scale: {}, sigma_a: {:?}, sigma_s: {:?} }}",
+                c.n,
+                self.world_from_grid,
+                c.scale,
+                digest(&c.sigma_a),
+                digest(&c.sigma_s)
+            );
+        }
         match &self.field {
             Field::Samples { n, values } => {
                 let digest = values
@@ -310,6 +409,96 @@ fn unit_box(p0: Vec3, p1: Vec3, world_from_medium: Mat4) -> Result<(Mat4, Vec3, 
 }
 
 impl Density {
+    /// pbrt-v4's `rgbgrid` over the box from `p0` to `p1`: `sigma_a` and
+    /// `sigma_s` per grid point (either may be absent: one everywhere), both
+    /// times `scale`; an error saying why when a count is not the product, a
+    /// value is negative or not finite, or the box is degenerate.
+    pub fn rgb_grid(
+        n: [usize; 3],
+        sigma_a: Option<Vec<Vec3>>,
+        sigma_s: Option<Vec<Vec3>>,
+        scale: f32,
+        p0: Vec3,
+        p1: Vec3,
+        world_from_medium: Mat4,
+    ) -> Result<Self, String> {
+        let count = n.iter().try_fold(1usize, |a, &k| a.checked_mul(k));
+        if n.contains(&0) {
+            return Err(format!("a grid of {} x {} x {}", n[0], n[1], n[2]));
+        }
+        let mut max = [Vec3::splat(scale); 2];
+        for (k, (name, values)) in [("sigma_a", &sigma_a), ("sigma_s", &sigma_s)].into_iter().enumerate() {
+            let Some(values) = values else { continue };
+            if count != Some(values.len()) {
+                return Err(format!(
+                    "{} \"{name}\" values for a grid of {} x {} x {}",
+                    values.len(),
+                    n[0],
+                    n[1],
+                    n[2]
+                ));
+            }
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && v.min_element() >= 0.0)) {
+                return Err(format!(
+                    "a \"{name}\" of {v}: coefficients must be finite and not negative"
+                ));
+            }
+            max[k] = values.iter().fold(Vec3::ZERO, |a, &v| a.max(v)) * scale;
+        }
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!("a scale of {scale}"));
+        }
+        // Trilinear lookups stay below the largest sample: so does their sum.
+        let max_t = match (&sigma_a, &sigma_s) {
+            (Some(a), Some(s)) => a.iter().zip(s).fold(Vec3::ZERO, |m, (&a, &s)| m.max(a + s)) * scale,
+            _ => max[0] + max[1],
+        };
+        let (world_from_grid, _, _) = unit_box(p0, p1, world_from_medium)?;
+        let mut d = Self::placed(
+            world_from_grid,
+            Field::Samples {
+                n: [1, 1, 1],
+                values: vec![1.0],
+            },
+            1.0,
+        )?;
+        d.rgb = Some(RgbCoefficients {
+            n,
+            sigma_a,
+            sigma_s,
+            scale,
+            max_t,
+            max_s: max[1],
+        });
+        Ok(d)
+    }
+
+    /// The coefficients at `q` of a medium whose own are (`sa`, `ss`):
+    /// (sigma_t, sigma_s, sigma_a).
+    #[inline(always)]
+    fn coefficients(&self, q: Vec3, st: Vec3, sa: Vec3, ss: Vec3) -> (Vec3, Vec3, Vec3) {
+        match &self.rgb {
+            None => {
+                let density = self.lookup(q);
+                (st * density, ss * density, sa * density)
+            }
+            Some(c) => {
+                let (a, s) = c.at(q);
+                (a + s, s, a)
+            }
+        }
+    }
+
+    /// The largest sigma_t in each channel, for a medium whose own is `st`.
+    fn majorant(&self, st: Vec3) -> Vec3 {
+        self.rgb.as_ref().map_or(st * self.max, |c| c.max_t)
+    }
+
+    /// An `rgbgrid`'s largest sigma_t in each channel (`None` for others).
+    pub fn rgb_majorant(&self) -> Option<Vec3> {
+        self.rgb.as_ref().map(|c| c.max_t)
+    }
+
     /// A grid of `n[0] x n[1] x n[2]` values (x fastest) over the box from
     /// `p0` to `p1` in the space `world_from_medium` places; an error saying
     /// why when the count is not the product, a value is negative or not
@@ -367,6 +556,7 @@ impl Density {
             grid_from_world,
             field,
             max,
+            rgb: None,
         })
     }
 
@@ -382,6 +572,9 @@ impl Density {
 
     /// Samples along x, y and z of a grid (`None` for a cloud).
     pub fn resolution(&self) -> Option<[usize; 3]> {
+        if let Some(c) = &self.rgb {
+            return Some(c.n);
+        }
         match &self.field {
             Field::Samples { n, .. } => Some(*n),
             Field::Cloud { .. } => None,
@@ -493,6 +686,20 @@ impl Medium {
         Ok(())
     }
 
+    /// The medium's (sigma_a, sigma_s) at world point `p`: zero outside a
+    /// grid's box.
+    pub fn coefficients_at(&self, p: Vec3) -> (Vec3, Vec3) {
+        let Some(g) = &self.density else {
+            return (self.sigma_a, self.sigma_s);
+        };
+        let q = g.grid_from_world.transform_point3(p);
+        if q.cmplt(Vec3::ZERO).any() || q.cmpgt(Vec3::ONE).any() {
+            return (Vec3::ZERO, Vec3::ZERO);
+        }
+        let (_, ss, sa) = g.coefficients(q, self.sigma_t(), self.sigma_a, self.sigma_s);
+        (sa, ss)
+    }
+
     /// The Le the medium emits at world point `p` (sigma_a Le per unit
     /// length): zero outside a grid's box.
     pub fn le(&self, p: Vec3) -> Vec3 {
@@ -514,7 +721,10 @@ impl Medium {
     /// Whether light is ever scattered (else it is only absorbed, and a
     /// path's throughput just takes the transmittance).
     pub fn scatters(&self) -> bool {
-        self.sigma_s.max_element() > 0.0 && self.density.as_ref().is_none_or(|g| g.max > 0.0)
+        match self.density.as_ref().and_then(|g| g.rgb.as_ref()) {
+            Some(c) => c.max_s.max_element() > 0.0,
+            None => self.sigma_s.max_element() > 0.0 && self.density.as_ref().is_none_or(|g| g.max > 0.0),
+        }
     }
 
     /// Whether tracking through the medium needs random numbers.
@@ -610,7 +820,10 @@ impl Medium {
         mut emitted: Option<(&Emission, &mut Vec3)>,
     ) -> Vec3 {
         let st = self.sigma_t();
-        let majorant = st.max_element() * g.max;
+        let majorant = match &g.rgb {
+            None => st.max_element() * g.max,
+            Some(c) => c.max_t.max_element(),
+        };
         if majorant <= 0.0 {
             return Vec3::ONE;
         }
@@ -622,11 +835,20 @@ impl Medium {
                 return tr;
             }
             let q = go + gd * t;
-            let density = g.lookup(q);
+            let (fraction, absorbed) = match &g.rgb {
+                None => {
+                    let density = g.lookup(q);
+                    (st * (density / majorant), self.sigma_a * (density / majorant))
+                }
+                Some(c) => {
+                    let (a, s) = c.at(q);
+                    ((a + s) / majorant, a / majorant)
+                }
+            };
             if let Some((e, sum)) = emitted.as_mut() {
-                **sum += tr * self.sigma_a * (density / majorant) * e.at(q);
+                **sum += tr * absorbed * e.at(q);
             }
-            tr *= (Vec3::ONE - st * (density / majorant)).max(Vec3::ZERO);
+            tr *= (Vec3::ONE - fraction).max(Vec3::ZERO);
             let m = tr.max_element();
             if m <= 0.0 {
                 return Vec3::ZERO;
@@ -681,7 +903,7 @@ impl Medium {
             return (pass, emitted);
         }
         let st = self.sigma_t();
-        let majorant = st * g.max;
+        let majorant = g.majorant(st);
         let h = hero.min(2);
         let mh = majorant[h];
         let (mut beta, mut ratio) = (Vec3::ONE, Vec3::ONE);
@@ -701,22 +923,18 @@ impl Medium {
             t += step;
             let e = exp(-majorant * step);
             let q = go + gd * t;
-            let density = g.lookup(q);
+            let (sigma_t, sigma_s, sigma_a) = g.coefficients(q, st, self.sigma_a, self.sigma_s);
             if let Some((em, (b, r))) = emit {
                 // A tentative collision's density in each channel is its
                 // majorant's: the ratios take that, as pbrt-v4's r_e.
                 let p = mh * e[h];
                 let le = em.at(q);
-                emitted += path_weight(
-                    b * beta * e * self.sigma_a * density * le / p,
-                    r * ratio * majorant * e / p,
-                );
+                emitted += path_weight(b * beta * e * sigma_a * le / p, r * ratio * majorant * e / p);
             }
-            let sigma_t = st * density;
             let sigma_n = (majorant - sigma_t).max(Vec3::ZERO);
             if sigma_n[h] <= 0.0 || rng.next_f32() * mh < sigma_t[h] {
                 let p = sigma_t[h] * e[h];
-                beta *= self.sigma_s * density * e / p;
+                beta *= sigma_s * e / p;
                 ratio *= sigma_t * e / p;
                 let (beta, ratio) = normalised(beta, ratio);
                 return (MediumEvent::Scatter { t, beta, ratio }, emitted);
@@ -821,9 +1039,8 @@ pub fn normalised(beta: Vec3, ratio: Vec3) -> (Vec3, Vec3) {
     }
 }
 
-/// The samples' trilinear interpolation at `q` in the unit cube, zero
-/// beyond them (pbrt-v4's `SampledGrid::Lookup`).
-fn trilinear(n: [usize; 3], values: &[f32], q: Vec3) -> f32 {
+/// `trilinear` of the values `value(i)` of sample i (x fastest).
+fn trilinear_by(n: [usize; 3], q: Vec3, value: impl Fn(usize) -> f32) -> f32 {
     let s = q * Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32) - 0.5;
     let f = s.floor();
     let d = s - f;
@@ -833,7 +1050,7 @@ fn trilinear(n: [usize; 3], values: &[f32], q: Vec3) -> f32 {
         if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
             return 0.0;
         }
-        values[((k * ny + j) * nx + i) as usize]
+        value(((k * ny + j) * nx + i) as usize)
     };
     let lerp = |t: f32, a: f32, b: f32| (1.0 - t) * a + t * b;
     let d00 = lerp(d.x, at(x, y, z), at(x + 1, y, z));
@@ -841,6 +1058,12 @@ fn trilinear(n: [usize; 3], values: &[f32], q: Vec3) -> f32 {
     let d01 = lerp(d.x, at(x, y, z + 1), at(x + 1, y, z + 1));
     let d11 = lerp(d.x, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
     lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+}
+
+/// The samples' trilinear interpolation at `q` in the unit cube, zero
+/// beyond them (pbrt-v4's `SampledGrid::Lookup`).
+fn trilinear(n: [usize; 3], values: &[f32], q: Vec3) -> f32 {
+    trilinear_by(n, q, |i| values[i])
 }
 
 /// pbrt-v4's cloud density at `p` in the medium's space: five octaves of
@@ -1209,7 +1432,8 @@ mod tests {
         // Where the density is one everywhere (between the outer samples of
         // a large grid), every tentative collision is real: the events are
         // the homogeneous medium's for the same u, to rounding (and to the
-        // scale the grid's events are normalised to).
+        // scale the grid's events are normalised to). So are those of an
+        // RGB grid whose coefficients are the medium's at every sample.
         let g = grid([2, 2, 2], &[1.0; 8], Mat4::from_scale(Vec3::splat(20.0)));
         let h = Medium {
             sigma_a: Vec3::new(0.3, 0.1, 0.0),
@@ -1223,9 +1447,25 @@ mod tests {
             emission: None,
             ..h.clone()
         };
+        let rgb = Density::rgb_grid(
+            [2, 2, 2],
+            Some(vec![h.sigma_a / 2.0; 8]),
+            Some(vec![h.sigma_s / 2.0; 8]),
+            2.0,
+            Vec3::splat(-1.0),
+            Vec3::ONE,
+            Mat4::from_scale(Vec3::splat(20.0)),
+        )
+        .unwrap();
+        let rgb = Medium {
+            sigma_a: Vec3::ONE,
+            sigma_s: Vec3::ONE,
+            density: Some(Arc::new(rgb)),
+            ..m.clone()
+        };
         let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1.0);
-        for k in 0..300 {
-            let u = (k as f32 + 0.5) / 300.0;
+        for (k, m) in (0..600).map(|k| (k, if k < 300 { &m } else { &rgb })) {
+            let u = ((k % 300) as f32 + 0.5) / 300.0;
             let (o, d) = (Vec3::new(-3.0, 1.0, 2.0), Vec3::new(1.0, 0.5, -0.2).normalize());
             match (
                 h.sample_homogeneous(4.0, k % 3, u, None).0,

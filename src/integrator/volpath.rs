@@ -359,6 +359,23 @@ mod tests {
         .unwrap();
         let grid = Some(Arc::new(grid));
         let ones = Emission::grid([4, 4, 4], le, Some(vec![1.0; 64]), None).unwrap();
+        // An RGB grid: each sample's coefficients of its own colour.
+        let coefficients = |k: usize| -> Vec<Vec3> {
+            (0..64)
+                .map(|i| Vec3::new(0.5, 1.0, 2.0)[(i + k) % 3] * Vec3::new(1.0, 0.3, 0.6) * ((i % 5) as f32))
+                .collect()
+        };
+        let rgb = Density::rgb_grid(
+            [4, 4, 4],
+            Some(coefficients(0)),
+            Some(coefficients(1)),
+            0.5,
+            Vec3::splat(-2.0),
+            Vec3::splat(2.0),
+            glam::Mat4::IDENTITY,
+        )
+        .unwrap();
+        let rgb_le = Emission::rgb_grid([4, 4, 4], vec![le * 2.0; 64], 0.5).unwrap();
         for (name, sigma_a, sigma_s, density, emission) in [
             (
                 "homogeneous, scattering",
@@ -388,6 +405,7 @@ mod tests {
                 grid.clone(),
                 ones,
             ),
+            ("RGB grid", Vec3::ONE, Vec3::ONE, Some(Arc::new(rgb)), rgb_le),
         ] {
             let mut d = closed_sphere_desc(wall.clone(), None, 16);
             d.media.push((

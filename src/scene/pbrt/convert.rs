@@ -1639,9 +1639,10 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         "homogeneous" => (false, false),
         "uniformgrid" => (true, false),
         "cloud" => (false, true),
+        "rgbgrid" => return rgb_grid_medium(m).map(Ok),
         other => {
             return Ok(Err(format!(
-                "media of type \"{other}\" are not supported (homogeneous, uniformgrid and cloud ones are)"
+                "media of type \"{other}\" are not supported (homogeneous, uniformgrid, rgbgrid and cloud ones are)"
             )))
         }
     };
@@ -1780,21 +1781,86 @@ fn grid_density(m: &super::ir::Medium) -> Result<Density> {
     if values.is_empty() {
         return Err(located(&m.loc, format!("{what}: no \"density\" values for the grid")));
     }
+    let n = grid_resolution(m)?;
+    let p0 = p.get_point3("p0", Vec3::ZERO)?;
+    let p1 = p.get_point3("p1", Vec3::ONE)?;
+    Density::grid(n, values.to_vec(), p0, p1, m.world_from_medium)
+        .map_err(|why| located(at("density"), format!("{what}: {why}")))
+}
+
+/// A grid medium's `nx`, `ny`, `nz` (1 each by default).
+fn grid_resolution(m: &super::ir::Medium) -> Result<[usize; 3]> {
+    let p = &m.params;
     let mut n = [0usize; 3];
     for (k, name) in ["nx", "ny", "nz"].into_iter().enumerate() {
         let v = p.get_int(name, 1)?;
         if v < 1 {
             return Err(located(
-                at(name),
-                format!("{what}: \"{name}\" must be at least 1, not {v}"),
+                p.loc_of(name).unwrap_or(&m.loc),
+                format!("MakeNamedMedium \"{}\": \"{name}\" must be at least 1, not {v}", m.name),
             ));
         }
         n[k] = v as usize;
     }
-    let p0 = p.get_point3("p0", Vec3::ZERO)?;
-    let p1 = p.get_point3("p1", Vec3::ONE)?;
-    Density::grid(n, values.to_vec(), p0, p1, m.world_from_medium)
-        .map_err(|why| located(at("density"), format!("{what}: {why}")))
+    Ok(n)
+}
+
+/// An `rgbgrid` medium (pbrt-v4's `RGBGridMedium::Create`): `sigma_a` and
+/// `sigma_s` as `rgb` values per grid point (at least one of them; one where
+/// the other is not given), times `scale`; `Le` per grid point (with
+/// `sigma_a`) times `Lescale`; `p0`, `p1`, `g` as for `uniformgrid`.
+fn rgb_grid_medium(m: &super::ir::Medium) -> Result<Medium> {
+    let p = &m.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
+    let what = format!("MakeNamedMedium \"{}\"", m.name);
+    let (sigma_a, sigma_s, le) = (p.get_rgbs("sigma_a"), p.get_rgbs("sigma_s"), p.get_rgbs("Le"));
+    if sigma_a.is_empty() && sigma_s.is_empty() {
+        return Err(located(
+            &m.loc,
+            format!("{what}: an rgbgrid needs \"sigma_a\" or \"sigma_s\" values"),
+        ));
+    }
+    if !le.is_empty() && sigma_a.is_empty() {
+        return Err(located(at("Le"), format!("{what}: \"Le\" needs \"sigma_a\" values")));
+    }
+    let n = grid_resolution(m)?;
+    let given = |v: Vec<Vec3>| (!v.is_empty()).then_some(v);
+    let density = Density::rgb_grid(
+        n,
+        given(sigma_a),
+        given(sigma_s),
+        p.get_float("scale", 1.0)?,
+        p.get_point3("p0", Vec3::ZERO)?,
+        p.get_point3("p1", Vec3::ONE)?,
+        m.world_from_medium,
+    )
+    .map_err(|why| {
+        let name = if why.contains("sigma_s") { "sigma_s" } else { "sigma_a" };
+        located(at(name), format!("{what}: {why}"))
+    })?;
+    // pbrt-v4 reads these as illuminants (an RGB times its colour space's
+    // white of luminance one) but, unlike a light's or another medium's
+    // `Le`, does not normalise them: its film records each 106.86 times
+    // the RGB given (`blackbody_film_rgb`).
+    let to_film = super::spectrum::cie_y_integral();
+    let emission = match given(le) {
+        None => None,
+        Some(le) => Some(
+            MediumEmission::rgb_grid(n, le, p.get_float("Lescale", 1.0)? * to_film)
+                .map_err(|why| located(at("Le"), format!("{what}: {why}")))?,
+        ),
+    };
+    let medium = Medium {
+        sigma_a: Vec3::ONE,
+        sigma_s: Vec3::ONE,
+        g: p.get_float("g", 0.0)?,
+        density: Some(std::sync::Arc::new(density)),
+        emission: emission.filter(|e| !e.is_dark()).map(std::sync::Arc::new),
+    };
+    medium
+        .check()
+        .map_err(|why| located(&m.loc, format!("{what}: {why}")))?;
+    Ok(medium)
 }
 
 /// A `cloud` medium's density (pbrt-v4's `CloudMedium::Create`: `density`

@@ -296,8 +296,13 @@ pub fn blackbody_rgb(kelvin: f32) -> Vec3 {
 /// integral of ȳ (106.86), which lights' spectra make up for by being
 /// normalised to that luminance.
 pub fn blackbody_film_rgb(kelvin: f32) -> Vec3 {
-    let y_integral: f64 = (LAMBDA_MIN..=LAMBDA_MAX).map(|l| cie_xyz_bar(l as f64)[1]).sum();
-    blackbody_rgb(kelvin) * y_integral as f32
+    blackbody_rgb(kelvin) * cie_y_integral()
+}
+
+/// The integral of ȳ over nanometres (106.86): what pbrt-v4's film records
+/// for a spectrum of luminance one that no light normalised.
+pub fn cie_y_integral() -> f32 {
+    (LAMBDA_MIN..=LAMBDA_MAX).map(|l| cie_xyz_bar(l as f64)[1]).sum::<f64>() as f32
 }
 
 /// CIE 1931 2° colour matching functions (x̄, ȳ, z̄): the CIE's table.

@@ -1833,6 +1833,110 @@ fn grid_media_are_placed_where_pbrt_places_them() {
 }
 
 #[test]
+fn rgb_grid_media_are_read_and_placed_as_pbrt_reads_them() {
+    // Three samples along x over [0, 3] x [0, 1] x [0, 1], moved by
+    // Translate 10 0 0 and Scale 2: at x = -11, -13, -15 of our world.
+    let grid = |params: &str| {
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+             Translate 10 0 0\nScale 2 2 2\n\
+             MakeNamedMedium \"smoke\" \"string type\" \"rgbgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
+             {params}\nAttributeEnd\n\
+             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
+        )
+    };
+    let text = grid(
+        "\"rgb sigma_a\" [1 0 0  0 2 0  0 0 3] \"rgb sigma_s\" [0.5 0.5 0.5  1 1 1  0 0 0] \"float scale\" 2 \"float g\" 0.3\n\
+         \"rgb Le\" [1 1 1  4 2 1  0 0 0] \"float Lescale\" 0.5",
+    );
+    let c = converted(&text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+    let m = &c.desc.media[0].1;
+    assert_eq!(m.g, 0.3);
+    // pbrt-v4's film sees an rgbgrid's Le 106.86 times as bright as a
+    // light's of the same RGB (it does not normalise these illuminants).
+    let k = super::spectrum::cie_y_integral();
+    assert!((k - 106.857).abs() < 0.01, "{k}");
+    for (x, sa, ss, le) in [
+        (-11.0, Vec3::new(2.0, 0.0, 0.0), Vec3::splat(1.0), Vec3::splat(0.5)),
+        (
+            -13.0,
+            Vec3::new(0.0, 4.0, 0.0),
+            Vec3::splat(2.0),
+            Vec3::new(2.0, 1.0, 0.5),
+        ),
+        (-15.0, Vec3::new(0.0, 0.0, 6.0), Vec3::ZERO, Vec3::ZERO),
+        (
+            -12.0,
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::splat(1.5),
+            Vec3::new(1.25, 0.75, 0.5),
+        ),
+        (13.0, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO),
+    ] {
+        let p = Vec3::new(x, 1.0, 1.0);
+        let (a, s) = m.coefficients_at(p);
+        let close = |u: Vec3, v: Vec3| (u - v).abs().max_element() < 1e-4;
+        let glow = m.le(p) / k;
+        assert!(
+            close(a, sa) && close(s, ss) && close(glow, le),
+            "x = {x}: {a} {s} {glow}"
+        );
+    }
+    // Without sigma_s it is one (times the scale) all over the box.
+    let c = converted(&grid("\"rgb sigma_a\" [1 0 0  0 2 0  0 0 3]"), Files::default(), false).unwrap();
+    assert_eq!(
+        c.desc.media[0].1.coefficients_at(Vec3::new(-15.9, 0.1, 1.9)).1,
+        Vec3::ONE
+    );
+    // pbrt-v4's errors, each at its place.
+    for (params, place, what) in [
+        (
+            "\"float g\" 0.5",
+            ":7:",
+            "an rgbgrid needs \"sigma_a\" or \"sigma_s\" values",
+        ),
+        (
+            "\"rgb sigma_s\" [1 1 1  1 1 1  1 1 1] \"rgb Le\" [1 1 1  1 1 1  1 1 1]",
+            ":8:",
+            "\"Le\" needs \"sigma_a\" values",
+        ),
+        (
+            "\"rgb sigma_a\" [1 1 1  1 1 1]",
+            ":8:",
+            "2 \"sigma_a\" values for a grid of 3 x 1 x 1",
+        ),
+        (
+            "\"rgb sigma_a\" [1 1 1  1 1 1  1 1 1] \"rgb sigma_s\" [1 1 1]",
+            ":8:",
+            "1 \"sigma_s\" values for a grid of 3 x 1 x 1",
+        ),
+        (
+            "\"rgb sigma_a\" [1 1 1  1 1 1  1 1 1] \"rgb Le\" [1 1 1]",
+            ":8:",
+            "1 \"Le\" values for a grid of 3 x 1 x 1",
+        ),
+        (
+            "\"rgb sigma_a\" [1 1 1  1 1 1  1 1 1] \"integer ny\" 0",
+            ":8:",
+            "\"ny\" must be at least 1",
+        ),
+        (
+            "\"rgb sigma_a\" [1 1 1  1 1 1  1 1 1] \"point3 p0\" [0 1 0]",
+            ":8:",
+            "is empty",
+        ),
+    ] {
+        let e = converted(&grid(params), Files::default(), false).unwrap_err();
+        assert!(
+            e.starts_with(&format!("scene/main.pbrt{place}")) && e.contains(what),
+            "{e}"
+        );
+        assert!(!e.contains('\n'), "{e}");
+    }
+}
+
+#[test]
 fn emissive_media_glow_where_pbrt_makes_them_glow() {
     use super::spectrum::blackbody_film_rgb as blackbody_rgb;
     // The grid of `grid_media_are_placed_where_pbrt_places_them`: samples at
