@@ -438,19 +438,7 @@ mod tests {
         use crate::light::Light;
         use crate::medium::Density;
         use std::sync::Arc;
-        let camera = CameraDesc {
-            position: Vec3::ZERO,
-            look_at: Vec3::Z,
-            up: Vec3::Y,
-            fov_y_deg: 60.0,
-            width: 8,
-            height: 8,
-            window: None,
-            lens: None,
-            orthographic: None,
-            spherical: None,
-        };
-        let mut d = SceneDesc::empty("sky", camera);
+        let mut d = SceneDesc::empty("sky", camera_along_z(60.0, 8));
         d.lights.push(Light::infinite(Vec3::ONE, None, glam::Mat3::IDENTITY));
         d.media.push((
             "haze".into(),
@@ -537,25 +525,29 @@ mod tests {
         assert!(dark.max_element() < 0.9, "{dark:?}");
     }
 
+    /// A pinhole camera at the origin looking along +z, `size` pixels square.
+    fn camera_along_z(fov_y_deg: f32, size: u32) -> CameraDesc {
+        CameraDesc {
+            position: Vec3::ZERO,
+            look_at: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg,
+            width: size,
+            height: size,
+            window: None,
+            lens: None,
+            orthographic: None,
+            spherical: None,
+        }
+    }
+
     /// A camera at the origin looking along +z at an emissive wall of
     /// radiance one at z = 3, through a slab between z = 1 and z = 2 bounded
     /// by two quads of no material; the slab is medium 0 when `flip_far` is false. With
     /// `flip_far` the far quad's normal points into the slab, so a ray
     /// crossing it enters medium 0 instead of leaving it.
     fn slab(flip_far: bool) -> Scene {
-        let camera = CameraDesc {
-            position: Vec3::ZERO,
-            look_at: Vec3::Z,
-            up: Vec3::Y,
-            fov_y_deg: 10.0,
-            width: 4,
-            height: 4,
-            window: None,
-            lens: None,
-            orthographic: None,
-            spherical: None,
-        };
-        let mut d = SceneDesc::empty("slab", camera);
+        let mut d = SceneDesc::empty("slab", camera_along_z(10.0, 4));
         let wall = d.material(
             "wall",
             Material::Emissive {

@@ -1824,12 +1824,19 @@ fn grid_media_are_placed_where_pbrt_places_them() {
         ),
         ("\"float density\" [1 5 2] \"point3 p0\" [0 1 0]", ":8:", "is empty"),
     ] {
-        let e = converted(&grid(extra), Files::default(), false).unwrap_err();
-        assert!(
-            e.starts_with(&format!("scene/main.pbrt{place}")) && e.contains(what),
-            "{e}"
-        );
+        refused_at(&grid(extra), place, what);
     }
+}
+
+/// `text` is refused in one line at `place` (":LINE:") of the main file,
+/// saying `what`.
+fn refused_at(text: &str, place: &str, what: &str) {
+    let e = converted(text, Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with(&format!("scene/main.pbrt{place}")) && e.contains(what),
+        "{e}"
+    );
+    assert!(!e.contains('\n'), "{e}");
 }
 
 #[test]
@@ -1927,12 +1934,7 @@ fn rgb_grid_media_are_read_and_placed_as_pbrt_reads_them() {
             "is empty",
         ),
     ] {
-        let e = converted(&grid(params), Files::default(), false).unwrap_err();
-        assert!(
-            e.starts_with(&format!("scene/main.pbrt{place}")) && e.contains(what),
-            "{e}"
-        );
-        assert!(!e.contains('\n'), "{e}");
+        refused_at(&grid(params), place, what);
     }
 }
 
