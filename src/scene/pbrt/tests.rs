@@ -1752,6 +1752,21 @@ fn a_gbuffer_film_renders_its_rgb_image_and_a_spectral_one_is_refused() {
     assert!(e.contains("Film \"spectral\" is not supported"), "{e}");
 }
 
+/// A scene whose medium "smoke", of type `ty` with `params` (on line 8),
+/// has three samples along x over the box [0, 3] x [0, 1] x [0, 1] of a
+/// medium space moved by Translate 10 0 0 and Scale 2: in pbrt's world they
+/// sit at x = 11, 13 and 15 (y = z = 1), in ours (pbrt's mirror image across
+/// the camera's vertical plane) at x = -11, -13, -15.
+fn placed_grid(ty: &str, params: &str) -> String {
+    format!(
+        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+         Translate 10 0 0\nScale 2 2 2\n\
+         MakeNamedMedium \"smoke\" \"string type\" \"{ty}\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
+         {params}\nAttributeEnd\n\
+         MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
+    )
+}
+
 #[test]
 fn grid_media_are_placed_where_pbrt_places_them() {
     // Three densities along x over the box [0, 3] x [0, 1] x [0, 1] of a
@@ -1759,12 +1774,9 @@ fn grid_media_are_placed_where_pbrt_places_them() {
     // the samples sit at x = 11, 13 and 15 (y = z = 1). Ours is pbrt's
     // mirror image across the camera's vertical plane (x -> -x here).
     let grid = |extra: &str| {
-        format!(
-            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
-             Translate 10 0 0\nScale 2 2 2\n\
-             MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
-             \"rgb sigma_a\" [0.5 0.5 0.5] \"float scale\" 2 {extra}\nAttributeEnd\n\
-             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
+        placed_grid(
+            "uniformgrid",
+            &format!("\"rgb sigma_a\" [0.5 0.5 0.5] \"float scale\" 2 {extra}"),
         )
     };
     let c = converted(&grid("\"float density\" [1 5 2]"), Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
@@ -1843,15 +1855,7 @@ fn refused_at(text: &str, place: &str, what: &str) {
 fn rgb_grid_media_are_read_and_placed_as_pbrt_reads_them() {
     // Three samples along x over [0, 3] x [0, 1] x [0, 1], moved by
     // Translate 10 0 0 and Scale 2: at x = -11, -13, -15 of our world.
-    let grid = |params: &str| {
-        format!(
-            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
-             Translate 10 0 0\nScale 2 2 2\n\
-             MakeNamedMedium \"smoke\" \"string type\" \"rgbgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
-             {params}\nAttributeEnd\n\
-             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
-        )
-    };
+    let grid = |params: &str| placed_grid("rgbgrid", params);
     let text = grid(
         "\"rgb sigma_a\" [1 0 0  0 2 0  0 0 3] \"rgb sigma_s\" [0.5 0.5 0.5  1 1 1  0 0 0] \"float scale\" 2 \"float g\" 0.3\n\
          \"rgb Le\" [1 1 1  4 2 1  0 0 0] \"float Lescale\" 0.5",
@@ -1943,15 +1947,7 @@ fn emissive_media_glow_where_pbrt_makes_them_glow() {
     use super::spectrum::blackbody_film_rgb as blackbody_rgb;
     // The grid of `grid_media_are_placed_where_pbrt_places_them`: samples at
     // x = -11, -13, -15 of our world, (y, z) = (1, 1).
-    let grid = |extra: &str| {
-        format!(
-            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
-             Translate 10 0 0\nScale 2 2 2\n\
-             MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\" \"integer nx\" 3 \"point3 p1\" [3 1 1]\n\
-             \"float density\" [1 5 2] {extra}\nAttributeEnd\n\
-             MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 20\n"
-        )
-    };
+    let grid = |extra: &str| placed_grid("uniformgrid", &format!("\"float density\" [1 5 2] {extra}"));
     let le_at = |text: &str, x: f32| {
         let c = converted(text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
         assert!(c.warnings.is_empty(), "{:?}", c.warnings);
