@@ -290,6 +290,28 @@ struct RgbCoefficients {
     max_s: Vec3,
 }
 
+/// What a grid holds at a point: a density scaling the medium's own
+/// coefficients, or an RGB grid's (sigma_a, sigma_s). Each coefficient is
+/// made only where tracking needs it (most tentative collisions need
+/// sigma_t alone).
+#[derive(Clone, Copy)]
+enum Local {
+    Density(f32),
+    Rgb(Vec3, Vec3),
+}
+
+impl Local {
+    /// The coefficient of a medium whose own are `own` = (sigma_a, sigma_s):
+    /// `pick` 0 for sigma_a, 1 for sigma_s.
+    #[inline(always)]
+    fn sigma(self, own: Vec3, pick: usize) -> Vec3 {
+        match self {
+            Local::Density(d) => own * d,
+            Local::Rgb(a, s) => [a, s][pick],
+        }
+    }
+}
+
 impl RgbCoefficients {
     /// (sigma_a, sigma_s) at `q` in the unit cube.
     fn at(&self, q: Vec3) -> (Vec3, Vec3) {
@@ -473,18 +495,14 @@ impl Density {
         Ok(d)
     }
 
-    /// The coefficients at `q` of a medium whose own are (`sa`, `ss`):
-    /// (sigma_t, sigma_s, sigma_a).
+    /// What the grid holds at `q` in the unit cube.
     #[inline(always)]
-    fn coefficients(&self, q: Vec3, st: Vec3, sa: Vec3, ss: Vec3) -> (Vec3, Vec3, Vec3) {
+    fn local(&self, q: Vec3) -> Local {
         match &self.rgb {
-            None => {
-                let density = self.lookup(q);
-                (st * density, ss * density, sa * density)
-            }
+            None => Local::Density(self.lookup(q)),
             Some(c) => {
                 let (a, s) = c.at(q);
-                (a + s, s, a)
+                Local::Rgb(a, s)
             }
         }
     }
@@ -696,8 +714,8 @@ impl Medium {
         if q.cmplt(Vec3::ZERO).any() || q.cmpgt(Vec3::ONE).any() {
             return (Vec3::ZERO, Vec3::ZERO);
         }
-        let (_, ss, sa) = g.coefficients(q, self.sigma_t(), self.sigma_a, self.sigma_s);
-        (sa, ss)
+        let local = g.local(q);
+        (local.sigma(self.sigma_a, 0), local.sigma(self.sigma_s, 1))
     }
 
     /// The Le the medium emits at world point `p` (sigma_a Le per unit
@@ -835,17 +853,16 @@ impl Medium {
                 return tr;
             }
             let q = go + gd * t;
-            let (fraction, absorbed) = match &g.rgb {
-                None => {
-                    let density = g.lookup(q);
-                    (st * (density / majorant), self.sigma_a * (density / majorant))
-                }
-                Some(c) => {
-                    let (a, s) = c.at(q);
-                    ((a + s) / majorant, a / majorant)
-                }
+            let local = g.local(q);
+            let fraction = match local {
+                Local::Density(d) => st * (d / majorant),
+                Local::Rgb(a, s) => (a + s) / majorant,
             };
             if let Some((e, sum)) = emitted.as_mut() {
+                let absorbed = match local {
+                    Local::Density(d) => self.sigma_a * (d / majorant),
+                    Local::Rgb(a, _) => a / majorant,
+                };
                 **sum += tr * absorbed * e.at(q);
             }
             tr *= (Vec3::ONE - fraction).max(Vec3::ZERO);
@@ -923,8 +940,13 @@ impl Medium {
             t += step;
             let e = exp(-majorant * step);
             let q = go + gd * t;
-            let (sigma_t, sigma_s, sigma_a) = g.coefficients(q, st, self.sigma_a, self.sigma_s);
+            let local = g.local(q);
+            let sigma_t = match local {
+                Local::Density(d) => st * d,
+                Local::Rgb(a, s) => a + s,
+            };
             if let Some((em, (b, r))) = emit {
+                let sigma_a = local.sigma(self.sigma_a, 0);
                 // A tentative collision's density in each channel is its
                 // majorant's: the ratios take that, as pbrt-v4's r_e.
                 let p = mh * e[h];
@@ -934,7 +956,7 @@ impl Medium {
             let sigma_n = (majorant - sigma_t).max(Vec3::ZERO);
             if sigma_n[h] <= 0.0 || rng.next_f32() * mh < sigma_t[h] {
                 let p = sigma_t[h] * e[h];
-                beta *= sigma_s * e / p;
+                beta *= local.sigma(self.sigma_s, 1) * e / p;
                 ratio *= sigma_t * e / p;
                 let (beta, ratio) = normalised(beta, ratio);
                 return (MediumEvent::Scatter { t, beta, ratio }, emitted);
