@@ -15,9 +15,12 @@
 //! stops is scattered, into directions the phase function gives. A medium
 //! may also emit, sigma_a Le per unit length ([`Emission`]).
 
+mod majorant;
+
 use crate::math::{to_world, Vec2, Vec3};
 use crate::sampling::{mix64, Rng};
 use glam::Mat4;
+use majorant::MajorantGrid;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -267,8 +270,11 @@ pub struct Density {
     world_from_grid: Mat4,
     grid_from_world: Mat4,
     field: Field,
-    /// The largest density: the majorant for tracking through it.
+    /// The largest density.
     max: f32,
+    /// The largest density (or an `rgbgrid`'s sigma_t) over each cell of a
+    /// coarse grid over the box: the majorants for tracking through it.
+    majorants: MajorantGrid,
     /// pbrt-v4's `rgbgrid`: coefficients of their own at each grid point,
     /// which take the place of the medium's scaled by `field`.
     rgb: Option<RgbCoefficients>,
@@ -484,6 +490,8 @@ impl Density {
             },
             1.0,
         )?;
+        let value = |g: &Option<Vec<Vec3>>, i: usize| g.as_ref().map_or(Vec3::ONE, |v| v[i]);
+        d.majorants = MajorantGrid::over_samples(n, |i| (value(&sigma_a, i) + value(&sigma_s, i)) * scale);
         d.rgb = Some(RgbCoefficients {
             n,
             sigma_a,
@@ -507,9 +515,15 @@ impl Density {
         }
     }
 
-    /// The largest sigma_t in each channel, for a medium whose own is `st`.
-    fn majorant(&self, st: Vec3) -> Vec3 {
-        self.rgb.as_ref().map_or(st * self.max, |c| c.max_t)
+    /// The majorant sigma_t in each channel, for a medium whose own is
+    /// `st`, of a cell whose value is `cell`.
+    #[inline(always)]
+    fn cell_majorant(&self, cell: Vec3, st: Vec3) -> Vec3 {
+        if self.rgb.is_some() {
+            cell
+        } else {
+            st * cell.x
+        }
     }
 
     /// An `rgbgrid`'s largest sigma_t in each channel (`None` for others).
@@ -569,11 +583,16 @@ impl Density {
         if !(grid_from_world.is_finite() && world_from_grid.determinant().abs() > 0.0) {
             return Err("the medium's transformation is singular".into());
         }
+        let majorants = match &field {
+            Field::Samples { n, values } => MajorantGrid::over_samples(*n, |i| Vec3::splat(values[i])),
+            Field::Cloud(_) => MajorantGrid::uniform(Vec3::splat(max)),
+        };
         Ok(Density {
             world_from_grid,
             grid_from_world,
             field,
             max,
+            majorants,
             rgb: None,
         })
     }
@@ -821,11 +840,12 @@ impl Medium {
     }
 
     /// Transmittance over [t0, t1] of the grid-space ray `go + t gd` by
-    /// ratio tracking (Novak et al. 2014) against one majorant for all
-    /// channels, with pbrt-v4's roulette once it is small. With `emitted`,
-    /// adds to it the light the medium emits on the way (at each tentative
-    /// collision, the transmittance so far times sigma_a Le over the
-    /// majorant: an estimate of its integral along the ray).
+    /// ratio tracking (Novak et al. 2014), against one majorant for all
+    /// channels in each cell of the grid's majorant grid, with pbrt-v4's
+    /// roulette once it is small. With `emitted`, adds to it the light the
+    /// medium emits on the way (at each tentative collision, the
+    /// transmittance so far times sigma_a Le over the majorant: an estimate
+    /// of its integral along the ray).
     #[allow(clippy::too_many_arguments)]
     fn ratio_track(
         &self,
@@ -838,51 +858,59 @@ impl Medium {
         mut emitted: Option<(&Emission, &mut Vec3)>,
     ) -> Vec3 {
         let st = self.sigma_t();
-        let majorant = match &g.rgb {
-            None => st.max_element() * g.max,
-            Some(c) => c.max_t.max_element(),
-        };
-        if majorant <= 0.0 {
-            return Vec3::ONE;
-        }
         let mut tr = Vec3::ONE;
-        let mut t = t0;
-        for _ in 0..MAX_TRACKING_STEPS {
-            t += -(1.0 - rng.next_f32()).ln() / majorant;
-            if t >= t1 {
-                return tr;
-            }
-            let q = go + gd * t;
-            let local = g.local(q);
-            let fraction = match local {
-                Local::Density(d) => st * (d / majorant),
-                Local::Rgb(a, s) => (a + s) / majorant,
-            };
-            if let Some((e, sum)) = emitted.as_mut() {
-                let absorbed = match local {
-                    Local::Density(d) => self.sigma_a * (d / majorant),
-                    Local::Rgb(a, _) => a / majorant,
+        let mut steps = 0;
+        // The optical depth, against the majorants, left to the next
+        // tentative collision: it carries over from cell to cell.
+        let mut tau = -(1.0 - rng.next_f32()).ln();
+        for (from, to, cell) in g.majorants.cells(go, gd, t0, t1) {
+            let majorant = g.cell_majorant(cell, st).max_element();
+            let mut t = from;
+            loop {
+                if !(majorant > 0.0 && t + tau / majorant < to) {
+                    tau = (tau - majorant * (to - t)).max(0.0);
+                    break;
+                }
+                t += tau / majorant;
+                tau = -(1.0 - rng.next_f32()).ln();
+                let q = go + gd * t;
+                let local = g.local(q);
+                let fraction = match local {
+                    Local::Density(d) => st * (d / majorant),
+                    Local::Rgb(a, s) => (a + s) / majorant,
                 };
-                **sum += tr * absorbed * e.at(q);
-            }
-            tr *= (Vec3::ONE - fraction).max(Vec3::ZERO);
-            let m = tr.max_element();
-            if m <= 0.0 {
-                return Vec3::ZERO;
-            }
-            if m < 0.05 {
-                if rng.next_f32() < 0.75 {
+                if let Some((e, sum)) = emitted.as_mut() {
+                    let absorbed = match local {
+                        Local::Density(d) => self.sigma_a * (d / majorant),
+                        Local::Rgb(a, _) => a / majorant,
+                    };
+                    **sum += tr * absorbed * e.at(q);
+                }
+                tr *= (Vec3::ONE - fraction).max(Vec3::ZERO);
+                let m = tr.max_element();
+                if m <= 0.0 {
                     return Vec3::ZERO;
                 }
-                tr /= 0.25;
+                if m < 0.05 {
+                    if rng.next_f32() < 0.75 {
+                        return Vec3::ZERO;
+                    }
+                    tr /= 0.25;
+                }
+                steps += 1;
+                if steps >= MAX_TRACKING_STEPS {
+                    return Vec3::ZERO;
+                }
             }
         }
-        Vec3::ZERO
+        tr
     }
 
-    /// `sample_distance` through a density grid: delta tracking against the
-    /// majorant sigma_t times the grid's largest density (Woodcock tracking,
-    /// as null scattering in pbrt-v4), for the hero channel. A tentative
+    /// `sample_distance` through a density grid: delta tracking (Woodcock
+    /// tracking, as null scattering in pbrt-v4) for the hero channel,
+    /// against the majorant sigma_t of each cell of the grid's majorant
+    /// grid that the ray crosses (the optical depth to the next tentative
+    /// collision carries over from one cell to the next). A tentative
     /// collision at density rho is real with probability
     /// sigma_t rho / majorant in the hero channel, and scatters there with
     /// the albedo as weight as in a homogeneous medium; else it is null and
@@ -920,61 +948,73 @@ impl Medium {
             return (pass, emitted);
         }
         let st = self.sigma_t();
-        let majorant = g.majorant(st);
         let h = hero.min(2);
-        let mh = majorant[h];
         let (mut beta, mut ratio) = (Vec3::ONE, Vec3::ONE);
-        let mut t = t0;
-        let mut u = u;
         let mut emitted = Vec3::ZERO;
-        for _ in 0..MAX_TRACKING_STEPS {
-            let step = if mh > 0.0 { -(1.0 - u).ln() / mh } else { f32::INFINITY };
-            u = rng.next_f32();
-            if t + step >= t1 {
-                let e = exp(-majorant * (t1 - t));
-                beta *= e / e[h];
-                ratio *= e / e[h];
-                let (beta, ratio) = normalised(beta, ratio);
-                return (MediumEvent::Pass { beta, ratio }, emitted);
-            }
-            t += step;
-            let e = exp(-majorant * step);
-            let q = go + gd * t;
-            let local = g.local(q);
-            let sigma_t = match local {
-                Local::Density(d) => st * d,
-                Local::Rgb(a, s) => a + s,
-            };
-            if let Some((em, (b, r))) = emit {
-                let sigma_a = local.sigma(self.sigma_a, 0);
-                // A tentative collision's density in each channel is its
-                // majorant's: the ratios take that, as pbrt-v4's r_e.
-                let p = mh * e[h];
-                let le = em.at(q);
-                emitted += path_weight(b * beta * e * sigma_a * le / p, r * ratio * majorant * e / p);
-            }
-            let sigma_n = (majorant - sigma_t).max(Vec3::ZERO);
-            if sigma_n[h] <= 0.0 || rng.next_f32() * mh < sigma_t[h] {
-                let p = sigma_t[h] * e[h];
-                beta *= local.sigma(self.sigma_s, 1) * e / p;
-                ratio *= sigma_t * e / p;
-                let (beta, ratio) = normalised(beta, ratio);
-                return (MediumEvent::Scatter { t, beta, ratio }, emitted);
-            }
-            let p = sigma_n[h] * e[h];
-            beta *= sigma_n * e / p;
-            ratio *= sigma_n * e / p;
-            if ratio.max_element() > 1e8 {
-                (beta, ratio) = normalised(beta, ratio);
+        // The hero's optical depth, against the majorants, left to the next
+        // tentative collision (it carries over from cell to cell), and each
+        // channel's since the last event.
+        let mut tau = -(1.0 - u).ln();
+        let mut depth = Vec3::ZERO;
+        let mut steps = 0;
+        for (from, to, cell) in g.majorants.cells(go, gd, t0, t1) {
+            let majorant = g.cell_majorant(cell, st);
+            let mh = majorant[h];
+            let mut t = from;
+            loop {
+                if !(mh > 0.0 && t + tau / mh < to) {
+                    depth += majorant * (to - t);
+                    tau = (tau - mh * (to - t)).max(0.0);
+                    break;
+                }
+                let step = tau / mh;
+                t += step;
+                tau = -(1.0 - rng.next_f32()).ln();
+                let e = exp(-(depth + majorant * step));
+                depth = Vec3::ZERO;
+                let q = go + gd * t;
+                let local = g.local(q);
+                let sigma_t = match local {
+                    Local::Density(d) => st * d,
+                    Local::Rgb(a, s) => a + s,
+                };
+                if let Some((em, (b, r))) = emit {
+                    let sigma_a = local.sigma(self.sigma_a, 0);
+                    // A tentative collision's density in each channel is its
+                    // majorant's: the ratios take that, as pbrt-v4's r_e.
+                    let p = mh * e[h];
+                    let le = em.at(q);
+                    emitted += path_weight(b * beta * e * sigma_a * le / p, r * ratio * majorant * e / p);
+                }
+                let sigma_n = (majorant - sigma_t).max(Vec3::ZERO);
+                if sigma_n[h] <= 0.0 || rng.next_f32() * mh < sigma_t[h] {
+                    let p = sigma_t[h] * e[h];
+                    beta *= local.sigma(self.sigma_s, 1) * e / p;
+                    ratio *= sigma_t * e / p;
+                    let (beta, ratio) = normalised(beta, ratio);
+                    return (MediumEvent::Scatter { t, beta, ratio }, emitted);
+                }
+                let p = sigma_n[h] * e[h];
+                beta *= sigma_n * e / p;
+                ratio *= sigma_n * e / p;
+                if ratio.max_element() > 1e8 {
+                    (beta, ratio) = normalised(beta, ratio);
+                }
+                steps += 1;
+                if steps >= MAX_TRACKING_STEPS {
+                    return (
+                        MediumEvent::Pass {
+                            beta: Vec3::ZERO,
+                            ratio: Vec3::ONE,
+                        },
+                        emitted,
+                    );
+                }
             }
         }
-        // Beyond any sensible scene (a majorant far above the densities the
-        // ray meets over a vast distance): the path ends.
-        let end = MediumEvent::Pass {
-            beta: Vec3::ZERO,
-            ratio: Vec3::ONE,
-        };
-        (end, emitted)
+        let e = exp(-depth);
+        let (beta, ratio) = normalised(beta * e / e[h], ratio * e / e[h]);
+        (MediumEvent::Pass { beta, ratio }, emitted)
     }
 
     fn sample_homogeneous(
