@@ -400,10 +400,7 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         }
         let kind = match &m.density {
             None => "homogeneous".to_string(),
-            Some(g) => match g.resolution() {
-                Some([x, y, z]) => format!("a density grid of {x} x {y} x {z}, densities up to {}", g.max()),
-                None => "a procedural cloud (pbrt-v4's), densities up to 1".to_string(),
-            },
+            Some(g) => g.describe(),
         };
         println!(
             "medium \"{name}\": {kind}, sigma_a {}, sigma_s {}, g {}{glow}",

@@ -69,6 +69,40 @@ impl MajorantGrid {
         MajorantGrid { res, max }
     }
 
+    /// Bounds on a field given as regions of the cube, `res` cells along
+    /// each axis: each cell holds `base` (the field's value outside every
+    /// region) or the largest value of a region reaching into it (widened by
+    /// a thousandth of a cell), as boxes (lo, hi, value).
+    pub fn over_regions(res: [usize; 3], base: f32, regions: impl IntoIterator<Item = (Vec3, Vec3, f32)>) -> Self {
+        let mut max = vec![Vec3::splat(base); res.iter().product()];
+        let span = |lo: f32, hi: f32, r: usize| -> Option<(usize, usize)> {
+            let (a, b) = (lo * r as f32 - 1e-3, hi * r as f32 + 1e-3);
+            if !(a < r as f32 && b >= 0.0) {
+                return None;
+            }
+            let clamp = |x: f32| (x.floor().max(0.0) as usize).min(r - 1);
+            Some((clamp(a), clamp(b)))
+        };
+        for (lo, hi, value) in regions {
+            let (Some(x), Some(y), Some(z)) = (
+                span(lo.x, hi.x, res[0]),
+                span(lo.y, hi.y, res[1]),
+                span(lo.z, hi.z, res[2]),
+            ) else {
+                continue;
+            };
+            for cz in z.0..=z.1 {
+                for cy in y.0..=y.1 {
+                    let row = (cz * res[1] + cy) * res[0];
+                    for m in &mut max[row + x.0..=row + x.1] {
+                        *m = m.max(Vec3::splat(value));
+                    }
+                }
+            }
+        }
+        MajorantGrid { res, max }
+    }
+
     /// The largest value over the whole cube.
     #[cfg(test)]
     pub fn overall(&self) -> Vec3 {
@@ -132,7 +166,7 @@ impl Iterator for Cells<'_> {
 
     fn next(&mut self) -> Option<(f32, f32, Vec3)> {
         // Every call steps into the next cell, so the walk ends within
-        // 3 x 16 calls even where rounding (or a NaN) leaves t short of t1.
+        // the sum of the resolutions' calls even where rounding (or a NaN) leaves t short of t1.
         if self.t >= self.t1 {
             return None;
         }

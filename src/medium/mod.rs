@@ -16,11 +16,14 @@
 //! may also emit, sigma_a Le per unit length ([`Emission`]).
 
 mod majorant;
+pub mod nanovdb;
+mod sparse;
 
 use crate::math::{to_world, Vec2, Vec3};
 use crate::sampling::{mix64, Rng};
 use glam::Mat4;
 use majorant::MajorantGrid;
+use sparse::SparseGrid;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -68,6 +71,37 @@ struct Temperature {
     /// The blackbody's RGB at `TABLE_LOW + i step` kelvin.
     table: Vec<Vec3>,
     step: f32,
+}
+
+impl Temperature {
+    /// Temperatures `field`, whose largest value is `hottest` (its
+    /// lookups interpolate between values and zero), their glow times
+    /// `factor`.
+    fn new(
+        field: Field,
+        hottest: f32,
+        offset: f32,
+        scale: f32,
+        factor: f32,
+        rgb: &dyn Fn(f32) -> Vec3,
+    ) -> Result<Self, String> {
+        if !(offset.is_finite() && scale.is_finite()) {
+            return Err("the temperature's offset and scale must be finite".into());
+        }
+        let kelvin = |v: f32| (v - offset) * scale;
+        let hottest = kelvin(0.0).max(kelvin(hottest));
+        let step = ((hottest - TABLE_LOW) / (TABLE_SIZE - 1) as f32).max(f32::MIN_POSITIVE);
+        let table = (0..TABLE_SIZE)
+            .map(|i| rgb(TABLE_LOW + i as f32 * step) * factor)
+            .collect();
+        Ok(Temperature {
+            field,
+            offset,
+            scale,
+            table,
+            step,
+        })
+    }
 }
 
 impl std::fmt::Debug for Temperature {
@@ -173,27 +207,47 @@ impl Emission {
                 scale: tscale,
                 rgb,
             }) => {
-                if !(offset.is_finite() && tscale.is_finite()) {
-                    return Err("the temperature's offset and scale must be finite".into());
-                }
-                // Lookups interpolate between the values and zero.
-                let kelvin = |v: f32| (v - offset) * tscale;
-                let hottest = values.iter().fold(kelvin(0.0), |a, &v| a.max(kelvin(v)));
-                let step = ((hottest - TABLE_LOW) / (TABLE_SIZE - 1) as f32).max(f32::MIN_POSITIVE);
-                let table = (0..TABLE_SIZE).map(|i| rgb(TABLE_LOW + i as f32 * step)).collect();
-                Some(Temperature {
-                    field: samples("temperature", values)?,
-                    offset,
-                    scale: tscale,
-                    table,
-                    step,
-                })
+                let hottest = values.iter().fold(0.0f32, |a, &v| a.max(v));
+                let field = samples("temperature", values)?;
+                Some(Temperature::new(field, hottest, offset, tscale, 1.0, rgb)?)
             }
         };
         Ok(Emission {
             le,
             scale,
             temperature,
+            grid: None,
+        })
+    }
+
+    /// A NanoVDB medium's (pbrt-v4's `NanoVDBMedium`): `lescale` times the
+    /// blackbody of the temperature `grid` holds, seen from the density's
+    /// box from `lo` to `hi` in the medium's space.
+    pub fn nanovdb_temperature(
+        grid: nanovdb::VdbGrid,
+        (lo, hi): (Vec3, Vec3),
+        lescale: f32,
+        offset: f32,
+        scale: f32,
+        rgb: &dyn Fn(f32) -> Vec3,
+    ) -> Result<Self, String> {
+        if !(lescale.is_finite() && lescale >= 0.0) {
+            return Err(format!("an \"Lescale\" of {lescale}"));
+        }
+        let hottest = grid.values.max();
+        let map = grid.index_from_world;
+        let field = SparseField::new(grid.values, lo, hi, |p| nanovdb::apply(&map, p))?;
+        Ok(Emission {
+            le: Vec3::ONE,
+            scale: None,
+            temperature: Some(Temperature::new(
+                Field::Sparse(Box::new(field)),
+                hottest,
+                offset,
+                scale,
+                lescale,
+                rgb,
+            )?),
             grid: None,
         })
     }
@@ -343,7 +397,49 @@ enum Field {
         values: Vec<f32>,
     },
     Cloud(Cloud),
+    /// A NanoVDB grid's voxels, placed in the box by `index_from_q`.
+    Sparse(Box<SparseField>),
 }
+
+/// A sparse grid's voxels over a box: the voxel space's point for a point
+/// `q` of the box's unit cube is `a q + b`.
+#[derive(Clone, PartialEq)]
+pub struct SparseField {
+    grid: SparseGrid,
+    a: glam::Mat3,
+    b: Vec3,
+}
+
+impl SparseField {
+    /// `grid` seen from the box from `lo` to `hi` of the medium's space,
+    /// which `index_from_medium` takes to the grid's voxel space.
+    fn new(grid: SparseGrid, lo: Vec3, hi: Vec3, index_from_medium: impl Fn(Vec3) -> Vec3) -> Result<Self, String> {
+        let b = index_from_medium(lo);
+        let axis = |k: usize| {
+            let mut p = lo;
+            p[k] = hi[k];
+            index_from_medium(p) - b
+        };
+        let a = glam::Mat3::from_cols(axis(0), axis(1), axis(2));
+        if !(a.is_finite() && b.is_finite() && a.determinant().abs() > 0.0) {
+            return Err("the grid's map from its voxels to space is singular".into());
+        }
+        Ok(SparseField { grid, a, b })
+    }
+
+    fn lookup(&self, q: Vec3) -> f32 {
+        self.grid.trilinear(self.a * q + self.b)
+    }
+
+    fn majorants(&self) -> MajorantGrid {
+        let inv = self.a.inverse();
+        let b = self.b;
+        self.grid.majorants([NANOVDB_MAJORANT_RESOLUTION; 3], |p| inv * (p - b))
+    }
+}
+
+/// Cells along each axis of a NanoVDB medium's majorant grid (pbrt-v4's).
+const NANOVDB_MAJORANT_RESOLUTION: usize = 64;
 
 impl std::fmt::Debug for Field {
     // A digest of the values: scene fingerprints print media, and a grid
@@ -357,6 +453,7 @@ impl std::fmt::Debug for Field {
                 write!(f, "Samples {{ n: {n:?}, values: {digest:016x} }}")
             }
             Field::Cloud(c) => write!(f, "{c:?}"),
+            Field::Sparse(s) => write!(f, "{:?} a: {:?} b: {}", s.grid, s.a, s.b),
         }
     }
 }
@@ -366,6 +463,7 @@ impl Field {
         match self {
             Field::Samples { n, values } => trilinear(*n, values, q),
             Field::Cloud(c) => cloud_density(c.lo + q * c.size, c.density, c.wispiness, c.frequency),
+            Field::Sparse(s) => s.lookup(q),
         }
     }
 }
@@ -417,6 +515,11 @@ impl std::fmt::Debug for Density {
                 )
             }
             Field::Cloud(c) => write!(f, "Density {{ {c:?}, world_from_grid: {:?} }}", self.world_from_grid),
+            Field::Sparse(s) => write!(
+                f,
+                "Density {{ {:?}, a: {:?}, b: {}, world_from_grid: {:?} }}",
+                s.grid, s.a, s.b, self.world_from_grid
+            ),
         }
     }
 }
@@ -578,6 +681,33 @@ impl Density {
         Self::placed(world_from_grid, field, 1.0)
     }
 
+    /// pbrt-v4's `nanovdb` medium: the density NanoVDB `grid` holds, over
+    /// its world bounds (joined with `also`, the temperature grid's) in the
+    /// space `world_from_medium` places; the box, in the medium's space,
+    /// with it.
+    pub fn nanovdb(
+        grid: nanovdb::VdbGrid,
+        also: Option<(Vec3, Vec3)>,
+        world_from_medium: Mat4,
+    ) -> Result<(Self, (Vec3, Vec3)), String> {
+        if let Some(v) = grid.values.values().find(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(format!("a density of {v}: densities must be finite and not negative"));
+        }
+        let (mut lo, mut hi) = grid.world_bounds;
+        if let Some((a, b)) = also {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        let (world_from_grid, _, _) = unit_box(lo, hi, world_from_medium)?;
+        let max = grid.values.max();
+        let map = grid.index_from_world;
+        let field = SparseField::new(grid.values, lo, hi, |p| nanovdb::apply(&map, p))?;
+        Ok((
+            Self::placed(world_from_grid, Field::Sparse(Box::new(field)), max)?,
+            (lo, hi),
+        ))
+    }
+
     fn placed(world_from_grid: Mat4, field: Field, max: f32) -> Result<Self, String> {
         let grid_from_world = world_from_grid.inverse();
         if !(grid_from_world.is_finite() && world_from_grid.determinant().abs() > 0.0) {
@@ -586,6 +716,7 @@ impl Density {
         let majorants = match &field {
             Field::Samples { n, values } => MajorantGrid::over_samples(*n, |i| Vec3::splat(values[i])),
             Field::Cloud(_) => MajorantGrid::uniform(Vec3::splat(max)),
+            Field::Sparse(s) => s.majorants(),
         };
         Ok(Density {
             world_from_grid,
@@ -614,7 +745,26 @@ impl Density {
         }
         match &self.field {
             Field::Samples { n, .. } => Some(*n),
-            Field::Cloud { .. } => None,
+            Field::Cloud { .. } | Field::Sparse(_) => None,
+        }
+    }
+
+    /// What the density is, in a few words (for `info`).
+    pub fn describe(&self) -> String {
+        match &self.field {
+            Field::Samples { n, .. } => format!(
+                "a density grid of {} x {} x {}, densities up to {}",
+                n[0], n[1], n[2], self.max
+            ),
+            Field::Cloud(_) => "a procedural cloud (pbrt-v4's), densities up to 1".to_string(),
+            Field::Sparse(s) => {
+                let [x, y, z] = s.grid.blocks();
+                format!(
+                    "a NanoVDB grid, {} leaves of 8^3 voxels in a box of {x} x {y} x {z} such blocks, densities up to {}",
+                    s.grid.leaf_count(),
+                    self.max
+                )
+            }
         }
     }
 

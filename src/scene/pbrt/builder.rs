@@ -1127,12 +1127,24 @@ impl<'a> Builder<'a> {
                     )
                 })?;
                 let world_from_medium = self.ctm_static(&t.loc, "MakeNamedMedium");
+                // A NanoVDB file is read here, where files are found (as
+                // pbrt-v4 finds it: beside the scene file).
+                let file = if ty == "nanovdb" {
+                    let at = params.loc_of("filename").unwrap_or(&t.loc).clone();
+                    let file_name = params.get_string("filename")?.unwrap_or_default();
+                    let what = format!("MakeNamedMedium \"{name}\": nanovdb");
+                    let (path, bytes) = self.read_named(&at, &what, &file_name)?;
+                    Some((path, Arc::new(bytes)))
+                } else {
+                    None
+                };
                 self.scene.media.push(Medium {
                     name,
                     ty,
                     params,
                     world_from_medium,
                     loc: t.loc.clone(),
+                    file,
                 });
             }
             "MediumInterface" => {

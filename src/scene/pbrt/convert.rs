@@ -47,7 +47,7 @@ use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
-use crate::medium::{Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
+use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
@@ -1639,14 +1639,16 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         "homogeneous" => (false, false),
         "uniformgrid" => (true, false),
         "cloud" => (false, true),
+        "nanovdb" => (false, false),
         "rgbgrid" => return rgb_grid_medium(m).map(Ok),
         other => {
             return Ok(Err(format!(
-                "media of type \"{other}\" are not supported (homogeneous, uniformgrid, rgbgrid and cloud ones are)"
+                "media of type \"{other}\" are not supported (homogeneous, uniformgrid, rgbgrid, cloud and nanovdb ones are)"
             )))
         }
     };
-    if !grid && !cloud && !p.get_string_or("preset", "")?.is_empty() {
+    let vdb = m.ty == "nanovdb";
+    if !grid && !cloud && !vdb && !p.get_string_or("preset", "")?.is_empty() {
         return Ok(Err("named scattering presets (\"preset\") are not supported".into()));
     }
     // An `rgb` coefficient as given (pbrt-v4's unbounded spectrum of it), a
@@ -1664,8 +1666,9 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         (Ok(a), Ok(s)) => (a, s),
         (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
     };
-    // pbrt-v4's cloud emits nothing (its "Le" is left unread, and reported).
-    let le = if cloud {
+    // pbrt-v4's cloud emits nothing, its nanovdb medium only by temperature
+    // (their "Le" is left unread, and reported).
+    let le = if cloud || vdb {
         None
     } else {
         match medium_le(m)? {
@@ -1679,6 +1682,12 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         (Some(std::sync::Arc::new(density)), emission)
     } else if cloud {
         (cloud_density(m)?, None)
+    } else if vdb {
+        let (density, emission) = match nanovdb_medium(m)? {
+            Ok(v) => v,
+            Err(why) => return Ok(Err(why)),
+        };
+        (Some(std::sync::Arc::new(density)), emission)
     } else {
         let lescale = p.get_float("Lescale", 1.0)?;
         (None, le.map(|c| MediumEmission::uniform(c * lescale)))
@@ -1696,6 +1705,55 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         .check()
         .map_err(|why| located(&m.loc, format!("MakeNamedMedium \"{}\": {why}", m.name)))?;
     Ok(Ok(medium))
+}
+
+/// A `nanovdb` medium's density and emission (pbrt-v4's
+/// `NanoVDBMedium::Create`): the float grids named by `gridname`
+/// ("density") and `temperaturename` ("temperature", optional) of the file
+/// `filename`; emission `Lescale` (1) times the blackbody of the
+/// temperature, less `temperatureoffset` (or `temperaturecutoff`, 0), times
+/// `temperaturescale` (1), in kelvin.
+/// A grid the file holds in a way we do not read is `Ok(Err(why))`.
+fn nanovdb_medium(m: &super::ir::Medium) -> Result<std::result::Result<(Density, Option<MediumEmission>), String>> {
+    let p = &m.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&m.loc);
+    let what = format!("MakeNamedMedium \"{}\"", m.name);
+    let Some((path, bytes)) = &m.file else {
+        return Err(located(&m.loc, format!("{what}: no \"filename\" was read")));
+    };
+    let density_name = p.get_string_or("gridname", "density")?;
+    let temperature_name = p.get_string_or("temperaturename", "temperature")?;
+    let in_file = |e: String| located(at("filename"), format!("{what}: {}: {e}", path.display()));
+    let mut grids = match nanovdb::read_grids(bytes, &[&density_name, &temperature_name]) {
+        Ok(grids) => grids,
+        Err(e) if e.contains(nanovdb::UNSUPPORTED) => return Ok(Err(format!("{}: {e}", path.display()))),
+        Err(e) => return Err(in_file(e)),
+    };
+    let temperature = grids.pop().flatten();
+    let Some(density) = grids.pop().flatten() else {
+        return Err(in_file(format!("no grid named \"{density_name}\"")));
+    };
+    let lescale = p.get_float("Lescale", 1.0)?;
+    let offset = p.get_float("temperatureoffset", p.get_float("temperaturecutoff", 0.0)?)?;
+    let tscale = p.get_float("temperaturescale", 1.0)?;
+    let (density, bounds) = Density::nanovdb(
+        density,
+        temperature.as_ref().map(|t| t.world_bounds),
+        m.world_from_medium,
+    )
+    .map_err(in_file)?;
+    // As pbrt-v4: a medium emits only with a temperature grid and a
+    // positive Lescale.
+    let emission = match temperature {
+        Some(t) if lescale > 0.0 => Some(
+            MediumEmission::nanovdb_temperature(t, bounds, lescale, offset, tscale, &|k| {
+                super::spectrum::blackbody_film_rgb(k)
+            })
+            .map_err(|e| located(at("Lescale"), format!("{what}: {e}")))?,
+        ),
+        _ => None,
+    };
+    Ok(Ok((density, emission)))
 }
 
 /// A medium's `Le` as the RGB radiance the film records (pbrt-v4 reads it

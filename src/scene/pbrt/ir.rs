@@ -147,6 +147,8 @@ pub struct Medium {
     pub params: Params,
     pub world_from_medium: Mat4,
     pub loc: Loc,
+    /// A `nanovdb` medium's file: where it was found, and its bytes.
+    pub file: Option<(PathBuf, Arc<Vec<u8>>)>,
 }
 
 /// A triangle mesh in object space: from `trianglemesh` (its `P`, `N`, `uv`,
