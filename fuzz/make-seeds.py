@@ -284,3 +284,19 @@ Shape "sphere"
 Material "interface"
 Shape "sphere" "float radius" [ 2 ]
 """ + "\0" + "# wavelength value\n400 1.9\n500 1.8\n600 2.9\n700 4.0\n")
+
+# A nanovdb medium: the tail is served as any .nvdb file too, here the
+# tests' NanoVDB file (uncompressed it would be 4 MB; ZIP as it is).
+with open(os.path.join(here, "..", "tests", "data", "small-zip.nvdb"), "rb") as f:
+    nvdb = f.read()
+put("pbrt", "nanovdb-media.pbrt", (pbrt_camera + """WorldBegin
+AttributeBegin
+  MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
+    "rgb sigma_a" [0.5 0.6 0.8] "rgb sigma_s" [2.5 2.0 1.5] "float scale" 4
+    "float Lescale" 0.05 "float temperaturescale" 2
+  Material "interface"
+  MediumInterface "" "smoke"
+  Shape "sphere" "float radius" 3
+AttributeEnd
+LightSource "infinite" "rgb L" [0.5 0.5 0.5]
+""").encode() + b"\0" + nvdb)

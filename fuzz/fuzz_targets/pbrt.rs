@@ -10,7 +10,8 @@
 //! The input is the scene file up to its first NUL; the bytes after it are
 //! served as any `.ply` file the scene names (and, decompressed by the
 //! reader, as any `.ply.gz`) and as any `.spd` spectrum file, so the fuzzer
-//! mutates the `plymesh` and spectrum file paths too.
+//! mutates the `plymesh`, spectrum and NanoVDB file paths too (every
+//! `.nvdb` file a `nanovdb` medium names is that tail as well).
 //! `virtual/inc.pbrt` is a small fixed file for `Include` and `Import`.
 
 #![no_main]
@@ -42,7 +43,11 @@ impl FileSource for Files<'_> {
         let name = path.to_string_lossy();
         if path == Path::new("virtual/inc.pbrt") {
             Ok(INCLUDE.to_vec())
-        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") || name.ends_with(".spd") {
+        } else if name.ends_with(".ply")
+            || name.ends_with(".ply.gz")
+            || name.ends_with(".spd")
+            || name.ends_with(".nvdb")
+        {
             Ok(self.ply.to_vec())
         } else {
             Err(Error::new(ErrorKind::NotFound, "not among the fuzz target's files"))

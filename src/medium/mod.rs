@@ -434,12 +434,17 @@ impl SparseField {
     fn majorants(&self) -> MajorantGrid {
         let inv = self.a.inverse();
         let b = self.b;
-        self.grid.majorants([NANOVDB_MAJORANT_RESOLUTION; 3], |p| inv * (p - b))
+        // pbrt-v4's 64 cells an axis, but none narrower than a leaf (8
+        // voxels): a cell's bound takes in the voxels a voxel beyond it, so
+        // narrower cells bound scarcely tighter and cost the tracking more
+        // steps (BENCHMARKS.md, "NanoVDB media against pbrt-v4").
+        let res = [0, 1, 2].map(|k| ((self.a.col(k).length() / 8.0).ceil() as usize).clamp(1, MAX_MAJORANT_CELLS));
+        self.grid.majorants(res, |p| inv * (p - b))
     }
 }
 
-/// Cells along each axis of a NanoVDB medium's majorant grid (pbrt-v4's).
-const NANOVDB_MAJORANT_RESOLUTION: usize = 64;
+/// Most cells along each axis of a NanoVDB medium's majorant grid (pbrt-v4's).
+const MAX_MAJORANT_CELLS: usize = 64;
 
 impl std::fmt::Debug for Field {
     // A digest of the values: scene fingerprints print media, and a grid

@@ -43,7 +43,7 @@ fn ply(bytes: &[u8]) -> Result<(), String> {
 }
 
 /// What the pbrt target does: the scene up to the first NUL, the rest served
-/// as every `.ply` (and `.ply.gz`) and `.spd` it names, `inc.pbrt` a fixed file; read,
+/// as every `.ply` (and `.ply.gz`), `.spd` and `.nvdb` it names, `inc.pbrt` a fixed file; read,
 /// converted leniently and built.
 fn pbrt(bytes: &[u8]) -> Result<(), String> {
     let (text, ply) = match bytes.iter().position(|&b| b == 0) {
@@ -71,7 +71,11 @@ impl FileSource for PbrtFiles {
             Ok(b"MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
 AttributeBegin\nNamedMaterial \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n"
                 .to_vec())
-        } else if name.ends_with(".ply") || name.ends_with(".ply.gz") || name.ends_with(".spd") {
+        } else if name.ends_with(".ply")
+            || name.ends_with(".ply.gz")
+            || name.ends_with(".spd")
+            || name.ends_with(".nvdb")
+        {
             Ok(self.ply.clone())
         } else {
             NoFiles.read(path)
