@@ -74,12 +74,11 @@ struct Temperature {
 }
 
 impl Temperature {
-    /// Temperatures `field`, whose largest value is `hottest` (its
-    /// lookups interpolate between values and zero), their glow times
-    /// `factor`.
+    /// Temperatures `field`, whose values lie in `range` (its lookups
+    /// interpolate between values and zero), their glow times `factor`.
     fn new(
         field: Field,
-        hottest: f32,
+        range: (f32, f32),
         offset: f32,
         scale: f32,
         factor: f32,
@@ -89,7 +88,7 @@ impl Temperature {
             return Err("the temperature's offset and scale must be finite".into());
         }
         let kelvin = |v: f32| (v - offset) * scale;
-        let hottest = kelvin(0.0).max(kelvin(hottest));
+        let hottest = kelvin(0.0).max(kelvin(range.0)).max(kelvin(range.1));
         let step = ((hottest - TABLE_LOW) / (TABLE_SIZE - 1) as f32).max(f32::MIN_POSITIVE);
         let table = (0..TABLE_SIZE)
             .map(|i| rgb(TABLE_LOW + i as f32 * step) * factor)
@@ -207,9 +206,11 @@ impl Emission {
                 scale: tscale,
                 rgb,
             }) => {
-                let hottest = values.iter().fold(0.0f32, |a, &v| a.max(v));
+                let range = values
+                    .iter()
+                    .fold((0.0f32, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
                 let field = samples("temperature", values)?;
-                Some(Temperature::new(field, hottest, offset, tscale, 1.0, rgb)?)
+                Some(Temperature::new(field, range, offset, tscale, 1.0, rgb)?)
             }
         };
         Ok(Emission {
@@ -234,7 +235,10 @@ impl Emission {
         if !(lescale.is_finite() && lescale >= 0.0) {
             return Err(format!("an \"Lescale\" of {lescale}"));
         }
-        let hottest = grid.values.max();
+        let range = grid
+            .values
+            .values()
+            .fold((0.0f32, 0.0f32), |(lo, hi), v| (lo.min(v), hi.max(v)));
         let map = grid.index_from_world;
         let field = SparseField::new(grid.values, lo, hi, |p| nanovdb::apply(&map, p))?;
         Ok(Emission {
@@ -242,7 +246,7 @@ impl Emission {
             scale: None,
             temperature: Some(Temperature::new(
                 Field::Sparse(Box::new(field)),
-                hottest,
+                range,
                 offset,
                 scale,
                 lescale,
@@ -397,7 +401,7 @@ enum Field {
         values: Vec<f32>,
     },
     Cloud(Cloud),
-    /// A NanoVDB grid's voxels, placed in the box by `index_from_q`.
+    /// A NanoVDB grid's voxels, placed in the box by its map.
     Sparse(Box<SparseField>),
 }
 
