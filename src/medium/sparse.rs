@@ -74,7 +74,11 @@ impl SparseBuilder {
             }
             blocks[a] = ((hi[a] as i64 - origin[a] as i64) / BLOCK as i64 + 1) as usize;
         }
-        let count = blocks.iter().map(|&b| b as u64).product::<u64>();
+        // Each axis may span 2^29 blocks: their product overflows.
+        let count = blocks
+            .iter()
+            .try_fold(1u64, |a, &b| a.checked_mul(b as u64))
+            .unwrap_or(u64::MAX);
         if count > MAX_BLOCKS {
             return Err(format!(
                 "a bounding box from {lo:?} to {hi:?}: {count} blocks of 8^3 voxels, more than the limit of {MAX_BLOCKS}"
@@ -325,6 +329,8 @@ mod tests {
         assert_eq!(mid, 64.0 * 0.5 + 8.0 * 2.5 + 3.5);
         assert_eq!(g.max(), 511.0);
         assert!(SparseBuilder::new([0, 0, 0], [1 << 20, 1 << 20, 1 << 10], 0.0).is_err());
+        // A box over all of index space (a count that overflows 64 bits).
+        assert!(SparseBuilder::new([i32::MIN; 3], [i32::MAX; 3], 0.0).is_err());
         // Lookups within a block (one table read) and across blocks agree
         // with the eight voxels' interpolation.
         let mut rng = crate::sampling::Rng::new(1, 2);
