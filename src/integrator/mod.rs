@@ -206,7 +206,7 @@ pub fn render_observed(
     let tiles_total = tile_count(window.rect.width(), window.rect.height());
     // The sensor's response is applied to finished films: sums, checkpoints
     // and photon files stay as the light left them.
-    let balance = settings.white_balance.map(crate::sensor::white_balance);
+    let balance = crate::sensor::film_matrix(settings.sensor, settings.white_balance);
     let develop = |mut film: Film| {
         if let Some(m) = balance {
             film.transform_colours(m);

@@ -254,6 +254,8 @@ pub struct RenderSettings {
     /// The colour temperature (kelvin) the film balances to white; `None`:
     /// the film records colours as they are.
     pub white_balance: Option<f32>,
+    /// The film's sensor: `sensor::OBSERVER` or one of `sensor::SENSORS`.
+    pub sensor: &'static str,
     /// Photon mapping settings.
     pub photon: PhotonSettings,
     /// Files that carry work between runs.
@@ -329,6 +331,10 @@ impl RenderSettings {
         }
         if let Some(k) = self.white_balance {
             v.push(("white_balance", Value::Real(k)));
+        }
+        // Absent for the observer, so older checkpoints still match.
+        if self.sensor != crate::sensor::OBSERVER {
+            v.push(("sensor", Value::Name(self.sensor)));
         }
         if let Some(t) = self.threads {
             v.push(("threads", Value::Int(t as u64)));
@@ -700,6 +706,11 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         max_component: real("max_component"),
         white_balance: real("white_balance"),
+        sensor: crate::sensor::SENSORS
+            .iter()
+            .copied()
+            .find(|&s| s == choice("sensor"))
+            .unwrap_or(crate::sensor::OBSERVER),
         photon: PhotonSettings {
             photons: int("photons").unwrap_or_default(),
             // SPPM converges to the answer only if photon paths are not cut

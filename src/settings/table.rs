@@ -114,6 +114,17 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &[],
     },
     Spec {
+        name: "sensor",
+        kind: Kind::Choice(&crate::sensor::SENSORS),
+        default: DefaultValue::Name(crate::sensor::OBSERVER),
+        doc: "The film's sensor: cie1931 (the CIE 1931 observer: colours as they are) or one of pbrt-v4's \
+              measured cameras (canon_eos_100d, nikon_d850, sony_ilce_9, ...), balanced at white_balance \
+              (6500 K unless given) as pbrt-v4 balances them, applied to the finished film as a colour \
+              matrix fitted to the camera's spectra (pbrt-v4's Film \"sensor\")",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
         name: "photons",
         kind: Kind::Count { min: 0, max: 1 << 40 },
         default: DefaultValue::Int(200_000),

@@ -226,7 +226,7 @@ impl Progressive {
             pass: vec![PixelSum::default(); width as usize * height as usize],
             done: 0,
             target: settings.ssaa * settings.ssaa,
-            balance: settings.white_balance.map(crate::sensor::white_balance),
+            balance: crate::sensor::film_matrix(settings.sensor, settings.white_balance),
             stats: RayStats::default(),
         }
     }
@@ -358,8 +358,8 @@ pub fn low_res_pass(
             film.set(x, y, rows[(y / block) as usize][(x / block) as usize]);
         }
     }
-    if let Some(k) = settings.white_balance {
-        film.transform_colours(crate::sensor::white_balance(k));
+    if let Some(m) = crate::sensor::film_matrix(settings.sensor, settings.white_balance) {
+        film.transform_colours(m);
     }
     Some(film)
 }
@@ -425,7 +425,7 @@ mod tests {
     }
 
     #[test]
-    fn white_balance_maps_every_pixel_of_the_offline_and_the_progressive_film() {
+    fn white_balance_and_camera_sensors_map_every_pixel_of_the_offline_and_the_progressive_film() {
         let scene = small_cornell();
         let plain = integrator::render(&scene, &settings(), &|| {}).unwrap().film;
         let s = RenderSettings {
@@ -448,6 +448,25 @@ mod tests {
         let mut p = Progressive::new(scene.camera.width, scene.camera.height, &s);
         while p.run_pass(&scene, &s, view.estimator().as_ref(), &never) {}
         assert_eq!(p.film(), balanced);
+
+        // A named camera is its own matrix at the same temperature, in both
+        // films: not the observer's balance.
+        let c = RenderSettings {
+            sensor: "nikon_d850",
+            ..s.clone()
+        };
+        let camera = integrator::render(&scene, &c, &|| {}).unwrap().film;
+        let mc = crate::sensor::camera_matrix("nikon_d850", 3000.0).unwrap();
+        assert!((mc - m).to_cols_array().iter().any(|d| d.abs() > 0.01));
+        for (b, p) in camera.pixels.iter().zip(&plain.pixels) {
+            assert!(
+                (*b - mc * *p).abs().max_element() <= 1e-6 * p.max_element().max(1.0),
+                "{b} {p}"
+            );
+        }
+        let mut p = Progressive::new(scene.camera.width, scene.camera.height, &c);
+        while p.run_pass(&scene, &c, view.estimator().as_ref(), &never) {}
+        assert_eq!(p.film(), camera);
     }
 
     #[test]

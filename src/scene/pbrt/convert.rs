@@ -809,27 +809,28 @@ impl<'a> Conv<'a> {
         }
         // The film's sensor: pbrt-v4's CIE 1931 observer unless a camera is
         // named, balanced to white at `whitebalance` kelvin (a named camera
-        // at 6500 K unless given).
-        let sensor = fp.get_string_or("sensor", "cie1931")?;
-        let mut kelvin = fp.get_float("whitebalance", 0.0)?;
-        let mut kelvin_loc = fp.loc_of("whitebalance").cloned();
-        if sensor != "cie1931" {
+        // at 6500 K unless given, which the sensor's matrix assumes).
+        let sensor = fp.get_string_or("sensor", crate::sensor::OBSERVER)?;
+        let kelvin = fp.get_float("whitebalance", 0.0)?;
+        let kelvin_loc = fp.loc_of("whitebalance").cloned();
+        if sensor != crate::sensor::OBSERVER {
             let at = fp
                 .loc_of("sensor")
                 .or(scene.film.loc.as_ref())
                 .cloned()
                 .unwrap_or_else(|| self.default_loc());
-            self.problem(
-                Kind::Other,
-                &at,
-                format!(
-                    "Film: camera sensor \"{sensor}\": measured sensor responses are not supported, only \"cie1931\", \
-                     which --lenient uses in its place"
-                ),
-            );
-            if kelvin == 0.0 {
-                kelvin = 6500.0;
-                kelvin_loc = Some(at);
+            match crate::sensor::SENSORS.iter().find(|&&s| s == sensor) {
+                Some(&name) => set(self, Some(&at), "sensor", Value::Name(name)),
+                // pbrt-v4 stops on a name it does not know.
+                None => {
+                    return Err(located(
+                        &at,
+                        format!(
+                            "Film: unknown camera sensor \"{sensor}\" (known: {})",
+                            crate::sensor::SENSORS.join(", ")
+                        ),
+                    ))
+                }
             }
         }
         if kelvin != 0.0 {
@@ -3937,39 +3938,51 @@ mod tests {
     }
 
     #[test]
-    fn film_white_balance_is_the_white_balance_setting_and_camera_sensors_are_refused() {
+    fn film_white_balance_and_camera_sensors_are_settings() {
         let c = ok("Film \"rgb\" \"float whitebalance\" [ 3200 ]\nWorldBegin\n");
         let s = &c.desc.settings.scene_file;
         assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(3200.0)));
+        assert!(s.get("sensor").is_none());
         assert!(c.warnings.is_empty(), "{:?}", c.warnings);
-        // pbrt-v4's default sensor neither balances nor is refused.
+        // pbrt-v4's default sensor neither balances nor names a camera.
         let d = ok("Film \"rgb\" \"string sensor\" \"cie1931\"\nWorldBegin\n")
             .desc
             .settings;
         assert!(d.scene_file.get("white_balance").is_none() && d.preset.get("white_balance").is_none());
+        assert!(d.scene_file.get("sensor").is_none());
         // A temperature outside the range is the file's error at its place.
         let e = convert_text("Film \"rgb\"\n  \"float whitebalance\" [ -5 ]\nWorldBegin\n", true)
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("dir/main.pbrt:2: white_balance = -5: must be"), "{e}");
-        // A measured camera sensor is refused at its line; with --lenient the
-        // CIE observer stands in, balanced at pbrt-v4's 6500 K default.
+        // A measured camera is the sensor setting, with or without a
+        // temperature (the film's matrix balances it at 6500 K unless given).
         let text = "Film \"rgb\"\n  \"string sensor\" \"canon_eos_100d\"\nWorldBegin\n";
-        let e = convert_text(text, false).unwrap_err().to_string();
-        assert!(
-            e.contains("dir/main.pbrt:2: Film: camera sensor \"canon_eos_100d\": measured"),
-            "{e}"
-        );
-        let c = convert_text(text, true).unwrap();
+        let c = convert_text(text, false).unwrap();
         let s = &c.desc.settings.scene_file;
-        assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(6500.0)));
+        assert_eq!(s.get("sensor").map(|v| v.0), Some(Value::Name("canon_eos_100d")));
+        assert!(s.get("white_balance").is_none());
+        assert!(c.warnings.is_empty(), "{:?}", c.warnings);
         let c = convert_text(
             &text.replace("WorldBegin", "  \"float whitebalance\" 5000\nWorldBegin"),
-            true,
+            false,
         )
         .unwrap();
         let s = &c.desc.settings.scene_file;
         assert_eq!(s.get("white_balance").map(|v| v.0), Some(Value::Real(5000.0)));
+        assert_eq!(s.get("sensor").map(|v| v.0), Some(Value::Name("canon_eos_100d")));
+        // A name pbrt-v4 does not know is an error at its line, lenient or not.
+        for lenient in [false, true] {
+            let e = convert_text(&text.replace("eos_100d", "eos_99d"), lenient)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with(
+                    "dir/main.pbrt:2: Film: unknown camera sensor \"canon_eos_99d\" (known: cie1931, canon_eos_100d,"
+                ),
+                "{e}"
+            );
+        }
     }
 
     #[test]

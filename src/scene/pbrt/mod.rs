@@ -25,7 +25,7 @@
 //! listed in [`PbrtScene::unsupported`] for the converter to decide.
 
 mod builder;
-mod cie;
+pub(crate) mod cie;
 pub mod convert;
 pub mod error;
 mod ir;

@@ -17,12 +17,54 @@
 //! spectrum; the two differ by 4e-4 in x and y at most, a few tenths of a
 //! percent in the balanced colour.
 //!
-//! Sensors with measured spectral responses (pbrt-v4's camera names) need
-//! spectra this renderer does not carry; the pbrt reader refuses them (and
-//! with `--lenient` stands the CIE observer in, balanced alike).
+//! Sensors with measured spectral responses (pbrt-v4's camera names) are
+//! matrices on the finished film too, fitted from the cameras' spectra
+//! (`camera`).
 
 use crate::math::Vec3;
 use glam::Mat3;
+
+mod camera;
+mod cameras;
+
+pub use camera::{camera_matrix, names as camera_names};
+
+/// The default sensor: the CIE 1931 observer (pbrt-v4's "cie1931").
+pub const OBSERVER: &str = "cie1931";
+
+/// The sensors a film may name: the observer, then pbrt-v4's cameras.
+pub const SENSORS: [&str; 18] = [
+    "cie1931",
+    "canon_eos_100d",
+    "canon_eos_1dx_mkii",
+    "canon_eos_200d",
+    "canon_eos_200d_mkii",
+    "canon_eos_5d",
+    "canon_eos_5d_mkii",
+    "canon_eos_5d_mkiii",
+    "canon_eos_5d_mkiv",
+    "canon_eos_5ds",
+    "canon_eos_m",
+    "hasselblad_l1d_20c",
+    "nikon_d810",
+    "nikon_d850",
+    "sony_ilce_6400",
+    "sony_ilce_7m3",
+    "sony_ilce_7rm3",
+    "sony_ilce_9",
+];
+
+/// What the film's sensor does to a finished film in linear sRGB: a named
+/// camera's matrix (balanced at `kelvin`, 6500 K unless given, as pbrt-v4
+/// balances cameras), or the observer's white balance when a temperature
+/// is given; `None`: the film as it is.
+pub fn film_matrix(sensor: &str, kelvin: Option<f32>) -> Option<Mat3> {
+    if sensor == OBSERVER {
+        kelvin.map(white_balance)
+    } else {
+        camera_matrix(sensor, kelvin.unwrap_or(6500.0))
+    }
+}
 
 /// Temperatures a white balance may name, in kelvin: below 1000 K a
 /// blackbody has no visible light to speak of, and the daylight locus is
@@ -112,6 +154,20 @@ pub fn white_balance(kelvin: f32) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sensor_names_are_the_observer_and_every_camera() {
+        assert_eq!(SENSORS[0], OBSERVER);
+        assert!(SENSORS[1..].iter().copied().eq(camera_names()));
+        for name in &SENSORS[1..] {
+            assert!(
+                film_matrix(name, None).is_some() && film_matrix(name, Some(3000.0)).is_some(),
+                "{name}"
+            );
+        }
+        assert_eq!(film_matrix(OBSERVER, None), None);
+        assert_eq!(film_matrix(OBSERVER, Some(3000.0)), Some(white_balance(3000.0)));
+    }
 
     fn close(a: Mat3, b: Mat3, tol: f32) -> bool {
         (a - b).to_cols_array().iter().all(|d| d.abs() <= tol)
