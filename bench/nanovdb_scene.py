@@ -7,22 +7,35 @@ scene, in a box of no surface above a grey floor, under a disk light and a
 dim sky, glowing by the blackbody of its temperatures. See BENCHMARKS.md,
 "NanoVDB media against pbrt-v4".
 
-    python3 bench/nanovdb_scene.py OUT.pbrt [--dark]
+    python3 bench/nanovdb_scene.py OUT.pbrt [--dark] [--grid FILE.nvdb --scale S]
 
---dark leaves the glow out (Lescale 0).
+--dark leaves the glow out (Lescale 0). --grid copies another NanoVDB file
+in the test file's place (its "density" grid; with no temperature grid it
+does not glow), e.g. the one bench/nanovdb-large.cpp writes, and --scale sets
+the medium's density scale (4).
 """
 import os
 import shutil
 import sys
 
-args = [a for a in sys.argv[1:] if not a.startswith("--")]
-flags = {a for a in sys.argv[1:] if a.startswith("--")}
+argv = sys.argv[1:]
+opts = {}
+for name in ("--grid", "--scale"):
+    if name in argv:
+        i = argv.index(name)
+        if i + 1 >= len(argv):
+            sys.exit(__doc__)
+        opts[name] = argv[i + 1]
+        del argv[i:i + 2]
+args = [a for a in argv if not a.startswith("--")]
+flags = {a for a in argv if a.startswith("--")}
 if len(args) != 1 or flags - {"--dark"}:
     sys.exit(__doc__)
 out = args[0]
 here = os.path.dirname(os.path.abspath(__file__))
-shutil.copy(os.path.join(here, "..", "tests", "data", "small-zip.nvdb"),
-            os.path.join(os.path.dirname(os.path.abspath(out)), "smoke.nvdb"))
+grid = opts.get("--grid", os.path.join(here, "..", "tests", "data", "small-zip.nvdb"))
+scale = float(opts.get("--scale", "4"))
+shutil.copy(grid, os.path.join(os.path.dirname(os.path.abspath(out)), "smoke.nvdb"))
 lescale = 0 if "--dark" in flags else 0.05
 with open(out, "w") as f:
     f.write(f'''LookAt 1.3 2.5 -4.5  1.3 0.3 1.1  0 1 0
@@ -44,7 +57,7 @@ AttributeBegin
   Translate 0.2 0 0
   Rotate 15 0 1 0
   MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
-    "rgb sigma_a" [0.5 0.6 0.8] "rgb sigma_s" [2.5 2.0 1.5] "float scale" 4 "float g" 0.3
+    "rgb sigma_a" [0.5 0.6 0.8] "rgb sigma_s" [2.5 2.0 1.5] "float scale" {scale:g} "float g" 0.3
     "float Lescale" {lescale} "float temperaturescale" 2
   Material "interface"
   MediumInterface "" "smoke"
