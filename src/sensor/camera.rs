@@ -167,6 +167,17 @@ mod tests {
     }
 
     #[test]
+    fn every_camera_has_a_finite_matrix_over_the_whole_temperature_range() {
+        let (lo, hi) = super::super::KELVIN_RANGE;
+        for name in names() {
+            for kelvin in [lo, 2000.0, 3999.0, 4001.0, 25_000.0, hi] {
+                let m = camera_matrix(name, kelvin).unwrap();
+                assert!(m.is_finite() && m.determinant().abs() > 1e-3, "{name} {kelvin}: {m:?}");
+            }
+        }
+    }
+
+    #[test]
     fn unknown_cameras_have_no_matrix() {
         assert!(camera_matrix("cie1931", 6500.0).is_none());
         assert!(camera_matrix("canon_eos_100", 6500.0).is_none());
