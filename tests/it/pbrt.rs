@@ -237,6 +237,16 @@ fn the_three_bitterli_scenes_render_with_their_references_mean() {
 }
 
 #[test]
+fn photon_mapping_asked_for_on_a_pbrt_scene_follows_its_depth() {
+    // cornell-box asks for paths of 65 bounces; photon paths cut at five
+    // hits (the photon integrator's own default) leave it 3% dark, past the
+    // tolerance; following the file's depth, within half a percent.
+    let Some(dir) = bitterli() else { return };
+    let ratio = small_render_ratio(&dir, "cornell-box", (64, 64), &["--integrator", "photon"]);
+    assert!((ratio - 1.0).abs() < 0.015, "luminance ratio {ratio}");
+}
+
+#[test]
 fn info_counts_the_bitterli_scenes_triangles_lights_and_materials() {
     let Some(dir) = bitterli() else { return };
     // From the files: cornell-box's one quad light is two emitting

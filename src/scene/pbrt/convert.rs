@@ -906,6 +906,16 @@ impl<'a> Conv<'a> {
                     "max_depth",
                     Value::Int(max_depth.max(0) as u64),
                 );
+                // Photon mapping asked for on the scene follows its depth
+                // too, as its SPPM does: photon paths cut at our default of
+                // five hits left `cornell-box` 3% dark (BENCHMARKS.md,
+                // "Bitterli's scenes").
+                set(
+                    self,
+                    depth_loc.as_ref().or(i.loc.as_ref()),
+                    "max_bounces",
+                    Value::Int(max_depth.clamp(1, 100) as u64),
+                );
             }
             "sppm" => {
                 set(self, i.loc.as_ref(), "integrator", Value::Name("sppm"));
@@ -3742,6 +3752,8 @@ mod tests {
         assert!(mats.contains(&Material::diffuse(0.2, 0.3, 0.4)));
         let s = &c.desc.settings.scene_file;
         assert_eq!(s.get("max_depth").map(|v| v.0), Some(Value::Int(7)));
+        // Photon paths asked for on the scene follow the file's depth.
+        assert_eq!(s.get("max_bounces").map(|v| v.0), Some(Value::Int(7)));
         assert_eq!(s.get("spp").map(|v| v.0), Some(Value::Int(32)));
         assert_eq!(s.get("integrator").map(|v| v.0), Some(Value::Name("path")));
         assert_eq!(s.get("filter").map(|v| v.0), Some(Value::Name("box")));
@@ -3761,6 +3773,7 @@ mod tests {
         let d = ok("WorldBegin\n").desc.settings;
         assert_eq!(d.preset.get("spp").map(|v| v.0), Some(Value::Int(16)));
         assert_eq!(d.preset.get("max_depth").map(|v| v.0), Some(Value::Int(5)));
+        assert_eq!(d.preset.get("max_bounces").map(|v| v.0), Some(Value::Int(5)));
         assert_eq!(d.preset.get("filter").map(|v| v.0), Some(Value::Name("gaussian")));
         assert_eq!(d.preset.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
         assert_eq!(s.get("sampler").map(|v| v.0), Some(Value::Name("zsobol")));
