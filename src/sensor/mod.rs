@@ -1,4 +1,4 @@
-//! The film's sensor: its white balance.
+//! The film's sensor: its white balance, or a measured camera's response.
 //!
 //! pbrt-v4's films see radiance through a `PixelSensor`. Its default, the
 //! CIE 1931 observer, records XYZ, which the film turns into the output
