@@ -82,9 +82,9 @@ impl PhotonMapping<'_> {
             if let Bxdf::Diffuse(d) = bsdf.bxdf {
                 let e = match self.precomputed {
                     // Built with the admission this integrator reads the global map with.
-                    Some(pre) if std::ptr::eq(map, self.map.unwrap_or(map)) && g == &self.gather => {
-                        pre.lookup(hit.p, n, scratch)
-                    }
+                    Some(pre) if std::ptr::eq(map, self.map.unwrap_or(map)) && g == &self.gather => pre
+                        .lookup(hit.p, n, scratch)
+                        .unwrap_or_else(|| estimate::irradiance(map, g, hit.p, n, admit, scratch)),
                     _ => estimate::irradiance(map, g, hit.p, n, admit, scratch),
                 };
                 return e * d.r * std::f32::consts::FRAC_1_PI;

@@ -229,14 +229,17 @@ impl PrecomputedIrradiance {
     }
 
     /// Irradiance at `p` on the side of unit normal `n`: that of the nearest
-    /// site within the gather radius facing the same way, or zero.
-    pub fn lookup(&self, p: Vec3, n: Vec3, scratch: &mut Vec<Neighbour>) -> Vec3 {
+    /// site within the gather radius facing the same way; `None` when there
+    /// is none. Photons may still be there (one site in `PRECOMPUTE_STRIDE`
+    /// photons), so the caller gathers them instead: read as zero, the
+    /// sparse places (faint indirect light beside bright direct light) came
+    /// out dark.
+    pub fn lookup(&self, p: Vec3, n: Vec3, scratch: &mut Vec<Neighbour>) -> Option<Vec3> {
         let accept = |s: &Photon| s.arrived_from(n) && s.normal().dot(n) > self.min_cos;
         self.sites.k_nearest(p, 1, self.radius * self.radius, accept, scratch);
-        match scratch.first() {
-            Some(nb) => self.sites.photons()[nb.index as usize].power() * self.sites.unit,
-            None => Vec3::ZERO,
-        }
+        scratch
+            .first()
+            .map(|nb| self.sites.photons()[nb.index as usize].power() * self.sites.unit)
     }
 
     pub fn sites(&self) -> usize {
@@ -277,7 +280,7 @@ mod tests {
             let mut scratch = vec![];
             for ph in map.photons().iter().step_by(97) {
                 let full = irradiance(&map, &g, ph.p, Vec3::Z, Admit::ALL, &mut scratch);
-                let near = pre.lookup(ph.p, Vec3::Z, &mut scratch);
+                let near = pre.lookup(ph.p, Vec3::Z, &mut scratch).unwrap();
                 assert!(full.x > 0.0 && near.x > 0.0);
                 // The nearest site's estimate: the same density within the
                 // photon noise, and never clipped (f16 would stop at 65504).
