@@ -5,6 +5,7 @@
 //! [`film::Film`], and [`image_io`] writes the film to disk.
 
 pub mod bsdf;
+pub mod bssrdf;
 pub mod camera;
 pub mod error;
 pub mod film;

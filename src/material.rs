@@ -8,6 +8,7 @@
 //! outward normal, because which side is inside decides its relative index.
 
 use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, TrowbridgeReitz};
+use crate::bssrdf::{Bssrdf, BssrdfTable};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
 use crate::texture::{Footprint, TexCoord, TexImage, Texture, WrapMode};
@@ -210,6 +211,32 @@ pub enum Material {
         map: Arc<TexImage>,
         mirrored: bool,
     },
+    /// A translucent object (pbrt-v4 `subsurface`): a dielectric surface
+    /// over a medium, the light that enters leaving elsewhere by the
+    /// object's BSSRDF (`crate::bssrdf`). Only the path tracer follows it
+    /// there; other integrators see the dielectric surface.
+    Subsurface(Box<Subsurface>),
+}
+
+/// A subsurface material's surface, medium and profile table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Subsurface {
+    pub eta: f32,
+    pub roughness: MaterialRoughness,
+    pub scattering: SubsurfaceScattering,
+    /// The profiles for the medium's g and the surface's eta.
+    pub table: Arc<BssrdfTable>,
+}
+
+/// How a subsurface material's medium is given.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SubsurfaceScattering {
+    /// Absorption and scattering per unit length, scale applied.
+    Coefficients { sigma_a: Vec3, sigma_s: Vec3 },
+    /// The total diffuse reflectance wanted at each point and the mean free
+    /// path (scale applied): the albedo follows from the profile table
+    /// (pbrt-v4's `reflectance` and `mfp`).
+    Reflectance { reflectance: Texture, mfp: Vec3 },
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -351,6 +378,7 @@ impl Material {
             | Material::Dielectric { roughness, .. }
             | Material::Dispersive { roughness, .. } => roughness.is_smooth(),
             Material::ThinDielectric { .. } => true,
+            Material::Subsurface(s) => s.roughness.is_smooth(),
             Material::CoatedConductor {
                 interface_roughness,
                 conductor_roughness,
@@ -376,6 +404,7 @@ impl Material {
                     | Material::ThinDielectric { .. }
                     | Material::CoatedDiffuse { .. }
                     | Material::CoatedConductor { .. }
+                    | Material::Subsurface(_)
             ),
         }
     }
@@ -425,6 +454,10 @@ impl Material {
             }
             Material::Bumped { .. } => true,
             Material::NormalMapped { base, .. } => base.needs_footprint(),
+            Material::Subsurface(s) => {
+                s.roughness.has_image()
+                    || matches!(&s.scattering, SubsurfaceScattering::Reflectance { reflectance, .. } if reflectance.has_image())
+            }
         }
     }
 
@@ -491,6 +524,9 @@ impl Material {
             Material::Dispersive { eta, roughness } => {
                 return Bsdf::new(Bxdf::dispersive(roughness.distribution(&tc), *eta), sp.ns, sp.dpdu);
             }
+            Material::Subsurface(s) => {
+                return Bsdf::new(Bxdf::dielectric(s.roughness.distribution(&tc), s.eta), sp.ns, sp.dpdu);
+            }
             Material::ThinDielectric { eta } => Bxdf::thin_dielectric(*eta),
             Material::CoatedDiffuse {
                 reflectance,
@@ -552,6 +588,43 @@ impl Material {
             };
         }
         Bsdf::new(bxdf, ns, sp.dpdu)
+    }
+
+    /// The BSSRDF at a surface point seen from `wo`, for a subsurface
+    /// material (the one a `Mix` shows there, bump and normal maps applied
+    /// to the point); `None` for every other.
+    pub fn bssrdf(&self, sp: &SurfacePoint, wo: Vec3) -> Option<Bssrdf<'_>> {
+        let tc = TexCoord {
+            uv: sp.uv,
+            p: sp.p,
+            footprint: sp.footprint,
+        };
+        match self {
+            Material::Mix { .. } => self.chosen(&tc, wo).bssrdf(sp, wo),
+            Material::Bumped { base, displacement } => base.bssrdf(&sp.bumped(displacement), wo),
+            Material::NormalMapped { base, map, mirrored } => base.bssrdf(&sp.normal_mapped(map, *mirrored), wo),
+            Material::Subsurface(s) => {
+                let (sigma_a, sigma_s) = match &s.scattering {
+                    SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => (*sigma_a, *sigma_s),
+                    SubsurfaceScattering::Reflectance { reflectance, mfp } => {
+                        s.table.coefficients_for(reflectance.evaluate(&tc), *mfp)
+                    }
+                };
+                Some(Bssrdf::new(sp.p, sp.ns, sigma_a, sigma_s, &s.table))
+            }
+            _ => None,
+        }
+    }
+
+    /// Whether the material (or one it mixes or maps) scatters below its
+    /// surface.
+    pub fn has_subsurface(&self) -> bool {
+        match self {
+            Material::Subsurface(_) => true,
+            Material::Mix { materials, .. } => materials.iter().any(Material::has_subsurface),
+            Material::Bumped { base, .. } | Material::NormalMapped { base, .. } => base.has_subsurface(),
+            _ => false,
+        }
     }
 }
 

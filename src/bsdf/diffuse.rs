@@ -2,7 +2,8 @@
 //! reflection plus transmission (pbrt-v4 `DiffuseTransmissionBxDF`). Both
 //! are two-sided and sampled with the cosine-weighted hemisphere.
 
-use super::{abs_cos_theta, same_hemisphere, BsdfSample, BxdfFlags};
+use super::fresnel::{fr_dielectric, fresnel_moment1};
+use super::{abs_cos_theta, cos_theta, same_hemisphere, BsdfSample, BxdfFlags, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use std::f32::consts::FRAC_1_PI;
@@ -122,6 +123,50 @@ impl DiffuseTransmissionBxdf {
             flags |= BxdfFlags::DIFFUSE_TRANSMISSION;
         }
         flags
+    }
+}
+
+/// Where subsurface light leaves a translucent object (pbrt-v4's
+/// `NormalizedFresnelBxDF`): a Lambertian lobe weighted by the Fresnel
+/// transmittance of the interface of index `eta`, normalised to reflect all
+/// of it, on the side of `wo` (the outward normal). In radiance transport
+/// it carries eta^2 back: the refraction into the object took it away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalizedFresnelBxdf {
+    pub eta: f32,
+}
+
+impl NormalizedFresnelBxdf {
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        if !same_hemisphere(wo, wi) {
+            return Vec3::ZERO;
+        }
+        let c = 1.0 - 2.0 * fresnel_moment1(1.0 / self.eta);
+        let f = (1.0 - fr_dielectric(cos_theta(wi), self.eta)) / (c * std::f32::consts::PI);
+        let f = if mode == TransportMode::Radiance {
+            f * self.eta * self.eta
+        } else {
+            f
+        };
+        Vec3::splat(f)
+    }
+
+    pub fn sample_f(&self, wo: Vec3, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let wi = hemisphere_of(cosine_hemisphere(u), wo.z >= 0.0);
+        Some(BsdfSample {
+            f: self.f(wo, wi, mode),
+            wi,
+            pdf: abs_cos_theta(wi) * FRAC_1_PI,
+            flags: BxdfFlags::DIFFUSE_REFLECTION,
+            eta: 1.0,
+        })
+    }
+
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if !same_hemisphere(wo, wi) {
+            return 0.0;
+        }
+        abs_cos_theta(wi) * FRAC_1_PI
     }
 }
 

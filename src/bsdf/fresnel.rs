@@ -147,6 +147,33 @@ impl std::ops::Div for Complex {
     }
 }
 
+/// The first moment of the Fresnel reflectance of a dielectric interface,
+/// int_0^1 Fr(cos, 1 / eta) cos dcos with `fr_dielectric`'s index (the fits'
+/// `eta` is the index of the side the light comes from over the other's):
+/// polynomial fits (d'Eon and Irving 2011, as pbrt-v4's `FresnelMoment1`).
+pub fn fresnel_moment1(eta: f32) -> f32 {
+    let (e2, e3, e4, e5) = (eta * eta, eta.powi(3), eta.powi(4), eta.powi(5));
+    if eta < 1.0 {
+        0.45966 - 1.73965 * eta + 3.37668 * e2 - 3.904945 * e3 + 2.49277 * e4 - 0.68441 * e5
+    } else {
+        -4.61686 + 11.1136 * eta - 10.4646 * e2 + 5.11455 * e3 - 1.27198 * e4 + 0.12746 * e5
+    }
+}
+
+/// The second moment, int_0^1 Fr(cos, 1 / eta) cos^2 dcos (pbrt-v4's
+/// `FresnelMoment2`).
+pub fn fresnel_moment2(eta: f32) -> f32 {
+    let (e2, e3, e4, e5) = (eta * eta, eta.powi(3), eta.powi(4), eta.powi(5));
+    if eta < 1.0 {
+        0.27614 - 0.87350 * eta + 1.12077 * e2 - 0.65095 * e3 + 0.07883 * e4 + 0.04860 * e5
+    } else {
+        let (r, r2, r3) = (1.0 / eta, 1.0 / e2, 1.0 / e3);
+        -547.033 + 45.3087 * r3 - 218.725 * r2 + 458.843 * r + 404.557 * eta - 189.519 * e2 + 54.9327 * e3
+            - 9.00603 * e4
+            + 0.63942 * e5
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -214,5 +241,30 @@ mod tests {
         assert!(refract(Vec3::new(0.9, 0.0, -(0.19f32).sqrt()), Vec3::Z, 1.5).is_none());
         let r = reflect(wi, Vec3::Z);
         assert!((r - Vec3::new(-wi.x, 0.0, wi.z)).length() < 1e-6);
+    }
+
+    #[test]
+    fn fresnel_moments_match_their_integrals() {
+        for eta in [0.7f32, 1.0 / 1.33, 1.33, 1.5] {
+            let n = 20_000;
+            let (mut m1, mut m2) = (0.0f64, 0.0f64);
+            for i in 0..n {
+                let c = (i as f64 + 0.5) / n as f64;
+                let f = fr_dielectric(c as f32, 1.0 / eta) as f64;
+                m1 += f * c / n as f64;
+                m2 += f * c * c / n as f64;
+            }
+            // The fits are good to a few thousandths.
+            assert!(
+                (fresnel_moment1(eta) as f64 - m1).abs() < 0.002,
+                "{eta}: {} vs {m1}",
+                fresnel_moment1(eta)
+            );
+            assert!(
+                (fresnel_moment2(eta) as f64 - m2).abs() < 0.002,
+                "{eta}: {} vs {m2}",
+                fresnel_moment2(eta)
+            );
+        }
     }
 }

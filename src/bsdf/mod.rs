@@ -50,10 +50,10 @@ mod tests;
 pub use coated::{CoatTable, CoatedDiffuseBxdf};
 pub use conductor::ConductorBxdf;
 pub use dielectric::{DielectricBxdf, ThinDielectricBxdf};
-pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf};
+pub use diffuse::{DiffuseBxdf, DiffuseTransmissionBxdf, NormalizedFresnelBxdf};
 pub use dispersive::DispersiveBxdf;
 pub use frame::Frame;
-pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, reflect, refract};
+pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, fresnel_moment1, fresnel_moment2, reflect, refract};
 pub use hair::HairBxdf;
 pub use layered::CoatedConductorBxdf;
 pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
@@ -241,6 +241,7 @@ pub enum Bxdf {
     CoatedDiffuse(CoatedDiffuseBxdf),
     CoatedConductor(CoatedConductorBxdf),
     Hair(HairBxdf),
+    NormalizedFresnel(NormalizedFresnelBxdf),
 }
 
 impl Bxdf {
@@ -312,6 +313,7 @@ impl Bxdf {
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
             Bxdf::Hair(b) => b.f(wo, wi, mode),
+            Bxdf::NormalizedFresnel(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -334,6 +336,7 @@ impl Bxdf {
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode),
+            Bxdf::NormalizedFresnel(b) => b.sample_f(wo, u, mode),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }
@@ -352,6 +355,7 @@ impl Bxdf {
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
             Bxdf::Hair(b) => b.pdf(wo, wi),
+            Bxdf::NormalizedFresnel(b) => b.pdf(wo, wi),
         }
     }
 
@@ -366,6 +370,7 @@ impl Bxdf {
             Bxdf::CoatedDiffuse(b) => b.flags(),
             Bxdf::CoatedConductor(b) => b.flags(),
             Bxdf::Hair(b) => b.flags(),
+            Bxdf::NormalizedFresnel(_) => BxdfFlags::DIFFUSE_REFLECTION,
         }
     }
 }
@@ -426,7 +431,7 @@ impl Bsdf {
     /// Whether `sample_f` reads its `uc` (to choose between lobes).
     pub fn uses_lobe_choice(&self) -> bool {
         match self.bxdf {
-            Bxdf::Diffuse(_) | Bxdf::Conductor(_) => false,
+            Bxdf::Diffuse(_) | Bxdf::Conductor(_) | Bxdf::NormalizedFresnel(_) => false,
             // Both smooth: one specular reflection, no choice.
             Bxdf::CoatedConductor(b) => b.flags() != BxdfFlags::SPECULAR_REFLECTION,
             _ => true,

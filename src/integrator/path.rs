@@ -69,7 +69,7 @@ pub struct PathTracer {
 
 impl RadianceEstimator for PathTracer {
     fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
-        if scene.has_media() {
+        if scene.has_media() || scene.has_subsurface() {
             return super::volpath::li(self, scene, camera_ray, sampler, stats);
         }
         let mut l = Vec3::ZERO;

@@ -19,10 +19,11 @@
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, sample_bsdf, scatters_towards};
 use super::path::{PathTracer, ROULETTE_DEPTH};
 use super::{LightSampling, RayStats};
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::{Bsdf, Bxdf, NormalizedFresnelBxdf, TransportMode};
+use crate::bssrdf::Bssrdf;
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::medium::{normalised, path_weight, MediumEvent};
-use crate::sampling::Sampler;
+use crate::sampling::{Rng, Sampler};
 use crate::scene::{Hit, Scene, MAX_CROSSINGS};
 
 /// Where a path scatters: on a surface, or in a medium.
@@ -183,14 +184,112 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
             scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
         });
+        // The vertex the next ray leaves, and its direction.
+        let (mut from_hit, mut wi) = (hit, bs.wi);
+        // Light refracted into a translucent object leaves it elsewhere: a
+        // vertex of its own, not counted as a bounce (as in pbrt-v4).
+        if bs.is_transmission() {
+            if let Some(bssrdf) = m.bssrdf(&sp, wo) {
+                let Some((exit, sp_weight, sp_ratio)) =
+                    subsurface_exit(scene, hit.material, &bssrdf, hero, sampler, stats)
+                else {
+                    break;
+                };
+                beta *= sp_weight;
+                ratio *= sp_ratio;
+                let esp = scene.surface(&exit);
+                let exit_bsdf = Bsdf::new(
+                    Bxdf::NormalizedFresnel(NormalizedFresnelBxdf { eta: bssrdf.eta }),
+                    esp.ns,
+                    esp.dpdu,
+                );
+                let wo = esp.ns;
+                if pt.light_sampling != LightSampling::Bsdf {
+                    let v = Vertex::Surface {
+                        hit: &exit,
+                        wo,
+                        bsdf: &exit_bsdf,
+                        medium,
+                    };
+                    let mis = pt.light_sampling == LightSampling::Mis;
+                    l += weight(beta, ratio) * sample_direct(scene, &v, mis, sampler, stats);
+                }
+                let Some(bs) = sample_bsdf(&exit_bsdf, wo, sampler) else {
+                    break;
+                };
+                if !exit.keeps_side(wo, bs.wi, bs.flags) {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.dot(exit_bsdf.frame.z).abs() / bs.pdf);
+                if !weight(beta, ratio).is_finite() || beta.max_element() <= 0.0 {
+                    break;
+                }
+                from = Some((exit.p, bs.pdf));
+                diffs = None;
+                (from_hit, wi) = (exit, bs.wi);
+            }
+        }
         if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
             break;
         }
         stats.other_rays += 1;
-        medium = scene.medium_after(&hit, medium, bs.wi);
-        ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+        medium = scene.medium_after(&from_hit, medium, wi);
+        ray = Ray::new(offset_origin(from_hit.p, from_hit.ng, wi), wi);
     }
     l
+}
+
+/// Most hits a subsurface probe segment collects.
+const MAX_PROBE_HITS: u32 = 64;
+
+/// Where light that entered a translucent object of material `material`
+/// leaves it (pbrt-v4's `VolPathIntegrator`): a probe segment sampled from
+/// the BSSRDF for the path's hero channel, and one of its hits on the same
+/// material, each equally likely (pbrt-v4's reservoir of equal weights).
+/// Returns the exit, Sp over the hero channel's density of choosing it, and
+/// each channel's density over the hero's (for the path's channel MIS).
+fn subsurface_exit(
+    scene: &Scene,
+    material: u32,
+    bssrdf: &Bssrdf,
+    hero: usize,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> Option<(Hit, Vec3, Vec3)> {
+    let u1 = sampler.next_f32();
+    let u2 = sampler.next_2d();
+    let (start, end) = bssrdf.sample_probe(hero, u1, u2)?;
+    let mut rng = Rng::new(sampler.next_f32().to_bits() as u64, material as u64);
+    let axis = (end - start).normalize_or_zero();
+    if axis == Vec3::ZERO {
+        return None;
+    }
+    let (mut origin, mut chosen, mut count) = (start, None, 0u32);
+    for _ in 0..MAX_PROBE_HITS {
+        let left = (end - origin).dot(axis);
+        if left.is_nan() || left <= 0.0 {
+            break;
+        }
+        stats.other_rays += 1;
+        let Some(h) = scene.intersect(&Ray::new(origin, axis), 0.0, left) else {
+            break;
+        };
+        if h.material == material {
+            count += 1;
+            if rng.next_f32() * (count as f32) < 1.0 {
+                chosen = Some(h);
+            }
+        }
+        origin = offset_origin(h.p, h.ng, axis);
+    }
+    let exit = chosen?;
+    let sp = bssrdf.sr(exit.p.distance(bssrdf.po));
+    let pdf = bssrdf.pdf_sp(exit.p, exit.ng);
+    let hero_pdf = pdf[hero];
+    if sp == Vec3::ZERO || hero_pdf.is_nan() || hero_pdf <= 0.0 {
+        return None;
+    }
+    Some((exit, sp * (count as f32 / hero_pdf), pdf / hero_pdf))
 }
 
 /// Russian roulette on `beta` times `scale` (the squared relative indices

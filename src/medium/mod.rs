@@ -17,6 +17,7 @@
 
 mod majorant;
 pub mod nanovdb;
+pub mod presets;
 mod sparse;
 
 use crate::math::{to_world, Vec2, Vec3};

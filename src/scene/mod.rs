@@ -790,6 +790,8 @@ pub struct Scene {
     differentials: Vec<(bool, bool)>,
     any_footprints: bool,
     footprint: PixelFootprint,
+    /// Whether any material scatters below its surface (`Material::has_subsurface`).
+    any_subsurface: bool,
 }
 
 impl Scene {
@@ -986,6 +988,7 @@ impl Scene {
             differentials: vec![],
             any_footprints: false,
             footprint,
+            any_subsurface: false,
             desc,
             bvh_build_seconds,
         };
@@ -995,6 +998,7 @@ impl Scene {
             .map(|m| (m.is_bumped(), m.needs_footprint()))
             .collect();
         scene.any_footprints = scene.differentials.iter().any(|&(_, f)| f);
+        scene.any_subsurface = scene.materials.iter().any(Material::has_subsurface);
         // Lights at infinity reach the scene through its bounding sphere. A
         // scene of no surfaces (a medium around the camera under a sky) has
         // none: a unit sphere stands in, so that such lights have a power
@@ -1523,6 +1527,12 @@ impl Scene {
     /// volumetric path tracer.
     pub fn has_media(&self) -> bool {
         !self.media.is_empty()
+    }
+
+    /// Whether any material scatters below its surface: the path tracer
+    /// then takes the volumetric path tracer's loop, which follows it.
+    pub fn has_subsurface(&self) -> bool {
+        self.any_subsurface
     }
 
     /// The media on the two sides of the surface a hit is on, when it

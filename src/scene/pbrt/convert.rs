@@ -198,6 +198,22 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             ),
         );
     }
+    let subsurface = desc.materials.iter().any(|(_, m)| m.has_subsurface());
+    if subsurface && !matches!(scene.integrator.ty.as_str(), "volpath" | "") {
+        let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
+        c.warn(
+            &at,
+            format!(
+                "Integrator \"{}\": subsurface materials scatter below their surface only in the path tracer (pbrt-v4's \"volpath\"); {}",
+                scene.integrator.ty,
+                if matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
+                    "they do here, where pbrt-v4's \"path\" shows their dielectric surface alone"
+                } else {
+                    "other integrators show their dielectric surface alone"
+                }
+            ),
+        );
+    }
     if !desc.media.is_empty() && scene.integrator.ty == "bdpt" {
         // Our bidirectional path tracer has no media; the path tracer renders them.
         let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
@@ -2285,8 +2301,93 @@ fn convert_surface(
             }))
         }
         "hair" => hair(p),
+        "subsurface" => subsurface(scene, p, loc),
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
     }
+}
+
+/// pbrt-v4's `subsurface` material (`SubsurfaceMaterial::Create`): its
+/// medium by `name` (a measured preset, in mm^-1, with g = 0), else by
+/// `sigma_a` and `sigma_s`, else by `reflectance` and `mfp` (1), else
+/// pbrt-v4's default (whole milk's coefficients, per mm); the coefficients
+/// or `mfp` times `scale`; `eta` 1.33; `g` 0; a dielectric surface of that
+/// index and `roughness`. Coefficients and `mfp` are constants here.
+fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<Material, String>> {
+    use crate::bssrdf::BssrdfTable;
+    use crate::material::{Subsurface, SubsurfaceScattering};
+    let mut g = p.get_float("g", 0.0)?;
+    let scale = p.get_float("scale", 1.0)?;
+    let eta = p.get_float("eta", 1.33)?;
+    if !(eta.is_finite() && eta > 0.0) {
+        return Err(located(
+            loc,
+            format!("subsurface: \"eta\" {eta} must be a positive number"),
+        ));
+    }
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(located(
+            loc,
+            format!("subsurface: \"scale\" {scale} must be a non-negative number"),
+        ));
+    }
+    if !(g.is_finite() && g > -1.0 && g < 1.0) {
+        return Err(located(loc, format!("subsurface: \"g\" {g} must lie in (-1, 1)")));
+    }
+    let name = p.get_string_or("name", "")?;
+    let coefficients = |a: Vec3, s: Vec3| SubsurfaceScattering::Coefficients {
+        sigma_a: (a * scale).max(Vec3::ZERO),
+        sigma_s: (s * scale).max(Vec3::ZERO),
+    };
+    let scattering = if !name.is_empty() {
+        let Some((a, s)) = crate::medium::presets::scattering_preset(&name) else {
+            return Err(located(
+                place(p, "name", loc),
+                format!("subsurface: no measured medium is named \"{name}\""),
+            ));
+        };
+        // The presets' scattering coefficients are reduced ones.
+        g = 0.0;
+        coefficients(a, s)
+    } else if p.has("sigma_a") || p.has("sigma_s") {
+        let (a, s) = match (p.has("sigma_a"), p.has("sigma_s")) {
+            (true, true) => (colour(p, "sigma_a", loc)?, colour(p, "sigma_s", loc)?),
+            (true, false) => return Err(located(loc, "subsurface: \"sigma_a\" given without \"sigma_s\"")),
+            _ => return Err(located(loc, "subsurface: \"sigma_s\" given without \"sigma_a\"")),
+        };
+        match (a, s) {
+            (Ok(a), Ok(s)) => coefficients(a, s),
+            (Err(why), _) | (_, Err(why)) => return Ok(Err(format!("subsurface: {why}"))),
+        }
+    } else if p.has("reflectance") {
+        let reflectance = match spectrum_texture(scene, p, "reflectance", 1.0, loc)? {
+            Ok(t) => t,
+            Err(why) => return Ok(Err(format!("subsurface: {why}"))),
+        };
+        let mfp = if p.has("mfp") {
+            match colour(p, "mfp", loc)? {
+                Ok(m) => m,
+                Err(why) => return Ok(Err(format!("subsurface: {why}"))),
+            }
+        } else {
+            Vec3::ONE
+        };
+        SubsurfaceScattering::Reflectance {
+            reflectance,
+            mfp: (mfp * scale).max(Vec3::ZERO),
+        }
+    } else {
+        coefficients(Vec3::new(0.0011, 0.0024, 0.014), Vec3::new(2.55, 3.21, 3.77))
+    };
+    let roughness = match roughness(scene, p, loc)? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
+    Ok(Ok(Material::Subsurface(Box::new(Subsurface {
+        eta,
+        roughness,
+        scattering,
+        table: Arc::new(BssrdfTable::new(g, eta)),
+    }))))
 }
 
 /// pbrt-v4's `hair` material (`HairMaterial::Create`): its absorption from
@@ -4027,7 +4128,7 @@ mod tests {
     #[test]
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
-            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"subsurface\"\nNamedMaterial \"cu\"\n{}\
+            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"measured\"\nNamedMaterial \"cu\"\n{}\
              Shape \"sphere\" \"float phimax\" 90\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
             quad(0.0)
         );

@@ -1689,11 +1689,11 @@ fn mix_materials_convert_with_their_amount_and_refuse_what_they_cannot_hold() {
     assert_eq!(*amount, crate::texture::Texture::from(Vec3::splat(0.25)));
     // A part we lack makes the whole mix unsupported (grey with --lenient).
     let text = "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\
-                MakeNamedMaterial \"h\" \"string type\" \"subsurface\"\n\
+                MakeNamedMaterial \"h\" \"string type\" \"measured\"\n\
                 Material \"mix\" \"string materials\" [\"a\" \"h\"]\nShape \"sphere\"\n";
     let e = converted(text, Files::default(), false).unwrap_err();
     assert!(
-        e.starts_with("scene/main.pbrt:4: material (mix: material \"h\": type \"subsurface\" is not supported)"),
+        e.starts_with("scene/main.pbrt:4: material (mix: material \"h\": type \"measured\" is not supported)"),
         "{e}"
     );
     // Names that are not two defined materials are errors at the parameter.
