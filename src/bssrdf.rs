@@ -604,4 +604,30 @@ mod tests {
             assert!((total - PROBE_QUANTILE as f64).abs() < 0.01, "channel {c}: {total}");
         }
     }
+
+    #[test]
+    fn the_exit_lobe_reflects_all_that_reaches_it() {
+        // Normalised: its albedo is 1 for importance, eta^2 for radiance
+        // (given back what the refraction into the object took).
+        use crate::bsdf::{NormalizedFresnelBxdf, TransportMode};
+        for eta in [1.2f32, 1.33, 1.5] {
+            let b = NormalizedFresnelBxdf { eta };
+            let wo = Vec3::Z;
+            let n = 20_000;
+            let albedo = |mode| {
+                (0..n)
+                    .map(|i| {
+                        let c = (i as f32 + 0.5) / n as f32;
+                        let wi = Vec3::new((1.0 - c * c).sqrt(), 0.0, c);
+                        (b.f(wo, wi, mode).x * c) as f64 * 2.0 * std::f64::consts::PI / n as f64
+                    })
+                    .sum::<f64>()
+            };
+            let a = albedo(TransportMode::Importance);
+            assert!((a - 1.0).abs() < 0.01, "{eta}: {a}");
+            let r = albedo(TransportMode::Radiance);
+            assert!((r / a - (eta * eta) as f64).abs() < 1e-4, "{eta}: {r}");
+            assert_eq!(b.f(wo, -Vec3::Z, TransportMode::Importance), Vec3::ZERO);
+        }
+    }
 }

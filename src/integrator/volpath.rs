@@ -860,4 +860,88 @@ mod tests {
             );
         }
     }
+
+    fn subsurface(sigma_a: Vec3, sigma_s: Vec3, eta: f32) -> Material {
+        use crate::material::{Roughness, Subsurface, SubsurfaceScattering};
+        Material::Subsurface(Box::new(Subsurface {
+            eta,
+            roughness: Roughness::SMOOTH.into(),
+            scattering: SubsurfaceScattering::Coefficients { sigma_a, sigma_s },
+            table: std::sync::Arc::new(crate::bssrdf::BssrdfTable::new(0.0, eta)),
+        }))
+    }
+
+    #[test]
+    fn subsurface_probes_on_a_plane_integrate_the_profile_to_its_total_reflectance() {
+        // On a plane, exits found by probing weigh Sp by the density of
+        // finding them (over the channels, the hero chosen in turn): their
+        // mean is the integral of Sr over the plane, the slab's total
+        // reflectance rho_eff at each channel's albedo. This checks the
+        // radius sampling, the three probe axes (the two tangent ones never
+        // meet the plane), the density and the choice among hits together.
+        use crate::bssrdf::Bssrdf;
+        use crate::sampling::Sampler;
+        let (sigma_a, sigma_s) = (Vec3::new(0.5, 3.0, 12.0), Vec3::new(30.0, 30.0, 20.0));
+        let mut d = floor_under_quad();
+        let m = d.material("grey", subsurface(sigma_a, sigma_s, 1.33));
+        let scene = Scene::build(d).unwrap();
+        let Material::Subsurface(s) = scene.material(m) else {
+            panic!()
+        };
+        let b = Bssrdf::new(Vec3::ZERO, Vec3::Z, sigma_a, sigma_s, &s.table);
+        let n = 60_000;
+        let mut sum = Vec3::ZERO;
+        let mut stats = RayStats::default();
+        for i in 0..n {
+            let mut sampler = Sampler::new(false, 7, i as u64, 0);
+            if let Some((exit, w, ratio)) = super::subsurface_exit(&scene, m, &b, i % 3, &mut sampler, &mut stats) {
+                assert!(exit.p.z.abs() < 1e-4);
+                sum += super::path_weight(w, ratio);
+            }
+        }
+        let mean = sum / n as f32;
+        for c in 0..3 {
+            let rho = sigma_s[c] / (sigma_a[c] + sigma_s[c]);
+            let expected = s.table.rho_eff(rho);
+            assert!(
+                (mean[c] - expected).abs() < 0.02 * expected,
+                "channel {c}: {} against rho_eff {expected}",
+                mean[c]
+            );
+        }
+        // The channels differ enough for a mix-up to show.
+        assert!(s.table.rho_eff(30.0 / 30.5) > 1.5 * s.table.rho_eff(20.0 / 32.0));
+    }
+
+    #[test]
+    fn a_translucent_balls_channels_each_look_as_a_grey_ball_of_theirs() {
+        // The path follows one hero channel's profile and weighs by all
+        // channels' densities: each channel of a ball of coloured
+        // coefficients must be that channel of a grey ball with its values.
+        use super::super::analytic::furnace_with_balls;
+        let wall = Material::Emissive {
+            albedo: Vec3::splat(0.5),
+            le: Vec3::ONE,
+        };
+        let (sigma_a, sigma_s) = (Vec3::new(0.3, 3.0, 30.0), Vec3::new(40.0, 30.0, 20.0));
+        let region = |a: Vec3, s: Vec3| {
+            let scene = furnace_with_balls(
+                wall.clone(),
+                &[(Vec3::new(0.0, 0.0, 0.6), 0.2, subsurface(a, s, 1.4))],
+                16,
+            );
+            let film = render(&scene, &path_settings(256, None), &|| {}).unwrap().film;
+            film.mean(5, 5, 11, 11)
+        };
+        let coloured = region(sigma_a, sigma_s);
+        let grey: Vec<f32> = (0..3)
+            .map(|c| region(Vec3::splat(sigma_a[c]), Vec3::splat(sigma_s[c]))[c])
+            .collect();
+        for c in 0..3 {
+            let err = (coloured[c] - grey[c]).abs() / grey[c];
+            assert!(err < 0.02, "channel {c}: {} against {}", coloured[c], grey[c]);
+        }
+        // The channels differ: absorption darkens blue.
+        assert!(grey[0] > 1.1 * grey[2], "{grey:?}");
+    }
 }

@@ -1675,9 +1675,29 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
         }
     };
     let vdb = m.ty == "nanovdb";
-    if !grid && !cloud && !vdb && !p.get_string_or("preset", "")?.is_empty() {
-        return Ok(Err("named scattering presets (\"preset\") are not supported".into()));
-    }
+    // pbrt-v4 reads `preset` for homogeneous media alone: a measured
+    // medium's coefficients in mm^-1 (`medium::presets`), then `scale`.
+    let preset = if !grid && !cloud && !vdb {
+        p.get_string_or("preset", "")?
+    } else {
+        String::new()
+    };
+    let preset = if preset.is_empty() {
+        None
+    } else {
+        match crate::medium::presets::scattering_preset(&preset) {
+            Some(v) => Some(v),
+            None => {
+                return Err(located(
+                    place(p, "preset", &m.loc),
+                    format!(
+                        "MakeNamedMedium \"{}\": no measured medium is named \"{preset}\"",
+                        m.name
+                    ),
+                ))
+            }
+        }
+    };
     // An `rgb` coefficient as given (pbrt-v4's unbounded spectrum of it), a
     // sampled one projected as a reflectance is.
     let coefficient = |name: &str| -> Result<std::result::Result<Vec3, String>> {
@@ -1689,9 +1709,12 @@ fn convert_medium(m: &super::ir::Medium) -> Result<std::result::Result<Medium, S
             },
         })
     };
-    let (sigma_a, sigma_s) = match (coefficient("sigma_a")?, coefficient("sigma_s")?) {
-        (Ok(a), Ok(s)) => (a, s),
-        (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
+    let (sigma_a, sigma_s) = match preset {
+        Some(v) => v,
+        None => match (coefficient("sigma_a")?, coefficient("sigma_s")?) {
+            (Ok(a), Ok(s)) => (a, s),
+            (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
+        },
     };
     // pbrt-v4's cloud emits nothing, its nanovdb medium only by temperature
     // (their "Le" is left unread, and reported).
@@ -2371,9 +2394,15 @@ fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::R
         } else {
             Vec3::ONE
         };
+        if !(mfp.is_finite() && mfp.min_element() > 0.0) {
+            return Err(located(
+                place(p, "mfp", loc),
+                format!("subsurface: \"mfp\" {mfp} must be positive"),
+            ));
+        }
         SubsurfaceScattering::Reflectance {
             reflectance,
-            mfp: (mfp * scale).max(Vec3::ZERO),
+            mfp: mfp * scale,
         }
     } else {
         coefficients(Vec3::new(0.0011, 0.0024, 0.014), Vec3::new(2.55, 3.21, 3.77))

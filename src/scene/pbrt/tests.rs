@@ -2273,10 +2273,6 @@ fn media_it_cannot_render_are_refused_at_their_place() {
             "media of type \"openvdb\" are not supported",
         ),
         (
-            "\"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\"",
-            "presets",
-        ),
-        (
             "\"string type\" \"homogeneous\" \"spectrum Le\" \"metal-Cu-eta\"",
             "\"Le\" given as this spectrum is not supported",
         ),
@@ -2486,4 +2482,91 @@ fn cylinders_are_meshes_where_pbrts_quadric_is() {
     );
     assert!((hit(-0.2, 0.6).unwrap().uv.y - 0.2).abs() < 1e-4);
     assert!(hit(-0.2, 0.99).is_some() && hit(-0.2, 1.01).is_none() && hit(-0.55, 0.0).is_none());
+}
+
+#[test]
+fn measured_presets_give_media_their_coefficients_times_scale() {
+    let text = "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\" \"float scale\" 10\n\
+                MediumInterface \"m\" \"\"\nShape \"sphere\"\n";
+    let c = converted(text, Files::default(), false).unwrap();
+    let m = &c.desc.media[0].1;
+    assert!(
+        (m.sigma_a - Vec3::new(0.011, 0.024, 0.14)).abs().max_element() < 1e-6,
+        "{:?}",
+        m.sigma_a
+    );
+    assert!(
+        (m.sigma_s - Vec3::new(25.5, 32.1, 37.7)).abs().max_element() < 1e-4,
+        "{:?}",
+        m.sigma_s
+    );
+    // An unknown name is the file's error at the parameter, lenient or not.
+    for lenient in [false, true] {
+        let e = converted(&text.replace("Wholemilk", "Wholemilk2"), Files::default(), lenient).unwrap_err();
+        assert!(
+            e.starts_with("scene/main.pbrt:2:") && e.contains("no measured medium is named \"Wholemilk2\""),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
+    use crate::material::{Material, SubsurfaceScattering};
+    let material = |params: &str| {
+        let text = format!("WorldBegin\nMaterial \"subsurface\" {params}\nShape \"sphere\"\n");
+        let c = converted(&text, Files::default(), false)?;
+        let Some((_, Material::Subsurface(s))) = c.desc.materials.last() else {
+            panic!("{:?}", c.desc.materials)
+        };
+        Ok::<_, String>(s.as_ref().clone())
+    };
+    // By name: a measured medium in mm^-1 times scale, g forced to 0.
+    let s = material("\"string name\" \"Skin1\" \"float scale\" 50 \"float eta\" 1.5 \"float g\" 0.5").unwrap();
+    assert_eq!(s.eta, 1.5);
+    assert_eq!(*s.table, crate::bssrdf::BssrdfTable::new(0.0, 1.5));
+    let SubsurfaceScattering::Coefficients { sigma_a, sigma_s } = s.scattering else {
+        panic!()
+    };
+    assert!(
+        (sigma_a - Vec3::new(1.6, 8.5, 24.0)).abs().max_element() < 1e-4,
+        "{sigma_a:?}"
+    );
+    assert!(
+        (sigma_s - Vec3::new(37.0, 44.0, 50.5)).abs().max_element() < 1e-4,
+        "{sigma_s:?}"
+    );
+    // By coefficients, with g kept and eta 1.33 by default.
+    let s = material("\"rgb sigma_a\" [ 1 2 3 ] \"rgb sigma_s\" [ 4 5 6 ] \"float g\" 0.3 \"float scale\" 2").unwrap();
+    assert_eq!(*s.table, crate::bssrdf::BssrdfTable::new(0.3, 1.33));
+    assert_eq!(
+        s.scattering,
+        SubsurfaceScattering::Coefficients {
+            sigma_a: Vec3::new(2.0, 4.0, 6.0),
+            sigma_s: Vec3::new(8.0, 10.0, 12.0)
+        }
+    );
+    // By reflectance and mean free path (1 unless given), times scale.
+    let s = material("\"rgb reflectance\" [ 0.8 0.5 0.2 ] \"float scale\" 0.1").unwrap();
+    let SubsurfaceScattering::Reflectance { reflectance, mfp } = &s.scattering else {
+        panic!()
+    };
+    assert_eq!(*reflectance, crate::texture::Texture::from(Vec3::new(0.8, 0.5, 0.2)));
+    assert_eq!(*mfp, Vec3::splat(0.1));
+    // Nothing said: pbrt-v4's default, whole milk per unit length.
+    let s = material("").unwrap();
+    let SubsurfaceScattering::Coefficients { sigma_s, .. } = s.scattering else {
+        panic!()
+    };
+    assert_eq!(sigma_s, Vec3::new(2.55, 3.21, 3.77));
+    // Mistakes are the file's errors at their place.
+    let e = material("\"string name\" \"Skin3\"").unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:2:") && e.contains("no measured medium is named \"Skin3\""),
+        "{e}"
+    );
+    let e = material("\"rgb sigma_a\" [ 1 2 3 ]").unwrap_err();
+    assert!(e.contains("\"sigma_a\" given without \"sigma_s\""), "{e}");
+    let e = material("\"float eta\" -1").unwrap_err();
+    assert!(e.contains("subsurface: \"eta\" -1 must be a positive number"), "{e}");
 }
