@@ -21,7 +21,7 @@ const RULES: &[(&str, &[&str], &[&str])] = &[
     (
         "the basic types import nothing above them",
         &[
-            "geometry", "material", "medium", "light", "camera", "sampling", "bsdf", "texture",
+            "geometry", "material", "medium", "light", "camera", "sampling", "bsdf", "bssrdf", "texture",
         ],
         &["scene", "integrator", "photon", "state_file", "viewer", "settings"],
     ),

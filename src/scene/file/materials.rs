@@ -634,12 +634,107 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 transmittance: albedo("transmittance", 0.25)?,
             }
         }
+        "subsurface" => {
+            use crate::material::{Subsurface, SubsurfaceScattering};
+            let mut keys = vec!["name", "sigma_a", "sigma_s", "reflectance", "mfp", "scale", "eta", "g"];
+            keys.extend(ROUGHNESS_KEYS);
+            k.only(kind, &keys)?;
+            let scale = k.num("scale")?.unwrap_or(1.0);
+            if scale < 0.0 {
+                return Err(k.err(Some("scale"), format!("scale {scale} must be >= 0")));
+            }
+            let g = k.num("g")?.unwrap_or(0.0);
+            if !(g > -1.0 && g < 1.0) {
+                return Err(k.err(Some("g"), format!("g {g} must lie strictly between -1 and 1")));
+            }
+            // One way to give the medium; the keys of the others are errors.
+            let ways = [
+                ("name", &["name"][..]),
+                ("sigma_a", &["sigma_a", "sigma_s"][..]),
+                ("reflectance", &["reflectance", "mfp"][..]),
+            ];
+            let given: Vec<&str> = ways
+                .iter()
+                .filter(|(_, ks)| ks.iter().any(|x| k.has(x)))
+                .map(|(w, _)| *w)
+                .collect();
+            if given.len() > 1 {
+                return Err(k.err(
+                    Some(given[1]),
+                    "give the medium one way: `name`, or `sigma_a` and `sigma_s`, or `reflectance` (and `mfp`)".into(),
+                ));
+            }
+            let coefficient = |key: &str| -> Result<Vec3> {
+                let v = k
+                    .rgb(key)?
+                    .ok_or_else(|| k.err(None, format!("`sigma_a` and `sigma_s` go together: `{key}` is missing")))?;
+                if v.min_element() < 0.0 {
+                    return Err(k.err(Some(key), format!("{key} {:?} must be >= 0", v.to_array())));
+                }
+                Ok(v * scale)
+            };
+            let (scattering, g) = match given.first().copied() {
+                Some("name") => {
+                    let name = k.string("name")?.unwrap_or_default();
+                    let Some((a, s)) = crate::medium::presets::scattering_preset(name) else {
+                        let known: Vec<&str> = crate::medium::presets::preset_names().collect();
+                        return Err(k.err(
+                            Some("name"),
+                            format!("unknown measured medium '{name}' (known: {})", known.join(", ")),
+                        ));
+                    };
+                    if k.has("g") {
+                        return Err(k.err(
+                            Some("g"),
+                            "a measured medium's scattering is already reduced: it takes no `g`".into(),
+                        ));
+                    }
+                    let scattering = SubsurfaceScattering::Coefficients {
+                        sigma_a: a * scale,
+                        sigma_s: s * scale,
+                    };
+                    (scattering, 0.0)
+                }
+                Some("sigma_a") => {
+                    let scattering = SubsurfaceScattering::Coefficients {
+                        sigma_a: coefficient("sigma_a")?,
+                        sigma_s: coefficient("sigma_s")?,
+                    };
+                    (scattering, g)
+                }
+                Some(_) => {
+                    let mfp = k.rgb("mfp")?.unwrap_or(Vec3::ONE);
+                    if mfp.min_element() <= 0.0 {
+                        return Err(k.err(Some("mfp"), format!("mfp {:?} must be > 0", mfp.to_array())));
+                    }
+                    let scattering = SubsurfaceScattering::Reflectance {
+                        reflectance: albedo("reflectance", 0.5)?,
+                        mfp: mfp * scale,
+                    };
+                    (scattering, g)
+                }
+                None => {
+                    let scattering = SubsurfaceScattering::Coefficients {
+                        sigma_a: Vec3::new(0.0011, 0.0024, 0.014) * scale,
+                        sigma_s: Vec3::new(2.55, 3.21, 3.77) * scale,
+                    };
+                    (scattering, g)
+                }
+            };
+            let eta = eta(1.33)?;
+            Material::Subsurface(Box::new(Subsurface {
+                eta,
+                roughness: roughness()?.into(),
+                scattering,
+                table: std::sync::Arc::new(crate::bssrdf::BssrdfTable::new(g, eta)),
+            }))
+        }
         other => {
             return Err(k.err(
                 Some("type"),
                 format!(
                     "unknown material type '{other}' (diffuse, mirror, glass, conductor, dielectric, \
-                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission, interface)"
+                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission, subsurface, interface)"
                 ),
             ))
         }

@@ -1008,3 +1008,55 @@ fn media_bound_by_shapes_and_the_camera_in_one() {
         "{e}"
     );
 }
+
+#[test]
+fn subsurface_materials_are_read_and_checked() {
+    use crate::material::SubsurfaceScattering;
+    let text = format!(
+        "{CAMERA}[materials.skin]\ntype = \"subsurface\"\nname = \"Skin1\"\nscale = 1000\n\
+         [materials.wax]\ntype = \"subsurface\"\nreflectance = [0.8, 0.6, 0.3]\nmfp = 0.01\neta = 1.5\nroughness = 0.2\n\
+         [materials.jade]\ntype = \"subsurface\"\nsigma_a = [4, 0.5, 3]\nsigma_s = 40\ng = 0.4\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    let get = |n: &str| match d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m) {
+        Some(Material::Subsurface(s)) => s.as_ref().clone(),
+        other => panic!("{other:?}"),
+    };
+    let skin = get("skin");
+    assert_eq!(skin.eta, 1.33);
+    assert_eq!(*skin.table, crate::bssrdf::BssrdfTable::new(0.0, 1.33));
+    let SubsurfaceScattering::Coefficients { sigma_a, sigma_s } = skin.scattering else {
+        panic!()
+    };
+    assert!((sigma_a - Vec3::new(32.0, 170.0, 480.0)).abs().max_element() < 1e-3);
+    assert!((sigma_s - Vec3::new(740.0, 880.0, 1010.0)).abs().max_element() < 1e-3);
+    let wax = get("wax");
+    assert_eq!(wax.eta, 1.5);
+    assert!(!wax.roughness.is_smooth());
+    assert!(matches!(wax.scattering, SubsurfaceScattering::Reflectance { mfp, .. } if mfp == Vec3::splat(0.01)));
+    let jade = get("jade");
+    assert_eq!(*jade.table, crate::bssrdf::BssrdfTable::new(0.4, 1.33));
+    assert_eq!(
+        jade.scattering,
+        SubsurfaceScattering::Coefficients {
+            sigma_a: Vec3::new(4.0, 0.5, 3.0),
+            sigma_s: Vec3::splat(40.0)
+        }
+    );
+    for (bad, what) in [
+        ("name = \"Skin3\"\n", "unknown measured medium 'Skin3'"),
+        ("name = \"Skin1\"\ng = 0.5\n", "takes no `g`"),
+        ("sigma_a = 1\n", "`sigma_s` is missing"),
+        (
+            "sigma_a = 1\nsigma_s = 1\nreflectance = 0.5\n",
+            "give the medium one way",
+        ),
+        ("reflectance = 0.5\nmfp = 0\n", "mfp [0.0, 0.0, 0.0] must be > 0"),
+        ("g = 1\n", "g 1 must lie strictly between -1 and 1"),
+        ("ior = 1.5\n", "`ior` does not apply"),
+    ] {
+        let text = format!("{CAMERA}[materials.x]\ntype = \"subsurface\"\n{bad}");
+        let e = parse_str(&text).unwrap_err().to_string();
+        assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
+    }
+}

@@ -1103,7 +1103,14 @@ impl<'a> Conv<'a> {
             );
             return Ok(None);
         }
-        let Some((_, s)) = similarity(l.world_from_light) else {
+        // Only directions reach a light at infinity, and pbrt-v4 turns them
+        // by the upper 3 x 3 of the transformation and of its inverse: its
+        // translation and any projective row do nothing, unless together
+        // they make those two disagree.
+        let turn = glam::Mat3::from_mat4(l.world_from_light);
+        let inverse_turn = glam::Mat3::from_mat4(l.world_from_light.inverse());
+        let directions = (turn * inverse_turn).abs_diff_eq(glam::Mat3::IDENTITY, 1e-4);
+        let Some((_, s)) = similarity(Mat4::from_mat3(turn)).filter(|_| directions) else {
             self.problem(
                 Kind::Light,
                 &l.loc,

@@ -2570,3 +2570,27 @@ fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
     let e = material("\"float eta\" -1").unwrap_err();
     assert!(e.contains("subsurface: \"eta\" -1 must be a positive number"), "{e}");
 }
+
+#[test]
+fn lights_at_infinity_take_only_the_turn_of_their_transformation() {
+    // sssdragon's sky: a rotation whose matrix also holds a projective row,
+    // which pbrt-v4's direction transforms leave out.
+    let text = |t: &str| {
+        format!("WorldBegin\nAttributeBegin\n{t}\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\nAttributeEnd\nShape \"sphere\"\n")
+    };
+    let sky = "ConcatTransform [ -0.224951 0 -0.97437 0 -0.97437 0 0.224951 0 0 1 0 8.87 0 0 0 1 ]";
+    let c = converted(&text(sky), Files::default(), false).unwrap();
+    assert_eq!(c.desc.lights.len(), 1);
+    let c = converted(
+        &text("Translate 1 2 3\nRotate 30 0 0 1\nScale 2 2 2"),
+        Files::default(),
+        false,
+    )
+    .unwrap();
+    assert_eq!(c.desc.lights.len(), 1);
+    let e = converted(&text("Scale 1 2 1"), Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:4: infinite: a transformation other than rotation and uniform scale"),
+        "{e}"
+    );
+}
