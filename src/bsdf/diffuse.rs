@@ -151,24 +151,20 @@ impl NormalizedFresnelBxdf {
         Vec3::splat(f)
     }
 
+    /// Sampled as a Lambertian lobe is, the cosine on the side of `wo`.
     pub fn sample_f(&self, wo: Vec3, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        let wi = hemisphere_of(cosine_hemisphere(u), wo.z >= 0.0);
-        Some(BsdfSample {
-            f: self.f(wo, wi, mode),
-            wi,
-            pdf: abs_cos_theta(wi) * FRAC_1_PI,
-            flags: BxdfFlags::DIFFUSE_REFLECTION,
-            eta: 1.0,
-        })
+        let mut bs = LAMBERTIAN.sample_f(wo, u)?;
+        bs.f = self.f(wo, bs.wi, mode);
+        Some(bs)
     }
 
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if !same_hemisphere(wo, wi) {
-            return 0.0;
-        }
-        abs_cos_theta(wi) * FRAC_1_PI
+        LAMBERTIAN.pdf(wo, wi)
     }
 }
+
+/// The white Lambertian lobe whose sampling the Fresnel-weighted one shares.
+const LAMBERTIAN: DiffuseBxdf = DiffuseBxdf { r: Vec3::ONE };
 
 /// `w` (with w.z >= 0) moved to the upper hemisphere if `upper`, else the lower.
 fn hemisphere_of(w: Vec3, upper: bool) -> Vec3 {
