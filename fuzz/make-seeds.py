@@ -300,3 +300,23 @@ AttributeBegin
 AttributeEnd
 LightSource "infinite" "rgb L" [0.5 0.5 0.5]
 """).encode() + b"\0" + nvdb)
+
+# Subsurface materials, every way of giving their medium, and a measured
+# medium preset.
+put("pbrt", "subsurface.pbrt", pbrt_camera + """WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.5 0.5]
+Material "subsurface" "string name" [ "Skin1" ] "float scale" [ 20 ] "float eta" [ 1.5 ]
+Shape "sphere" "float radius" 0.5
+AttributeBegin
+  Translate 1 0 0
+  Material "subsurface" "rgb reflectance" [ 0.8 0.6 0.3 ] "rgb mfp" [ 0.05 0.03 0.02 ] "float roughness" 0.1
+  Shape "sphere" "float radius" 0.3
+AttributeEnd
+AttributeBegin
+  Translate -1 0 0
+  MakeNamedMedium "milk" "string type" "homogeneous" "string preset" "Wholemilk" "float scale" 10
+  Material "subsurface" "rgb sigma_a" [ 0.5 1 2 ] "rgb sigma_s" [ 20 20 20 ] "float g" 0.3
+  MediumInterface "milk" ""
+  Shape "sphere" "float radius" 0.3
+AttributeEnd
+""")

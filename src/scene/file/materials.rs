@@ -726,7 +726,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 eta,
                 roughness: roughness()?.into(),
                 scattering,
-                table: std::sync::Arc::new(crate::bssrdf::BssrdfTable::new(g, eta)),
+                table: crate::bssrdf::BssrdfTable::shared(g, eta),
             }))
         }
         other => {

@@ -2422,7 +2422,7 @@ fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::R
         eta,
         roughness,
         scattering,
-        table: Arc::new(BssrdfTable::new(g, eta)),
+        table: BssrdfTable::shared(g, eta),
     }))))
 }
 
