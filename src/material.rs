@@ -231,12 +231,13 @@ pub struct Subsurface {
 /// How a subsurface material's medium is given.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SubsurfaceScattering {
-    /// Absorption and scattering per unit length, scale applied.
-    Coefficients { sigma_a: Vec3, sigma_s: Vec3 },
+    /// Absorption and scattering per unit length, scale applied (negative
+    /// values read as zero).
+    Coefficients { sigma_a: Texture, sigma_s: Texture },
     /// The total diffuse reflectance wanted at each point and the mean free
     /// path (scale applied): the albedo follows from the profile table
     /// (pbrt-v4's `reflectance` and `mfp`).
-    Reflectance { reflectance: Texture, mfp: Vec3 },
+    Reflectance { reflectance: Texture, mfp: Texture },
 }
 
 /// What a material needs of a surface point to build its BSDF.
@@ -456,7 +457,14 @@ impl Material {
             Material::NormalMapped { base, .. } => base.needs_footprint(),
             Material::Subsurface(s) => {
                 s.roughness.has_image()
-                    || matches!(&s.scattering, SubsurfaceScattering::Reflectance { reflectance, .. } if reflectance.has_image())
+                    || match &s.scattering {
+                        SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => {
+                            sigma_a.has_image() || sigma_s.has_image()
+                        }
+                        SubsurfaceScattering::Reflectance { reflectance, mfp } => {
+                            reflectance.has_image() || mfp.has_image()
+                        }
+                    }
             }
         }
     }
@@ -605,10 +613,13 @@ impl Material {
             Material::NormalMapped { base, map, mirrored } => base.bssrdf(&sp.normal_mapped(map, *mirrored), wo),
             Material::Subsurface(s) => {
                 let (sigma_a, sigma_s) = match &s.scattering {
-                    SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => (*sigma_a, *sigma_s),
-                    SubsurfaceScattering::Reflectance { reflectance, mfp } => {
-                        s.table.coefficients_for(reflectance.evaluate(&tc), *mfp)
-                    }
+                    SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => (
+                        sigma_a.evaluate(&tc).max(Vec3::ZERO),
+                        sigma_s.evaluate(&tc).max(Vec3::ZERO),
+                    ),
+                    SubsurfaceScattering::Reflectance { reflectance, mfp } => s
+                        .table
+                        .coefficients_for(reflectance.evaluate(&tc), mfp.evaluate(&tc).max(Vec3::ZERO)),
                 };
                 Some(Bssrdf::new(sp.p, sp.ns, sigma_a, sigma_s, &s.table))
             }

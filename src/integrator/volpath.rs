@@ -866,7 +866,10 @@ mod tests {
         Material::Subsurface(Box::new(Subsurface {
             eta,
             roughness: Roughness::SMOOTH.into(),
-            scattering: SubsurfaceScattering::Coefficients { sigma_a, sigma_s },
+            scattering: SubsurfaceScattering::Coefficients {
+                sigma_a: sigma_a.into(),
+                sigma_s: sigma_s.into(),
+            },
             table: std::sync::Arc::new(crate::bssrdf::BssrdfTable::new(0.0, eta)),
         }))
     }

@@ -673,6 +673,7 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 }
                 Ok(v * scale)
             };
+            let constant = |v: Vec3| Texture::from(v);
             let (scattering, g) = match given.first().copied() {
                 Some("name") => {
                     let name = k.string("name")?.unwrap_or_default();
@@ -690,15 +691,15 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                         ));
                     }
                     let scattering = SubsurfaceScattering::Coefficients {
-                        sigma_a: a * scale,
-                        sigma_s: s * scale,
+                        sigma_a: constant(a * scale),
+                        sigma_s: constant(s * scale),
                     };
                     (scattering, 0.0)
                 }
                 Some("sigma_a") => {
                     let scattering = SubsurfaceScattering::Coefficients {
-                        sigma_a: coefficient("sigma_a")?,
-                        sigma_s: coefficient("sigma_s")?,
+                        sigma_a: constant(coefficient("sigma_a")?),
+                        sigma_s: constant(coefficient("sigma_s")?),
                     };
                     (scattering, g)
                 }
@@ -709,14 +710,14 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                     }
                     let scattering = SubsurfaceScattering::Reflectance {
                         reflectance: albedo("reflectance", 0.5)?,
-                        mfp: mfp * scale,
+                        mfp: constant(mfp * scale),
                     };
                     (scattering, g)
                 }
                 None => {
                     let scattering = SubsurfaceScattering::Coefficients {
-                        sigma_a: Vec3::new(0.0011, 0.0024, 0.014) * scale,
-                        sigma_s: Vec3::new(2.55, 3.21, 3.77) * scale,
+                        sigma_a: constant(Vec3::new(0.0011, 0.0024, 0.014) * scale),
+                        sigma_s: constant(Vec3::new(2.55, 3.21, 3.77) * scale),
                     };
                     (scattering, g)
                 }

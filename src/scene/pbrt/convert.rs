@@ -2340,8 +2340,8 @@ fn convert_surface(
 /// medium by `name` (a measured preset, in mm^-1, with g = 0), else by
 /// `sigma_a` and `sigma_s`, else by `reflectance` and `mfp` (1), else
 /// pbrt-v4's default (whole milk's coefficients, per mm); the coefficients
-/// or `mfp` times `scale`; `eta` 1.33; `g` 0; a dielectric surface of that
-/// index and `roughness`. Coefficients and `mfp` are constants here.
+/// or `mfp` (numbers or textures) times `scale`; `eta` 1.33; `g` 0; a
+/// dielectric surface of that index and `roughness`.
 fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::Result<Material, String>> {
     use crate::bssrdf::BssrdfTable;
     use crate::material::{Subsurface, SubsurfaceScattering};
@@ -2364,9 +2364,21 @@ fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::R
         return Err(located(loc, format!("subsurface: \"g\" {g} must lie in (-1, 1)")));
     }
     let name = p.get_string_or("name", "")?;
-    let coefficients = |a: Vec3, s: Vec3| SubsurfaceScattering::Coefficients {
-        sigma_a: (a * scale).max(Vec3::ZERO),
-        sigma_s: (s * scale).max(Vec3::ZERO),
+    // A coefficient times `scale`: a constant multiplied out, a texture wrapped.
+    let scaled = |t: Texture| match t {
+        Texture::Constant(c) => Texture::from(c * scale),
+        t if scale == 1.0 => t,
+        t => Texture::Scale {
+            tex: Arc::new(t),
+            scale: Arc::new(Texture::from(Vec3::splat(scale))),
+        },
+    };
+    let coefficients = |a: Texture, s: Texture| SubsurfaceScattering::Coefficients {
+        sigma_a: scaled(a),
+        sigma_s: scaled(s),
+    };
+    let texture_of = |name: &str, default: f32| -> Result<std::result::Result<Texture, String>> {
+        Ok(spectrum_texture(scene, p, name, default, loc)?.map_err(|why| format!("subsurface: {why}")))
     };
     let scattering = if !name.is_empty() {
         let Some((a, s)) = crate::medium::presets::scattering_preset(&name) else {
@@ -2377,42 +2389,43 @@ fn subsurface(scene: &PbrtScene, p: &Params, loc: &Loc) -> Result<std::result::R
         };
         // The presets' scattering coefficients are reduced ones.
         g = 0.0;
-        coefficients(a, s)
+        coefficients(Texture::from(a), Texture::from(s))
     } else if p.has("sigma_a") || p.has("sigma_s") {
-        let (a, s) = match (p.has("sigma_a"), p.has("sigma_s")) {
-            (true, true) => (colour(p, "sigma_a", loc)?, colour(p, "sigma_s", loc)?),
+        match (p.has("sigma_a"), p.has("sigma_s")) {
+            (true, true) => {}
             (true, false) => return Err(located(loc, "subsurface: \"sigma_a\" given without \"sigma_s\"")),
             _ => return Err(located(loc, "subsurface: \"sigma_s\" given without \"sigma_a\"")),
-        };
-        match (a, s) {
+        }
+        match (texture_of("sigma_a", 0.0)?, texture_of("sigma_s", 0.0)?) {
             (Ok(a), Ok(s)) => coefficients(a, s),
-            (Err(why), _) | (_, Err(why)) => return Ok(Err(format!("subsurface: {why}"))),
+            (Err(why), _) | (_, Err(why)) => return Ok(Err(why)),
         }
     } else if p.has("reflectance") {
-        let reflectance = match spectrum_texture(scene, p, "reflectance", 1.0, loc)? {
+        let reflectance = match texture_of("reflectance", 1.0)? {
             Ok(t) => t,
-            Err(why) => return Ok(Err(format!("subsurface: {why}"))),
+            Err(why) => return Ok(Err(why)),
         };
-        let mfp = if p.has("mfp") {
-            match colour(p, "mfp", loc)? {
-                Ok(m) => m,
-                Err(why) => return Ok(Err(format!("subsurface: {why}"))),
+        let mfp = match texture_of("mfp", 1.0)? {
+            Ok(t) => t,
+            Err(why) => return Ok(Err(why)),
+        };
+        if let Texture::Constant(m) = &mfp {
+            if !(m.is_finite() && m.min_element() > 0.0) {
+                return Err(located(
+                    place(p, "mfp", loc),
+                    format!("subsurface: \"mfp\" {m} must be positive"),
+                ));
             }
-        } else {
-            Vec3::ONE
-        };
-        if !(mfp.is_finite() && mfp.min_element() > 0.0) {
-            return Err(located(
-                place(p, "mfp", loc),
-                format!("subsurface: \"mfp\" {mfp} must be positive"),
-            ));
         }
         SubsurfaceScattering::Reflectance {
             reflectance,
-            mfp: mfp * scale,
+            mfp: scaled(mfp),
         }
     } else {
-        coefficients(Vec3::new(0.0011, 0.0024, 0.014), Vec3::new(2.55, 3.21, 3.77))
+        coefficients(
+            Texture::from(Vec3::new(0.0011, 0.0024, 0.014)),
+            Texture::from(Vec3::new(2.55, 3.21, 3.77)),
+        )
     };
     let roughness = match roughness(scene, p, loc)? {
         Ok(r) => r,

@@ -2514,7 +2514,10 @@ fn measured_presets_give_media_their_coefficients_times_scale() {
 fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
     use crate::material::{Material, SubsurfaceScattering};
     let material = |params: &str| {
-        let text = format!("WorldBegin\nMaterial \"subsurface\" {params}\nShape \"sphere\"\n");
+        let text = format!(
+            "WorldBegin\nTexture \"t\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [ 1 2 3 ]\n\
+             Material \"subsurface\" {params}\nShape \"sphere\"\n"
+        );
         let c = converted(&text, Files::default(), false)?;
         let Some((_, Material::Subsurface(s))) = c.desc.materials.last() else {
             panic!("{:?}", c.desc.materials)
@@ -2525,9 +2528,14 @@ fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
     let s = material("\"string name\" \"Skin1\" \"float scale\" 50 \"float eta\" 1.5 \"float g\" 0.5").unwrap();
     assert_eq!(s.eta, 1.5);
     assert_eq!(*s.table, crate::bssrdf::BssrdfTable::new(0.0, 1.5));
-    let SubsurfaceScattering::Coefficients { sigma_a, sigma_s } = s.scattering else {
+    let constant = |t: &crate::texture::Texture| match t {
+        crate::texture::Texture::Constant(c) => *c,
+        other => panic!("{other:?}"),
+    };
+    let SubsurfaceScattering::Coefficients { sigma_a, sigma_s } = &s.scattering else {
         panic!()
     };
+    let (sigma_a, sigma_s) = (constant(sigma_a), constant(sigma_s));
     assert!(
         (sigma_a - Vec3::new(1.6, 8.5, 24.0)).abs().max_element() < 1e-4,
         "{sigma_a:?}"
@@ -2542,8 +2550,8 @@ fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
     assert_eq!(
         s.scattering,
         SubsurfaceScattering::Coefficients {
-            sigma_a: Vec3::new(2.0, 4.0, 6.0),
-            sigma_s: Vec3::new(8.0, 10.0, 12.0)
+            sigma_a: Vec3::new(2.0, 4.0, 6.0).into(),
+            sigma_s: Vec3::new(8.0, 10.0, 12.0).into()
         }
     );
     // By reflectance and mean free path (1 unless given), times scale.
@@ -2552,17 +2560,25 @@ fn subsurface_materials_read_every_way_pbrt_gives_their_medium() {
         panic!()
     };
     assert_eq!(*reflectance, crate::texture::Texture::from(Vec3::new(0.8, 0.5, 0.2)));
-    assert_eq!(*mfp, Vec3::splat(0.1));
+    assert_eq!(*mfp, Vec3::splat(0.1).into());
     // Nothing said: pbrt-v4's default, whole milk per unit length.
     let s = material("").unwrap();
-    let SubsurfaceScattering::Coefficients { sigma_s, .. } = s.scattering else {
+    let SubsurfaceScattering::Coefficients { sigma_s, .. } = &s.scattering else {
         panic!()
     };
-    assert_eq!(sigma_s, Vec3::new(2.55, 3.21, 3.77));
+    assert_eq!(constant(sigma_s), Vec3::new(2.55, 3.21, 3.77));
+    // Textures: a coefficient's is scaled, wrapped.
+    let s = material("\"texture sigma_a\" \"t\" \"rgb sigma_s\" [ 4 5 6 ] \"float scale\" 2");
+    let s = s.unwrap();
+    let SubsurfaceScattering::Coefficients { sigma_a, sigma_s } = &s.scattering else {
+        panic!()
+    };
+    assert!(matches!(sigma_a, crate::texture::Texture::Scale { .. }), "{sigma_a:?}");
+    assert_eq!(constant(sigma_s), Vec3::new(8.0, 10.0, 12.0));
     // Mistakes are the file's errors at their place.
     let e = material("\"string name\" \"Skin3\"").unwrap_err();
     assert!(
-        e.starts_with("scene/main.pbrt:2:") && e.contains("no measured medium is named \"Skin3\""),
+        e.starts_with("scene/main.pbrt:3:") && e.contains("no measured medium is named \"Skin3\""),
         "{e}"
     );
     let e = material("\"rgb sigma_a\" [ 1 2 3 ]").unwrap_err();
