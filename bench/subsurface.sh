@@ -17,7 +17,15 @@
 #               pbrt-v4's spectral upsampling of the coloured coefficients
 #               does to the red channel
 #
-# Usage: PBRT=path/to/pbrt bench/subsurface.sh
+# Then a translucent bunny in the manner of pbrt-v4-scenes' sssdragon
+# (`dragon_50.pbrt`: Skin1 x 50, eta 1.5, the mesh scaled by 0.02 over a
+# checkerboard floor; its dragon mesh and sky image stand in as the
+# Stanford bunny scaled to the dragon's size and a constant sky with a
+# distant light), 342 x 256, 256 spp: `compare` over the image, and the
+# bunny's mean in each channel (its pixels: those pbrt-v4 renders orange),
+# ours over pbrt-v4's. PNG_OUT=file.png writes the two side by side.
+#
+# Usage: PBRT=path/to/pbrt [PNG_OUT=docs/subsurface-bunny.png] bench/subsurface.sh
 #   (pbrt-v4 built as ../shared/tools/pbrt-v4/ says)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -98,3 +106,91 @@ for name in ("grey", "coloured", "skin", "skin-red"):
 (sa, sb), (ra, rb) = means[("skin", "tall box")], means[("skin-red", "tall box")]
 print(f"tall box red, Skin1 over its red coefficients in grey: ours {sa[0] / ra[0]:.3f}, pbrt-v4 {sb[0] / rb[0]:.3f}")
 PY
+
+# The translucent bunny.
+mkdir -p "$out/geometry"
+python3 - ../shared/assets/stanford-bunny.obj "$out/geometry/bunny.ply" <<'PY'
+import sys
+vs, fs = [], []
+for line in open(sys.argv[1]):
+    t = line.split()
+    if t and t[0] == "v":
+        vs.append([float(x) for x in t[1:4]])
+    elif t and t[0] == "f":
+        fs.append([int(x.split("/")[0]) - 1 for x in t[1:]])
+# Centred on the floor, 46 units tall (the dragon's size before its 0.02).
+cx = (min(v[0] for v in vs) + max(v[0] for v in vs)) / 2
+cz = (min(v[2] for v in vs) + max(v[2] for v in vs)) / 2
+y0 = min(v[1] for v in vs)
+with open(sys.argv[2], "w") as f:
+    f.write(f"ply\nformat ascii 1.0\nelement vertex {len(vs)}\nproperty float x\nproperty float y\nproperty float z\n"
+            f"element face {len(fs)}\nproperty list uchar int vertex_indices\nend_header\n")
+    for v in vs:
+        f.write(f"{(v[0] - cx) * 300:.5f} {(v[1] - y0) * 300:.5f} {(v[2] - cz) * 300:.5f}\n")
+    for face in fs:
+        f.write(f"{len(face)} " + " ".join(map(str, face)) + "\n")
+PY
+cat >"$out/bunny.pbrt" <<'PBRT'
+Sampler "halton" "integer pixelsamples" [ 256 ]
+PixelFilter "gaussian"
+Film "rgb" "float iso" 200 "integer yresolution" [ 256 ] "integer xresolution" [ 342 ]
+Scale -1 1 1
+LookAt 3.69558 -3.46243 3.25463  3.04072 -2.85176 2.80939  -0.317366 0.312466 0.895346
+Camera "perspective" "float fov" [ 28.841503 ]
+WorldBegin
+AttributeBegin
+    ConcatTransform [ -0.224951 0 -0.97437 0 -0.97437 0 0.224951 0 0 1 0 8.87 0 0 0 1 ]
+    LightSource "infinite" "float scale" .3 "rgb L" [ 1 1 1 ]
+AttributeEnd
+LightSource "distant" "point3 from" [ 2 -3 6 ] "point3 to" [ 0 0 0 ] "rgb L" [ 2 2 2 ]
+AttributeBegin
+    Translate 0.2 0.3 0.78
+    Rotate 90 1 0 0
+    Rotate -90 0 1 0
+    Scale 0.02 0.02 0.02
+    Material "subsurface" "float scale" [ 50 ] "string name" [ "Skin1" ] "float eta" [ 1.5 ]
+    Shape "plymesh" "string filename" [ "geometry/bunny.ply" ]
+AttributeEnd
+Texture "checkers" "spectrum" "checkerboard" "float uscale" [ 16 ] "float vscale" [ 16 ]
+    "rgb tex2" [ 0.2 0.2 0.2 ] "rgb tex1" [ 0.4 0.4 0.4 ]
+AttributeBegin
+    Material "diffuse" "texture reflectance" [ "checkers" ]
+    Shape "bilinearmesh" "point3 P" [ -4 -4 0.78  4 -4 0.78  -4 4 0.78  4 4 0.78 ] "point2 uv" [ 0 0 1 0 0 1 1 1 ]
+AttributeEnd
+PBRT
+"$PBRT" --quiet --nthreads 2 --outfile "$out/bunny-pbrt.pfm" "$out/bunny.pbrt"
+start=$(date +%s.%N)
+"$bin" -q --scene "$out/bunny.pbrt" -o "$out/bunny-ours.pfm"
+echo "bunny: ours $(echo "$(date +%s.%N) - $start" | bc) s"
+"$bin" compare "$out/bunny-ours.pfm" "$out/bunny-pbrt.pfm" --max-luminance 4
+python3 - "$out" "${PNG_OUT:-}" <<'PY'
+import struct, sys, zlib
+out, png = sys.argv[1], sys.argv[2]
+def load(path):
+    with open(path, "rb") as f:
+        assert f.readline().strip() == b"PF"
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        fmt = "<" if scale < 0 else ">"
+        d = struct.unpack(f"{fmt}{w * h * 3}f", f.read(w * h * 12))
+    # Top row first.
+    return w, h, [d[3 * ((h - 1 - y) * w + x):3 * ((h - 1 - y) * w + x) + 3] for y in range(h) for x in range(w)]
+w, h, ours = load(f"{out}/bunny-ours.pfm")
+_, _, pbrt = load(f"{out}/bunny-pbrt.pfm")
+sel = [i for i, p in enumerate(pbrt) if p[0] > 1.6 * p[2]]
+a = [sum(ours[i][c] for i in sel) / len(sel) for c in range(3)]
+b = [sum(pbrt[i][c] for i in sel) / len(sel) for c in range(3)]
+print(f"bunny ({len(sel)} pixels): ours / pbrt-v4 R G B " + " ".join(f"{x / y:.3f}" for x, y in zip(a, b)))
+if png:
+    def srgb(x):
+        x = min(max(x, 0.0), 1.0)
+        return int((12.92 * x if x <= 0.0031308 else 1.055 * x ** (1 / 2.4) - 0.055) * 255 + 0.5)
+    rows = b"".join(b"\0" + bytes(srgb(v) for img in (ours, pbrt) for x in range(w) for v in img[y * w + x])
+                    for y in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    with open(png, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2 * w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))
+    print(f"wrote {png}")
+PY
+
