@@ -166,6 +166,17 @@ fn report_dropped(scene: &Scene, quiet: bool) {
     }
 }
 
+/// Subsurface scattering is the path tracer's alone; say so when another
+/// integrator renders a scene that has it.
+fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quiet: bool) {
+    if !quiet && scene.has_subsurface() && integrator != integrator::IntegratorKind::Path {
+        eprintln!(
+            "warning: subsurface materials scatter below their surface only in the path tracer (--integrator path); {} shows their dielectric surface alone",
+            integrator.name()
+        );
+    }
+}
+
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     // Installed first, so that a signal during loading is not a silent death.
@@ -179,6 +190,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     report_meshes(&loaded, &args.scene, args.quiet);
     let scene = Scene::build(loaded.desc)?;
     report_dropped(&scene, args.quiet);
+    report_subsurface(&scene, settings.integrator, args.quiet);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {

@@ -987,3 +987,43 @@ fn a_foggy_cornell_box_renders_the_same_on_any_thread_count_and_photons_refuse_i
     assert!(errors.len() == 1 && errors[0].contains("participating media"), "{err}");
     assert!(!target.exists());
 }
+
+#[test]
+fn subsurface_scenes_say_which_integrators_leave_their_insides_out() {
+    // pbrt-v4's "path" ignores subsurface scattering and ours renders it:
+    // the reader says so. Another integrator of ours sees the dielectric
+    // surface alone: the render says so. The path tracer, asked for
+    // "volpath", says nothing.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |integrator: &str| {
+        let file = dir.path().join(format!("sss-{integrator}.pbrt"));
+        std::fs::write(
+            &file,
+            format!(
+                "Integrator \"{integrator}\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+                 Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n\
+                 Translate 0 0 3\nMaterial \"subsurface\" \"string name\" \"Ketchup\"\nShape \"sphere\"\n"
+            ),
+        )
+        .unwrap();
+        file.display().to_string()
+    };
+    let out = dir.path().join("out.pfm").display().to_string();
+    let run = |file: &str, extra: &[&str]| {
+        let mut args = vec!["--scene", file, "--spp", "2", "--ssaa", "1", "-o", &out];
+        args.extend_from_slice(extra);
+        let o = raytracer(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let volpath = scene("volpath");
+    assert!(!run(&volpath, &[]).contains("warning"), "{}", run(&volpath, &[]));
+    let e = run(&scene("path"), &[]);
+    assert!(e.contains("pbrt-v4's ignores subsurface scattering"), "{e}");
+    let e = run(&volpath, &["--integrator", "photon", "--photons", "1000"]);
+    assert!(
+        e.contains("warning: subsurface materials scatter below their surface only in the path tracer")
+            && e.contains("photon shows their dielectric surface alone"),
+        "{e}"
+    );
+}

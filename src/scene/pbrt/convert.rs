@@ -198,19 +198,15 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             ),
         );
     }
+    // Other integrators than the path tracer are warned of when they render.
     let subsurface = desc.materials.iter().any(|(_, m)| m.has_subsurface());
-    if subsurface && !matches!(scene.integrator.ty.as_str(), "volpath" | "") {
+    if subsurface && matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
         let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
         c.warn(
             &at,
             format!(
-                "Integrator \"{}\": subsurface materials scatter below their surface only in the path tracer (pbrt-v4's \"volpath\"); {}",
-                scene.integrator.ty,
-                if matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
-                    "they do here, where pbrt-v4's \"path\" shows their dielectric surface alone"
-                } else {
-                    "other integrators show their dielectric surface alone"
-                }
+                "Integrator \"{}\": pbrt-v4's ignores subsurface scattering (its surface alone is seen); it is rendered here, as its \"volpath\" renders it",
+                scene.integrator.ty
             ),
         );
     }
