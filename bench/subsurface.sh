@@ -12,6 +12,9 @@
 #   coloured    short box reflectance (0.8 0.6 0.3), mfp (0.05 0.03 0.02)
 #   skin        tall box "Skin1" x 20 (sigma_a 0.64 3.4 9.6, sigma_s 14.8
 #               17.6 20.2)
+#   forward     tall box sigma_a 0.5, sigma_s 5, g 0.7 (forward scattering:
+#               the phase function's direction convention in the single-
+#               scattering term, and the reduced coefficients of the rest)
 #   skin-red    tall box grey with Skin1's red coefficients (0.64, 14.8):
 #               its red against skin's red, in each renderer, shows what
 #               pbrt-v4's spectral upsampling of the coloured coefficients
@@ -39,11 +42,13 @@ tall_grey='"string type" [ "subsurface" ] "rgb sigma_a" [ 0.5 0.5 0.5 ] "rgb sig
 short_grey='"string type" [ "subsurface" ] "rgb reflectance" [ 0.6 0.6 0.6 ] "rgb mfp" [ 0.05 0.05 0.05 ] "float eta" [ 1.5 ] "float roughness" [ 0.1 ]'
 short_col='"string type" [ "subsurface" ] "rgb reflectance" [ 0.8 0.6 0.3 ] "rgb mfp" [ 0.05 0.03 0.02 ] "float eta" [ 1.5 ] "float roughness" [ 0.1 ]'
 tall_skin='"string type" [ "subsurface" ] "string name" [ "Skin1" ] "float scale" [ 20 ] "float eta" [ 1.33 ]'
+tall_fwd='"string type" [ "subsurface" ] "rgb sigma_a" [ 0.5 0.5 0.5 ] "rgb sigma_s" [ 5 5 5 ] "float g" [ 0.7 ] "float eta" [ 1.33 ]'
 tall_red='"string type" [ "subsurface" ] "rgb sigma_a" [ 0.64 0.64 0.64 ] "rgb sigma_s" [ 14.8 14.8 14.8 ] "float eta" [ 1.33 ]'
 variants=(
     "grey|$tall_grey|$short_grey"
     "coloured|$tall_grey|$short_col"
     "skin|$tall_skin|$short_grey"
+    "forward|$tall_fwd|$short_grey"
     "skin-red|$tall_red|$short_grey"
 )
 for v in "${variants[@]}"; do
@@ -71,15 +76,10 @@ PY
     echo "$name: ours $(echo "$(date +%s.%N) - $start" | bc) s"
 done
 python3 - "$out" <<'PY'
-import struct, sys
+import sys
+sys.path.insert(0, "bench")
+from pfm import load
 out = sys.argv[1]
-def load(path):
-    with open(path, "rb") as f:
-        assert f.readline().strip() == b"PF"
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        fmt = "<" if scale < 0 else ">"
-        return w, h, struct.unpack(f"{fmt}{w * h * 3}f", f.read(w * h * 12))
 # Fractions of the frame (x0, y0, x1, y1), top down: the boxes' fronts.
 regions = {"tall box": (0.25, 0.35, 0.45, 0.75), "short box": (0.55, 0.6, 0.75, 0.85)}
 def mean(img, r):
@@ -87,16 +87,15 @@ def mean(img, r):
     x0, y0, x1, y1 = int(r[0] * w), int(r[1] * h), int(r[2] * w), int(r[3] * h)
     s, n = [0.0] * 3, 0
     for y in range(y0, y1):
-        row = h - 1 - y  # PFM rows run bottom up
         for x in range(x0, x1):
             for c in range(3):
-                s[c] += d[3 * (row * w + x) + c]
+                s[c] += d[y * w + x][c]
             n += 1
     return [v / n for v in s]
 means = {}
 print("| variant | region | ours R G B | pbrt-v4 R G B | ours / pbrt-v4 |")
 print("|---|---|---|---|---|")
-for name in ("grey", "coloured", "skin", "skin-red"):
+for name in ("grey", "coloured", "skin", "forward", "skin-red"):
     ours, pbrt = load(f"{out}/{name}-ours.pfm"), load(f"{out}/{name}-pbrt.pfm")
     for rn, r in regions.items():
         a, b = mean(ours, r), mean(pbrt, r)
@@ -165,16 +164,9 @@ echo "bunny: ours $(echo "$(date +%s.%N) - $start" | bc) s"
 "$bin" compare "$out/bunny-ours.pfm" "$out/bunny-pbrt.pfm" --max-luminance 4
 python3 - "$out" "${PNG_OUT:-}" <<'PY'
 import struct, sys, zlib
+sys.path.insert(0, "bench")
+from pfm import load
 out, png = sys.argv[1], sys.argv[2]
-def load(path):
-    with open(path, "rb") as f:
-        assert f.readline().strip() == b"PF"
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        fmt = "<" if scale < 0 else ">"
-        d = struct.unpack(f"{fmt}{w * h * 3}f", f.read(w * h * 12))
-    # Top row first.
-    return w, h, [d[3 * ((h - 1 - y) * w + x):3 * ((h - 1 - y) * w + x) + 3] for y in range(h) for x in range(w)]
 w, h, ours = load(f"{out}/bunny-ours.pfm")
 _, _, pbrt = load(f"{out}/bunny-pbrt.pfm")
 sel = [i for i, p in enumerate(pbrt) if p[0] > 1.6 * p[2]]
