@@ -28,6 +28,9 @@
 # bunny's mean in each channel (its pixels: those pbrt-v4 renders orange),
 # ours over pbrt-v4's. PNG_OUT=file.png writes the two side by side.
 #
+# Last, lossless balls of 30 and 6 mean free paths in radius under a
+# uniform sky, ours and pbrt-v4's centre pixels.
+#
 # Usage: PBRT=path/to/pbrt [PNG_OUT=docs/subsurface-bunny.png] bench/subsurface.sh
 #   (pbrt-v4 built as ../shared/tools/pbrt-v4/ says)
 set -euo pipefail
@@ -186,3 +189,26 @@ if png:
     print(f"wrote {png}")
 PY
 
+
+# Lossless balls (sigma_s 30) under a uniform sky of 1, 32 x 32, 256 spp:
+# the centre pixels' mean, radius 1 (30 mean free paths) and 0.2 (6). The
+# profile is a slab's: on a small object probes that miss it lose light.
+for radius in 1 0.2; do
+    file=$out/ball-$radius.pbrt
+    printf 'Integrator "volpath"\nFilm "rgb" "integer xresolution" 32 "integer yresolution" 32\nCamera "perspective" "float fov" 20\nWorldBegin\nLightSource "infinite" "rgb L" [ 1 1 1 ]\nTranslate 0 0 %s\nMaterial "subsurface" "rgb sigma_a" [ 0 0 0 ] "rgb sigma_s" [ 30 30 30 ]\nShape "sphere" "float radius" %s\n' \
+        "$(echo "$radius * 4" | bc)" "$radius" >"$file"
+    "$PBRT" --quiet --nthreads 2 --spp 256 --outfile "$out/ball-$radius-pbrt.pfm" "$file"
+    "$bin" -q --scene "$file" --spp 256 -o "$out/ball-$radius-ours.pfm"
+    python3 - "$out" "$radius" <<'PY'
+import sys
+sys.path.insert(0, "bench")
+from pfm import load
+out, radius = sys.argv[1:]
+def centre(path):
+    w, h, p = load(path)
+    c = [p[y * w + x] for y in range(12, 20) for x in range(12, 20)]
+    return sum(sum(q) / 3 for q in c) / len(c)
+print(f"lossless ball, radius {radius}: ours {centre(f'{out}/ball-{radius}-ours.pfm'):.3f}, "
+      f"pbrt-v4 {centre(f'{out}/ball-{radius}-pbrt.pfm'):.3f}")
+PY
+done
