@@ -79,6 +79,10 @@ pub struct Camera {
     spherical: Option<SphericalMapping>,
     pub width: u32,
     pub height: u32,
+    /// When the shutter opens and closes, where the scene has moving shapes
+    /// (`None` otherwise: camera rays are then all at time 0 and draw no
+    /// sample for their time).
+    pub shutter: Option<[f32; 2]>,
 }
 
 impl Camera {
@@ -107,6 +111,7 @@ impl Camera {
             spherical: None,
             width,
             height,
+            shutter: None,
         })
     }
 

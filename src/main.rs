@@ -177,6 +177,18 @@ fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quie
     }
 }
 
+/// Light paths (photons, bdpt's light subpaths) are traced at time 0: say
+/// so when such an integrator renders a scene that moves.
+fn report_motion(scene: &Scene, integrator: integrator::IntegratorKind, quiet: bool) {
+    use integrator::IntegratorKind::{Direct, Path};
+    if !quiet && scene.has_motion() && !matches!(integrator, Path | Direct) {
+        eprintln!(
+            "warning: moving shapes are blurred over the shutter only by the path tracer (--integrator path) and --integrator direct; {}'s light paths see them where they are at time 0",
+            integrator.name()
+        );
+    }
+}
+
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     // Installed first, so that a signal during loading is not a silent death.
@@ -191,6 +203,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let scene = Scene::build(loaded.desc)?;
     report_dropped(&scene, args.quiet);
     report_subsurface(&scene, settings.integrator, args.quiet);
+    report_motion(&scene, settings.integrator, args.quiet);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {

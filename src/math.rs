@@ -3,16 +3,24 @@
 pub use glam::{Vec2, Vec3};
 
 /// A ray with origin `o` and direction `d` (not necessarily unit length for
-/// shadow rays, always unit for camera and scattering rays).
+/// shadow rays, always unit for camera and scattering rays), at `time`
+/// within the camera's shutter interval (where moving shapes are met).
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
     pub o: Vec3,
     pub d: Vec3,
+    pub time: f32,
 }
 
 impl Ray {
+    /// A ray at time 0 (the shutter's opening by default).
     pub fn new(o: Vec3, d: Vec3) -> Self {
-        Ray { o, d }
+        Ray { o, d, time: 0.0 }
+    }
+
+    /// A ray at `time`: a path's later segments keep its camera ray's time.
+    pub fn timed(o: Vec3, d: Vec3, time: f32) -> Self {
+        Ray { o, d, time }
     }
 
     pub fn at(&self, t: f32) -> Vec3 {
@@ -104,5 +112,16 @@ impl Aabb {
 
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x
+    }
+
+    /// Whether `ray` meets the box between its origin and `t_max` (slabs;
+    /// a ray along a face may count either way).
+    pub fn hit_by(&self, ray: &Ray, t_max: f32) -> bool {
+        let inv = ray.d.recip();
+        let a = (self.min - ray.o) * inv;
+        let b = (self.max - ray.o) * inv;
+        let near = a.min(b).max_element().max(0.0);
+        let far = a.max(b).min_element().min(t_max);
+        near <= far
     }
 }

@@ -225,6 +225,17 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(b"media");
         h.bytes(format!("{:?} {:?} {:?}", desc.media, desc.camera_medium, desc.boundaries).as_bytes());
     }
+    // Motion came later still: hashed only when something moves.
+    if !desc.moving.is_empty() {
+        h.bytes(b"moving");
+        for m in &desc.moving {
+            h.u32(m.triangles.start as u32);
+            h.u32(m.triangles.end as u32);
+            h.bytes(format!("{:?}", m.motion).as_bytes());
+        }
+        h.f32(desc.shutter[0]);
+        h.f32(desc.shutter[1]);
+    }
     // Texture lookups filtered by the camera's footprint make even photons
     // depend on the camera and the sample count.
     let footprinted = desc.materials.iter().any(|(_, m)| m.needs_footprint());

@@ -439,7 +439,7 @@ impl Bdpt {
                 scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
             });
             stats.other_rays += 1;
-            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+            ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);
         }
         l
     }
@@ -578,7 +578,7 @@ impl Bdpt {
             };
             pdf_fwd = next;
             stats.other_rays += 1;
-            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+            ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);
         }
     }
 

@@ -132,7 +132,7 @@ pub fn walk_camera_path(
         diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
             scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
         });
-        ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+        ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);
     }
     l
 }
@@ -264,9 +264,14 @@ pub fn unoccluded_light_sample(
     let blocked = if ls.dist.is_finite() {
         let to_light = hit.p + ls.wi * ls.dist - o;
         let dist = to_light.length();
-        scene.occluded_before_light(&Ray::new(o, to_light / dist), 0.0, dist * (1.0 - 1e-4), li as u32)
+        scene.occluded_before_light(
+            &Ray::timed(o, to_light / dist, hit.time),
+            0.0,
+            dist * (1.0 - 1e-4),
+            li as u32,
+        )
     } else {
-        scene.occluded(&Ray::new(o, ls.wi), 0.0, f32::INFINITY)
+        scene.occluded(&Ray::timed(o, ls.wi, hit.time), 0.0, f32::INFINITY)
     };
     (!blocked).then_some(ls)
 }

@@ -497,10 +497,19 @@ pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, 
 /// (after the pixel position, as pbrt-v4's camera sample); a pinhole takes
 /// none, so its images are what they were before lenses existed.
 pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> Ray {
-    if cam.has_lens() {
+    let ray = if cam.has_lens() {
         cam.generate_ray_through_lens(pos.x, pos.y, sampler.next_2d())
     } else {
         cam.generate_ray(pos.x, pos.y)
+    };
+    // Its time, uniform over the shutter's, when anything moves: the request
+    // after the lens's, so that still scenes draw the samples they drew.
+    match cam.shutter {
+        Some([open, close]) => Ray {
+            time: open + (close - open) * sampler.next_f32(),
+            ..ray
+        },
+        None => ray,
     }
 }
 

@@ -149,7 +149,7 @@ impl RadianceEstimator for PathTracer {
                 beta /= q;
             }
             stats.other_rays += 1;
-            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+            ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);
         }
         l
     }

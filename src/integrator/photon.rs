@@ -145,7 +145,7 @@ impl PhotonMapping<'_> {
                 continue;
             }
             stats.other_rays += 1;
-            let mut ray = Ray::new(offset_origin(hit.p, hit.ng, d), d);
+            let mut ray = Ray::timed(offset_origin(hit.p, hit.ng, d), d, hit.time);
             let mut beta = weight;
             for depth in 0..=MAX_SPECULAR_DEPTH {
                 let Some(y) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
@@ -176,7 +176,7 @@ impl PhotonMapping<'_> {
                 }
                 beta *= bs.f * (bs.wi.dot(bsdf.frame.z).abs() / bs.pdf);
                 stats.other_rays += 1;
-                ray = Ray::new(offset_origin(y.p, y.ng, bs.wi), bs.wi);
+                ray = Ray::timed(offset_origin(y.p, y.ng, bs.wi), bs.wi, y.time);
             }
         }
         sum / n as f32

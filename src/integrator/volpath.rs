@@ -110,7 +110,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                         break;
                     }
                     stats.other_rays += 1;
-                    ray = Ray::new(p, wi);
+                    ray = Ray::timed(p, wi, ray.time);
                     camera_ray = false;
                     diffs = None;
                     continue;
@@ -136,7 +136,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                 break;
             }
             medium = scene.medium_after(&hit, medium, ray.d);
-            ray = Ray::new(offset_origin(hit.p, hit.ng, ray.d), ray.d);
+            ray = Ray::timed(offset_origin(hit.p, hit.ng, ray.d), ray.d, hit.time);
             continue;
         }
         let m = scene.material(hit.material);
@@ -234,7 +234,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         }
         stats.other_rays += 1;
         medium = scene.medium_after(&from_hit, medium, wi);
-        ray = Ray::new(offset_origin(from_hit.p, from_hit.ng, wi), wi);
+        ray = Ray::timed(offset_origin(from_hit.p, from_hit.ng, wi), wi, from_hit.time);
     }
     l
 }

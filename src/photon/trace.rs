@@ -212,7 +212,7 @@ fn trace_chunk(
             } else {
                 specular += 1;
             }
-            ray = Ray::new(offset_origin(hit.p, hit.ng, bs.wi), bs.wi);
+            ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);
         }
     }
     (photons, per_hit, rays)

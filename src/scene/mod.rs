@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod file;
 pub mod mesh;
+pub mod motion;
 pub mod pbrt;
 pub mod transform;
 
@@ -375,6 +376,19 @@ pub struct SceneDesc {
     /// The samples a pixel of the render, which scale texture footprints
     /// (`camera::PixelFootprint`); the render's settings set it.
     pub texture_spp: u32,
+    /// Runs of `triangles` that move while the shutter is open (placed as
+    /// at their motion's start).
+    pub moving: Vec<MovingTriangles>,
+    /// The times the shutter opens and closes: camera rays' times are
+    /// uniform between them when anything moves.
+    pub shutter: [f32; 2],
+}
+
+/// Triangles `triangles` of a scene, moving by `motion`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingTriangles {
+    pub triangles: std::ops::Range<usize>,
+    pub motion: motion::Motion,
 }
 
 impl SceneDesc {
@@ -395,6 +409,8 @@ impl SceneDesc {
             boundaries: vec![],
             settings: SceneSettings::default(),
             texture_spp: 64,
+            moving: vec![],
+            shutter: [0.0, 1.0],
         }
     }
 
@@ -486,6 +502,8 @@ pub struct Hit {
     pub kind: PrimKind,
     /// Index into `Scene::lights` when the hit is on an emitter.
     pub light: Option<u32>,
+    /// The ray's time: rays leaving the hit keep it.
+    pub time: f32,
 }
 
 /// The change of (u, v) for changes `dpdx`, `dpdy` of the point on a surface
@@ -513,6 +531,29 @@ const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::n
 /// the texture coordinates; with vertex normals, pbrt-v4's shading frame
 /// (dp/du made perpendicular to the shading normal, dp/dv their cross
 /// product) and the normals' derivatives.
+/// `triangle_shading` for a moving triangle, stored as placed at its
+/// motion's start and hit where `to_world` took it.
+fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(ShadingGeometry, [Vec3; 2])> {
+    let m = glam::Mat3::from_mat4(to_world);
+    let (back, normals) = (m.inverse(), m.inverse().transpose());
+    let placed = Hit {
+        p: to_world.inverse().transform_point3(hit.p),
+        ng: (m.transpose() * hit.ng).normalize(),
+        ns: (m.transpose() * hit.ns).normalize(),
+        dpdu: back * hit.dpdu,
+        ..*hit
+    };
+    let (g, [dpdu, dpdv]) = triangle_shading(t, &placed)?;
+    let g = ShadingGeometry {
+        n: (normals * g.n).normalize(),
+        dpdu: m * g.dpdu,
+        dpdv: m * g.dpdv,
+        dndu: normals * g.dndu,
+        dndv: normals * g.dndv,
+    };
+    Some((g, [m * dpdu, m * dpdv]))
+}
+
 fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let uv = t.uvs.unwrap_or(DEFAULT_UV);
     let [p0, p1, p2] = t.vertices;
@@ -755,7 +796,10 @@ pub struct Scene {
     /// Indices of the infinite lights.
     infinite_lights: Vec<u32>,
     pub bvh: Bvh,
-    /// Triangles in BVH order.
+    /// Runs of triangles that move while the shutter is open (empty for a
+    /// still scene), each with a BVH of its own.
+    movers: Vec<Mover>,
+    /// Triangles in BVH order: the static BVH's, then each mover's.
     triangles: Vec<Triangle>,
     info: Vec<TriInfo>,
     vertex_normals: Vec<Option<[Vec3; 3]>>,
@@ -794,10 +838,54 @@ pub struct Scene {
     any_subsurface: bool,
 }
 
+/// Triangles moving together: their BVH over them as placed at the start of
+/// their motion, where their triangles begin in `Scene::triangles`, and a
+/// box holding them wherever they move.
+#[derive(Clone, Debug)]
+struct Mover {
+    bvh: Bvh,
+    base: usize,
+    motion: motion::Motion,
+    bounds: crate::math::Aabb,
+}
+
+impl Mover {
+    /// The ray in the movers' start placement, with the transformation from
+    /// there to the ray's time; `None` when the ray misses its box.
+    #[inline(never)]
+    fn local_ray(&self, ray: &Ray, t_max: f32) -> Option<(Ray, glam::Mat4)> {
+        if !self.bounds.hit_by(ray, t_max) {
+            return None;
+        }
+        let m = self.motion.relative(ray.time);
+        let inv = m.inverse();
+        Some((
+            Ray::timed(inv.transform_point3(ray.o), inv.transform_vector3(ray.d), ray.time),
+            m,
+        ))
+    }
+}
+
 impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
-        let camera = c.camera().ok_or_else(|| Error::Scene(c.problem()))?;
+        let mut camera = c.camera().ok_or_else(|| Error::Scene(c.problem()))?;
+        if !desc.moving.is_empty() {
+            let [open, close] = desc.shutter;
+            if !(open.is_finite() && close.is_finite() && open <= close) {
+                return Err(Error::Scene(format!(
+                    "the shutter opens at {open} and closes at {close}: they must be finite and in order"
+                )));
+            }
+            camera.shutter = Some(desc.shutter);
+            // Their light samples see the scene at time 0 (`transmittance`).
+            if !desc.media.is_empty() || desc.materials.iter().any(|(_, m)| m.has_subsurface()) {
+                return Err(Error::Scene(
+                    "moving shapes in a scene with participating media or subsurface scattering are not supported"
+                        .into(),
+                ));
+            }
+        }
         let nmat = desc.materials.len() as u32;
         let mut tris = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::with_capacity(desc.triangles.len());
@@ -805,6 +893,28 @@ impl Scene {
         let mut uvs = Vec::with_capacity(desc.triangles.len());
         let mut dropped = 0;
         let (alphas, cut) = cutout_indices(&desc)?;
+        // Which run of moving triangles each description triangle is in.
+        let mut run_of = vec![u32::MAX; desc.triangles.len()];
+        for (k, m) in desc.moving.iter().enumerate() {
+            let r = &m.triangles;
+            if r.start > r.end || r.end > desc.triangles.len() || run_of[r.clone()].iter().any(|&g| g != u32::MAX) {
+                return Err(Error::Scene(format!(
+                    "moving triangles {}..{}: out of the scene's {} triangles or overlapping another run",
+                    r.start,
+                    r.end,
+                    desc.triangles.len()
+                )));
+            }
+            if r.clone().any(|i| cut.triangles.get(i).is_some_and(|&a| a != SOLID)) {
+                return Err(Error::Scene(format!(
+                    "moving triangles {}..{}: an alpha cut-out on a moving shape is not supported",
+                    r.start, r.end
+                )));
+            }
+            run_of[r.clone()].fill(k as u32);
+        }
+        // The run of each triangle kept (static ones and lights: none).
+        let mut runs = Vec::with_capacity(desc.triangles.len());
         for (i, t) in desc.triangles.iter().enumerate() {
             if t.material >= nmat {
                 return Err(Error::Scene(format!(
@@ -821,6 +931,7 @@ impl Scene {
                 continue;
             }
             tris.push(tri);
+            runs.push(run_of[i]);
             info.push(TriInfo {
                 material: t.material,
                 object: i as u32,
@@ -938,13 +1049,50 @@ impl Scene {
                 Bvh::MAX_TRIANGLES
             )));
         }
+        runs.resize(tris.len(), u32::MAX);
         let start = std::time::Instant::now();
-        let bvh = Bvh::build(&tris);
+        // The static triangles' BVH, then each moving run's over its
+        // triangles as placed at its start; the triangles are stored in that
+        // order, each run's after the static ones.
+        let (bvh, mut order) = if desc.moving.is_empty() {
+            let bvh = Bvh::build(&tris);
+            let order = bvh.order.clone();
+            (bvh, order)
+        } else {
+            let members =
+                |run: u32| -> Vec<u32> { (0..tris.len() as u32).filter(|&k| runs[k as usize] == run).collect() };
+            let statics = members(u32::MAX);
+            let bvh = Bvh::build(&statics.iter().map(|&k| tris[k as usize]).collect::<Vec<_>>());
+            let order = bvh.order.iter().map(|&j| statics[j as usize]).collect();
+            (bvh, order)
+        };
+        let mut movers = Vec::with_capacity(desc.moving.len());
+        for (k, m) in desc.moving.iter().enumerate() {
+            let members: Vec<u32> = (0..tris.len() as u32)
+                .filter(|&j| runs[j as usize] == k as u32)
+                .collect();
+            let run_bvh = Bvh::build(&members.iter().map(|&j| tris[j as usize]).collect::<Vec<_>>());
+            let base = order.len();
+            order.extend(run_bvh.order.iter().map(|&j| members[j as usize]));
+            let bounds = if members.is_empty() {
+                crate::math::Aabb::EMPTY
+            } else {
+                let b = run_bvh.bounds();
+                let (min, max) = m.motion.bounds(b.min, b.max);
+                crate::math::Aabb { min, max }
+            };
+            movers.push(Mover {
+                bvh: run_bvh,
+                base,
+                motion: m.motion.clone(),
+                bounds,
+            });
+        }
         let bvh_build_seconds = start.elapsed().as_secs_f64();
-        let triangles = bvh.order.iter().map(|&i| tris[i as usize]).collect();
-        let info = bvh.order.iter().map(|&i| info[i as usize]).collect();
-        let vertex_normals = bvh.order.iter().map(|&i| normals[i as usize]).collect();
-        let vertex_uvs = bvh.order.iter().map(|&i| uvs[i as usize]).collect();
+        let triangles = order.iter().map(|&i| tris[i as usize]).collect();
+        let info = order.iter().map(|&i| info[i as usize]).collect();
+        let vertex_normals = order.iter().map(|&i| normals[i as usize]).collect();
+        let vertex_uvs = order.iter().map(|&i| uvs[i as usize]).collect();
         for (i, c) in desc.curves.iter().enumerate() {
             if c.material >= nmat {
                 return Err(Error::Scene(format!(
@@ -971,6 +1119,7 @@ impl Scene {
             light_pmfs: vec![],
             infinite_lights,
             bvh,
+            movers,
             triangles,
             info,
             vertex_normals,
@@ -1090,6 +1239,69 @@ impl Scene {
 
     /// Closest hit along the ray in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let mut hit = self.intersect_still(ray, t_min, t_max);
+        if !self.movers.is_empty() {
+            hit = self.intersect_movers(ray, t_min, hit.map_or(t_max, |h| h.t)).or(hit);
+            if let Some(h) = &mut hit {
+                h.time = ray.time;
+            }
+        }
+        hit
+    }
+
+    /// The closest hit on a moving triangle before `t_max`, placed where the
+    /// triangle is at the ray's time.
+    #[inline(never)]
+    fn intersect_movers(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let mut best_t = t_max;
+        let mut best = None;
+        for m in &self.movers {
+            let Some((local, to_world)) = m.local_ray(ray, best_t) else {
+                continue;
+            };
+            if let Some((slot, h)) = m.bvh.intersect(&local, t_min, best_t) {
+                best_t = h.t;
+                best = Some((m.base + slot as usize, h.u, h.v, to_world));
+            }
+        }
+        let (slot, u, v, to_world) = best?;
+        let tri = &self.triangles[slot];
+        let h = self.triangle_hit(slot, u, v, best_t, tri.v0 + tri.e1 * u + tri.e2 * v);
+        let normals = glam::Mat3::from_mat4(to_world).inverse().transpose();
+        Some(Hit {
+            p: to_world.transform_point3(h.p),
+            ng: (normals * h.ng).normalize(),
+            ns: (normals * h.ns).normalize(),
+            dpdu: to_world.transform_vector3(h.dpdu),
+            ..h
+        })
+    }
+
+    /// Whether a moving triangle blocks the ray before `t_max`.
+    #[inline(never)]
+    fn movers_block(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.movers.iter().any(|m| {
+            m.local_ray(ray, t_max)
+                .is_some_and(|(local, _)| m.bvh.occluded(&local, t_min, t_max))
+        })
+    }
+
+    /// The motion of object `object` (a `Hit::object`), if it moves.
+    fn motion_of(&self, object: u32) -> Option<&motion::Motion> {
+        if self.movers.is_empty() {
+            return None;
+        }
+        let i = object as usize;
+        self.desc
+            .moving
+            .iter()
+            .find(|m| m.triangles.contains(&i))
+            .map(|m| &m.motion)
+    }
+
+    /// The closest hit on what does not move.
+    #[inline(always)]
+    fn intersect_still(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut best_t = t_max;
         let mut best = None;
         let triangle = if self.alphas.is_empty() {
@@ -1153,6 +1365,7 @@ impl Scene {
                     PrimKind::Sphere
                 },
                 light: s.light,
+                time: 0.0,
             });
         }
         let j = idx - self.spheres.len();
@@ -1180,6 +1393,7 @@ impl Scene {
                 PrimKind::Disk
             },
             light: d.light,
+            time: 0.0,
         })
     }
 
@@ -1211,6 +1425,7 @@ impl Scene {
                 + k) as u32,
             kind: PrimKind::Curve,
             light: None,
+            time: 0.0,
         }
     }
 
@@ -1417,7 +1632,13 @@ impl Scene {
     fn shading_geometry(&self, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
         let tris = self.desc.triangles.len();
         match hit.kind {
-            PrimKind::Triangle => triangle_shading(self.desc.triangles.get(hit.object as usize)?, hit),
+            PrimKind::Triangle => {
+                let t = self.desc.triangles.get(hit.object as usize)?;
+                match self.motion_of(hit.object) {
+                    None => triangle_shading(t, hit),
+                    Some(m) => moved_shading(t, hit, m.relative(hit.time)),
+                }
+            }
             PrimKind::Sphere => {
                 let object = self.spheres.get((hit.object as usize).checked_sub(tris)?)?;
                 let s = &object.sphere;
@@ -1463,6 +1684,7 @@ impl Scene {
     }
 
     /// The hit record of triangle `slot` (BVH order) at barycentrics (u, v).
+    #[inline(always)]
     fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
         let ns = match &self.vertex_normals[idx] {
@@ -1496,6 +1718,7 @@ impl Scene {
                 PrimKind::Triangle
             },
             light: inf.light,
+            time: 0.0,
         }
     }
 
@@ -1533,6 +1756,11 @@ impl Scene {
     /// then takes the volumetric path tracer's loop, which follows it.
     pub fn has_subsurface(&self) -> bool {
         self.any_subsurface
+    }
+
+    /// Whether any shape moves while the shutter is open.
+    pub fn has_motion(&self) -> bool {
+        !self.movers.is_empty()
     }
 
     /// The media on the two sides of the surface a hit is on, when it
@@ -1609,7 +1837,9 @@ impl Scene {
 
     /// Whether anything blocks the segment (t_min, t_max) of the ray.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.shapes_block(ray, t_min, t_max, None) || self.triangles_block(ray, t_min, t_max)
+        self.shapes_block(ray, t_min, t_max, None)
+            || self.triangles_block(ray, t_min, t_max)
+            || (!self.movers.is_empty() && self.movers_block(ray, t_min, t_max))
     }
 
     /// Whether anything but light `light`'s own sphere (or disk) blocks the
@@ -1618,7 +1848,9 @@ impl Scene {
     /// point's distance is ill-conditioned (a tangent ray), and a relative
     /// epsilon on `t_max` then lets the light shadow itself.
     pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
-        self.shapes_block(ray, t_min, t_max, Some(light)) || self.triangles_block(ray, t_min, t_max)
+        self.shapes_block(ray, t_min, t_max, Some(light))
+            || self.triangles_block(ray, t_min, t_max)
+            || (!self.movers.is_empty() && self.movers_block(ray, t_min, t_max))
     }
 
     /// Whether a sphere or disk (other than light `but`'s) blocks the ray.
@@ -1669,11 +1901,14 @@ impl Scene {
 
     /// Bounding box of all geometry (triangles, spheres and lights).
     pub fn bounds(&self) -> crate::math::Aabb {
-        let mut b = if self.triangles.is_empty() {
+        let mut b = if self.triangles.len() == self.movers.iter().map(|m| m.bvh.order.len()).sum::<usize>() {
             crate::math::Aabb::EMPTY
         } else {
             self.bvh.bounds()
         };
+        for m in &self.movers {
+            b = b.union(&m.bounds);
+        }
         for s in &self.spheres {
             b = b.union(&s.sphere.bounds());
         }
@@ -2205,5 +2440,113 @@ mod cutout_tests {
         });
         let e = Scene::build(d).err().unwrap().to_string();
         assert!(e.contains("cut-out 0 names triangles 0..3 of 0"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod motion_tests {
+    use super::*;
+    use glam::Mat4;
+    use motion::Motion;
+
+    /// A unit quad over [0, 1]^2 at z = 0 (texture coordinates its x and y),
+    /// moving by `end` over the times [0, 1], and a large still quad at
+    /// z = -1 behind it.
+    fn scene_with(end: Mat4) -> Scene {
+        let mut d = SceneDesc::empty("moving", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        let quad = |z: f32, size: f32| {
+            let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec2::new(x, y));
+            let v = c.map(|c| ((c - Vec2::splat(0.5)) * size + Vec2::splat(0.5)).extend(z));
+            [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
+                vertices: t.map(|i| v[i]),
+                normals: None,
+                uvs: Some(t.map(|i| c[i])),
+                material: m,
+            })
+        };
+        d.triangles.extend(quad(-1.0, 10.0));
+        d.triangles.extend(quad(0.0, 1.0));
+        d.moving.push(MovingTriangles {
+            triangles: 2..4,
+            motion: Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).unwrap(),
+        });
+        Scene::build(d).unwrap()
+    }
+
+    fn down_at(x: f32, y: f32, time: f32) -> Ray {
+        Ray::timed(Vec3::new(x, y, 1.0), -Vec3::Z, time)
+    }
+
+    #[test]
+    fn a_moving_quad_is_met_where_it_is_at_the_rays_time() {
+        let scene = scene_with(Mat4::from_translation(Vec3::new(2.0, 0.0, 0.0)));
+        assert!(scene.has_motion());
+        // (x of the ray, time, whether it meets the quad rather than the floor).
+        for (x, time, on_quad) in [
+            (0.5, 0.0, true),
+            (2.5, 0.0, false),
+            (2.5, 1.0, true),
+            (0.5, 1.0, false),
+            (1.5, 0.5, true),
+            (1.5, 0.2, false),
+            (1.5, 0.8, false),
+            (1.5, 0.3, true),
+        ] {
+            let ray = down_at(x, 0.5, time);
+            let hit = scene.intersect(&ray, 0.0, f32::INFINITY).unwrap();
+            let z = if on_quad { 0.0 } else { -1.0 };
+            assert!(
+                (hit.p - Vec3::new(x, 0.5, z)).length() < 1e-5,
+                "x {x} time {time}: {:?}",
+                hit.p
+            );
+            assert!((hit.t - (1.0 - z)).abs() < 1e-5 && hit.time == time);
+            assert_eq!(scene.occluded(&ray, 0.0, 1.5), on_quad, "x {x} time {time}");
+            if on_quad {
+                // Its texture coordinates move with it.
+                let u = x - 2.0 * time;
+                assert!((hit.uv - Vec2::new(u, 0.5)).length() < 1e-5, "{:?}", hit.uv);
+            }
+        }
+        // The still scene's bounds hold the quad's whole path.
+        assert!(scene.bounds().max.x >= 3.0 - 1e-4);
+    }
+
+    #[test]
+    fn a_turning_quad_turns_its_normal_and_surface() {
+        // A quarter turn about the x axis over the shutter: at time 0.5 the
+        // quad leans 45 degrees and its normal with it.
+        let scene = scene_with(Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
+        let hit = scene.intersect(&down_at(0.5, 0.3, 0.5), 0.0, f32::INFINITY).unwrap();
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        // The plane through the x axis with normal (0, -h, h): z = y.
+        assert!((hit.p - Vec3::new(0.5, 0.3, 0.3)).length() < 1e-4, "{:?}", hit.p);
+        assert!((hit.ng - Vec3::new(0.0, -h, h)).length() < 1e-4, "{:?}", hit.ng);
+        assert!((hit.ns - hit.ng).length() < 1e-4);
+        assert!(hit.dpdu.dot(hit.ng).abs() < 1e-4);
+        // The shading frame of its texture goes with it.
+        let (g, [dpdu, dpdv]) = scene.shading_geometry(&hit).unwrap();
+        assert!(dpdu.dot(hit.ng).abs() < 1e-4 && dpdv.dot(hit.ng).abs() < 1e-4);
+        assert!((g.n - hit.ng).length() < 1e-4, "{:?}", g.n);
+        assert!((dpdv - Vec3::new(0.0, h, h)).length() < 1e-4, "{dpdv:?}");
+    }
+
+    #[test]
+    fn a_still_scene_keeps_its_camera_rays_at_time_zero() {
+        let scene = Scene::build(builtin::cornell()).unwrap();
+        assert!(!scene.has_motion() && scene.camera.shutter.is_none());
+        let moving = scene_with(Mat4::from_translation(Vec3::X));
+        assert_eq!(moving.camera.shutter, Some([0.0, 1.0]));
+    }
+
+    #[test]
+    fn bad_runs_of_moving_triangles_are_refused() {
+        let mut d = SceneDesc::empty("moving", builtin::cornell().camera);
+        d.moving.push(MovingTriangles {
+            triangles: 0..3,
+            motion: Motion::new(Mat4::IDENTITY, Mat4::from_translation(Vec3::X), [0.0, 1.0]).unwrap(),
+        });
+        assert!(Scene::build(d).is_err());
     }
 }

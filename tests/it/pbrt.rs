@@ -1027,3 +1027,59 @@ fn subsurface_scenes_say_which_integrators_leave_their_insides_out() {
         "{e}"
     );
 }
+
+/// Row 0 of a render of a black unit square moving one unit along x over
+/// the transformation times [0, 1], in front of a white sky, seen by an
+/// orthographic camera whose 60 columns span x from -1 to 2.
+fn moving_square_row(camera: &str) -> Vec<f64> {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("moving.pbrt");
+    std::fs::write(
+        &p,
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ] {camera}\n\
+             Film \"rgb\" \"integer xresolution\" [ 60 ] \"integer yresolution\" [ 2 ]\n\
+             PixelFilter \"box\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n\
+             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
+             ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
+             Shape \"bilinearmesh\" \"point3 P\" [ -0.5 -0.5 0  0.5 -0.5 0  -0.5 0.5 0  0.5 0.5 0 ]\nAttributeEnd\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out.pfm");
+    let o = raytracer(&[
+        "--scene",
+        p.to_str().unwrap(),
+        "--spp",
+        "256",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = read_image(&out).unwrap();
+    (0..60).map(|x| luminance(img.get(x, 0)) as f64).collect()
+}
+
+#[test]
+fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
+    // The square covers x from time x - 0.5 to x + 0.5: the sky shows for
+    // the rest of the shutter's time. A shutter closing at 0.5 sees the
+    // first half of the motion, and pbrt-v4's film takes half the light.
+    for (camera, close, scale) in [("", 1.0, 1.0), ("\"float shutterclose\" 0.5", 0.5, 0.5)] {
+        let row = moving_square_row(camera);
+        for (i, &v) in row.iter().enumerate() {
+            let x = -1.0 + (i as f64 + 0.5) * 0.05;
+            // Pixels over a kink of the coverage average it away.
+            if [-0.5, 0.5, 1.5].iter().any(|k: &f64| (x - k).abs() < 0.03) {
+                continue;
+            }
+            let covered = ((x + 0.5).min(close) - (x - 0.5).max(0.0)).max(0.0) / close;
+            let expected = scale * (1.0 - covered);
+            assert!(
+                (v - expected).abs() < 0.03,
+                "{camera}: column {i} (x {x:.3}): {v} vs {expected}"
+            );
+        }
+    }
+}

@@ -43,6 +43,8 @@ fn plane_scene(light: Light) -> SceneDesc {
         boundaries: vec![],
         settings: SceneSettings::default(),
         texture_spp: 64,
+        moving: vec![],
+        shutter: [0.0, 1.0],
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));
     let s = 10.0;

@@ -269,6 +269,7 @@ impl<'a> Builder<'a> {
                 shapes: vec![],
                 warnings: vec![],
                 unsupported: vec![],
+                transform_times: [0.0, 1.0],
                 files: vec![],
                 scene_dir: main.parent().unwrap_or(Path::new("")).to_path_buf(),
             },
@@ -833,7 +834,17 @@ impl<'a> Builder<'a> {
             }
             "TransformTimes" => {
                 self.options_only(&t)?;
-                let _: [f32; 2] = self.numbers(&t)?;
+                let times: [f32; 2] = self.numbers(&t)?;
+                if !(times[0].is_finite() && times[1].is_finite() && times[0] < times[1]) {
+                    return Err(PbrtError::at(
+                        &t.loc,
+                        format!(
+                            "TransformTimes {} {}: the times must be finite and increasing",
+                            times[0], times[1]
+                        ),
+                    ));
+                }
+                self.scene.transform_times = times;
             }
             "ReverseOrientation" => {
                 self.world_only(&t)?;
@@ -1276,7 +1287,15 @@ impl<'a> Builder<'a> {
         for u in found.unsupported {
             self.unsupported(&t.loc, u);
         }
-        let world_from_object = self.ctm_static(&t.loc, "Shape");
+        // A shape outside object definitions may move; pbrt-v4 lights none
+        // that moves.
+        let [start, end] = self.gs.ctm;
+        let moving = start != end && self.active_object.is_none() && self.gs.area_light.is_none();
+        let (world_from_object, world_from_object_end) = if moving {
+            (start, Some(end))
+        } else {
+            (self.ctm_static(&t.loc, "Shape"), None)
+        };
         let mut area_light = self.gs.area_light;
         if area_light.is_some() && self.active_object.is_some() {
             self.warn(
@@ -1291,6 +1310,7 @@ impl<'a> Builder<'a> {
                 params: Arc::new(params),
                 geometry,
                 world_from_object,
+                world_from_object_end,
                 reverse_orientation: self.gs.reverse_orientation,
                 material: 0,
                 area_light,

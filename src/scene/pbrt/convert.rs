@@ -49,11 +49,12 @@ use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
+use crate::scene::motion::Motion;
 use crate::scene::FilmCrop;
 use crate::scene::{
     Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
 };
-use crate::scene::{CurveDesc, DiskDesc};
+use crate::scene::{CurveDesc, DiskDesc, MovingTriangles};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -178,9 +179,11 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         dropped_light_triangles: 0,
         black_emitters: 0,
         imaging_ratio: 1.0,
+        shutter: [0.0, 1.0],
     };
     let (camera, mirror, crop) = c.camera()?;
     let mut desc = SceneDesc::empty(&name, camera);
+    desc.shutter = c.shutter;
     desc.settings = c.settings()?;
     c.lights(&mut desc)?;
     c.shapes(&mut desc)?;
@@ -278,6 +281,8 @@ struct Conv<'a> {
     scene: &'a PbrtScene,
     /// pbrt-v4's `exposureTime * ISO / 100`: what the film multiplies radiance by.
     imaging_ratio: f32,
+    /// The camera's `shutteropen` and `shutterclose`.
+    shutter: [f32; 2],
     problems: Vec<Problem>,
     warnings: Vec<String>,
     /// pbrt material index -> this scene's material index.
@@ -573,6 +578,7 @@ impl<'a> Conv<'a> {
             ));
         }
         self.imaging_ratio = exposure_time * iso / 100.0;
+        self.shutter = [open, close];
         self.read.push(cp);
 
         // pbrt's camera axes in world space.
@@ -1328,6 +1334,29 @@ impl<'a> Conv<'a> {
         Ok(index)
     }
 
+    /// Marks the triangles from `first` on, just added for `shape`, as
+    /// moving from `start` to `end` over the transformation times; a motion
+    /// that cannot be rendered is a problem at the shape, and the triangles
+    /// then hold still at the start.
+    fn moving(&mut self, desc: &mut SceneDesc, shape: &Shape, first: usize, start: Mat4, end: Mat4, alpha: bool) {
+        if alpha {
+            let why = "an \"alpha\" cut-out on a moving shape (ActiveTransform) is not supported; --lenient uses the start transformation";
+            self.problem(Kind::Shape, &shape.loc, why);
+            return;
+        }
+        match Motion::new(start, end, self.scene.transform_times) {
+            Ok(motion) => desc.moving.push(MovingTriangles {
+                triangles: first..desc.triangles.len(),
+                motion,
+            }),
+            Err(why) => self.problem(
+                Kind::Shape,
+                &shape.loc,
+                format!("a moving shape (ActiveTransform): {why}; --lenient uses the start transformation"),
+            ),
+        }
+    }
+
     fn shapes(&mut self, desc: &mut SceneDesc) -> Result<()> {
         let scene = self.scene;
         for shape in &scene.shapes {
@@ -1398,6 +1427,17 @@ impl<'a> Conv<'a> {
                 }
             }
             let m = shape.world_from_object;
+            let alpha_given = alpha.is_some();
+            if shape.world_from_object_end.is_some() && !matches!(shape.geometry, Geometry::Mesh(_)) {
+                self.problem(
+                    Kind::Shape,
+                    &shape.loc,
+                    format!(
+                        "a moving \"{}\" (ActiveTransform) is not supported, only moving meshes; --lenient uses the start transformation",
+                        shape.ty
+                    ),
+                );
+            }
             match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     let world: Vec<Vec3> = mesh.positions.iter().map(|&v| m.project_point3(v)).collect();
@@ -1478,6 +1518,9 @@ impl<'a> Conv<'a> {
                         if let Some(alpha) = alpha {
                             let shapes = CutShapes::Triangles(first..desc.triangles.len());
                             desc.cutouts.push(Cutout { alpha, shapes });
+                        }
+                        if let Some(end) = shape.world_from_object_end {
+                            self.moving(desc, shape, first, m, end, alpha_given);
                         }
                     }
                 }
@@ -3050,6 +3093,9 @@ fn reflect(desc: &mut SceneDesc) {
         vector(Vec3::Z).extend(0.0),
         point(Vec3::ZERO).extend(1.0),
     );
+    for m in &mut desc.moving {
+        m.motion = m.motion.mirrored(r);
+    }
     for (_, m) in &mut desc.media {
         if let Some(g) = &m.density {
             m.density = Some(std::sync::Arc::new(g.reflected(r)));

@@ -246,6 +246,9 @@ pub struct Shape {
     /// Object to world: for an instanced shape, the transformation at the
     /// `ObjectInstance` times the one at the `Shape` inside `ObjectBegin`.
     pub world_from_object: Mat4,
+    /// Object to world at the end of the transformation times, for a shape
+    /// that moves (`ActiveTransform`); `None` for one that holds still.
+    pub world_from_object_end: Option<Mat4>,
     /// `ReverseOrientation` in force at the shape.
     pub reverse_orientation: bool,
     /// Index into `PbrtScene::materials`.
@@ -319,6 +322,8 @@ pub struct PbrtScene {
     /// (`ActiveTransform`), displacement. Whether they are errors is the
     /// converter's decision.
     pub unsupported: Vec<Note>,
+    /// `TransformTimes`: the times of the start and end transformations.
+    pub transform_times: [f32; 2],
     /// Every file read: the scene, its Includes and Imports, its meshes.
     pub files: Vec<PathBuf>,
     /// The folder of the top-level scene file (pbrt-v4's search directory).

@@ -528,12 +528,29 @@ fn motion_is_noted_and_transform_blocks_work_as_attribute_blocks() {
         "WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\nShape \"sphere\"\n\
          TransformBegin\nActiveTransform StartTime\nTranslate 0 1 0\nTransformEnd\nShape \"disk\"\n",
     );
-    // The start transformation is used; the motion is listed.
+    // Both shapes move from the start transformation to the end one (the
+    // transform block restores both); the converter decides what moves.
+    let end = Mat4::from_translation(Vec3::new(1.0, 0.0, 0.0));
+    for shape in &s.shapes {
+        assert_mat(shape.world_from_object, Mat4::IDENTITY);
+        assert_mat(shape.world_from_object_end.unwrap(), end);
+    }
+    assert!(s.unsupported.is_empty());
+    // A moving area light is noted, at its start transformation.
+    let s = parse(
+        "WorldBegin\nAttributeBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
+         AreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\nShape \"sphere\"\n",
+    );
     assert_mat(s.shapes[0].world_from_object, Mat4::IDENTITY);
-    assert_mat(s.shapes[1].world_from_object, Mat4::IDENTITY);
+    assert!(s.shapes[0].world_from_object_end.is_none() && s.shapes[1].world_from_object_end.is_none());
     let lines: Vec<_> = s.unsupported.iter().map(|n| n.loc.line).collect();
-    assert_eq!(lines, [5, 10]);
+    assert_eq!(lines, [7]);
     assert!(s.unsupported[0].message.contains("animated transformation"));
+    assert_eq!(parse("TransformTimes 0.5 2\nWorldBegin\n").transform_times, [0.5, 2.0]);
+    error(
+        "TransformTimes 1 1\n",
+        "scene/main.pbrt:1:1: TransformTimes 1 1: the times must be finite and increasing",
+    );
     error(
         "ActiveTransform Sometimes\n",
         "scene/main.pbrt:1:17: ActiveTransform: expected All, StartTime or EndTime",
@@ -1658,7 +1675,8 @@ fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
 fn a_file_included_twice_lists_each_unsupported_place_once() {
     let files = Files::default().with(
         "scene/s.pbrt",
-        "Shape \"sphere\" \"float zmax\" 0.5\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
+        "Shape \"sphere\" \"float zmax\" 0.5\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
+         Shape \"disk\"\n",
     );
     // Moving shapes: two problems on each line of s.pbrt.
     let e = converted(
@@ -1670,7 +1688,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
     .unwrap_err();
     assert_eq!(e.matches("a partial sphere").count(), 1, "{e}");
     assert_eq!(e.matches("\"ribbon\" curves").count(), 1, "{e}");
-    assert_eq!(e.matches("ActiveTransform").count(), 2, "{e}");
+    assert_eq!(e.matches("a moving \"disk\" (ActiveTransform)").count(), 1, "{e}");
 }
 
 #[test]
