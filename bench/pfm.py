@@ -16,3 +16,20 @@ def load(path):
         row = h - 1 - y
         pixels.extend(d[3 * (row * w + x):3 * (row * w + x) + 3] for x in range(w))
     return w, h, pixels
+
+
+def write_png(path, w, h, images):
+    """Writes images of w x h pixels (as `load` gives them) side by side to
+    an sRGB PNG."""
+    import zlib
+
+    def srgb(x):
+        x = min(max(x, 0.0), 1.0)
+        return int((12.92 * x if x <= 0.0031308 else 1.055 * x ** (1 / 2.4) - 0.055) * 255 + 0.5)
+
+    rows = b"".join(b"\0" + bytes(srgb(v) for img in images for x in range(w) for v in img[y * w + x])
+                    for y in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", len(images) * w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))

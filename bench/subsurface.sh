@@ -166,9 +166,9 @@ start=$(date +%s.%N)
 echo "bunny: ours $(echo "$(date +%s.%N) - $start" | bc) s"
 "$bin" compare "$out/bunny-ours.pfm" "$out/bunny-pbrt.pfm" --max-luminance 4
 python3 - "$out" "${PNG_OUT:-}" <<'PY'
-import struct, sys, zlib
+import sys
 sys.path.insert(0, "bench")
-from pfm import load
+from pfm import load, write_png
 out, png = sys.argv[1], sys.argv[2]
 w, h, ours = load(f"{out}/bunny-ours.pfm")
 _, _, pbrt = load(f"{out}/bunny-pbrt.pfm")
@@ -177,15 +177,7 @@ a = [sum(ours[i][c] for i in sel) / len(sel) for c in range(3)]
 b = [sum(pbrt[i][c] for i in sel) / len(sel) for c in range(3)]
 print(f"bunny ({len(sel)} pixels): ours / pbrt-v4 R G B " + " ".join(f"{x / y:.3f}" for x, y in zip(a, b)))
 if png:
-    def srgb(x):
-        x = min(max(x, 0.0), 1.0)
-        return int((12.92 * x if x <= 0.0031308 else 1.055 * x ** (1 / 2.4) - 0.055) * 255 + 0.5)
-    rows = b"".join(b"\0" + bytes(srgb(v) for img in (ours, pbrt) for x in range(w) for v in img[y * w + x])
-                    for y in range(h))
-    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
-    with open(png, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2 * w, h, 8, 2, 0, 0, 0))
-                + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))
+    write_png(png, w, h, (ours, pbrt))
     print(f"wrote {png}")
 PY
 

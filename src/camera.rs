@@ -83,6 +83,8 @@ pub struct Camera {
     /// (`None` otherwise: camera rays are then all at time 0 and draw no
     /// sample for their time).
     pub shutter: Option<[f32; 2]>,
+    /// The camera's motion over the shutter, from where it is placed.
+    pub motion: Option<crate::geometry::motion::Motion>,
 }
 
 impl Camera {
@@ -112,6 +114,7 @@ impl Camera {
             width,
             height,
             shutter: None,
+            motion: None,
         })
     }
 

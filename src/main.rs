@@ -410,6 +410,21 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
             count(&mut scene.desc.cutouts.iter().map(|c| &c.shapes))
         );
     }
+    if scene.has_motion() {
+        let d = &scene.desc;
+        let triangles: usize = d.moving.iter().map(|m| m.triangles.len()).sum();
+        println!(
+            "moving: {} meshes ({triangles} triangles){}, shutter open from {} to {}",
+            d.moving.len(),
+            if d.camera_motion.is_some() {
+                " and the camera"
+            } else {
+                ""
+            },
+            d.shutter[0],
+            d.shutter[1]
+        );
+    }
     for (name, m) in &scene.desc.media {
         let glow = m
             .emission

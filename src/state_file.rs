@@ -226,7 +226,11 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(format!("{:?} {:?} {:?}", desc.media, desc.camera_medium, desc.boundaries).as_bytes());
     }
     // Motion came later still: hashed only when something moves.
-    if !desc.moving.is_empty() {
+    if let Some(m) = &desc.camera_motion {
+        h.bytes(b"camera motion");
+        h.bytes(format!("{m:?}").as_bytes());
+    }
+    if !desc.moving.is_empty() || desc.camera_motion.is_some() {
         h.bytes(b"moving");
         for m in &desc.moving {
             h.u32(m.triangles.start as u32);

@@ -1,9 +1,11 @@
 //! Shapes and the acceleration structures: triangles, spheres, disks,
-//! curves, the triangle BVH and the BVH over the other shapes' boxes.
+//! curves, the triangle BVH and the BVH over the other shapes' boxes, and
+//! the motion of shapes that move while the shutter is open.
 
 pub mod bvh;
 pub mod curve;
 pub mod disk;
+pub mod motion;
 pub mod sphere;
 pub mod subdivision;
 pub mod triangle;

@@ -504,12 +504,20 @@ pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler)
     };
     // Its time, uniform over the shutter's, when anything moves: the request
     // after the lens's, so that still scenes draw the samples they drew.
-    match cam.shutter {
-        Some([open, close]) => Ray {
-            time: open + (close - open) * sampler.next_f32(),
-            ..ray
-        },
-        None => ray,
+    let Some([open, close]) = cam.shutter else {
+        return ray;
+    };
+    let time = open + (close - open) * sampler.next_f32();
+    match &cam.motion {
+        Some(m) => {
+            let to = m.relative(time);
+            Ray::timed(
+                to.transform_point3(ray.o),
+                to.transform_vector3(ray.d).normalize(),
+                time,
+            )
+        }
+        None => Ray { time, ..ray },
     }
 }
 

@@ -5,7 +5,6 @@
 pub mod builtin;
 pub mod file;
 pub mod mesh;
-pub mod motion;
 pub mod pbrt;
 pub mod transform;
 
@@ -14,6 +13,7 @@ use crate::camera::Camera;
 use crate::camera::{Differentials, PixelFootprint};
 use crate::error::{Error, Result};
 use crate::geometry::curve::CurveHit;
+pub use crate::geometry::motion;
 use crate::geometry::triangle::TriHit;
 use crate::geometry::{BoxBvh, Bvh, Curve, Disk, Sphere, Triangle};
 use crate::light::Light;
@@ -382,6 +382,8 @@ pub struct SceneDesc {
     /// The times the shutter opens and closes: camera rays' times are
     /// uniform between them when anything moves.
     pub shutter: [f32; 2],
+    /// The camera's motion, from where `camera` places it.
+    pub camera_motion: Option<motion::Motion>,
 }
 
 /// Triangles `triangles` of a scene, moving by `motion`.
@@ -411,6 +413,7 @@ impl SceneDesc {
             texture_spp: 64,
             moving: vec![],
             shutter: [0.0, 1.0],
+            camera_motion: None,
         }
     }
 
@@ -870,7 +873,7 @@ impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
         let mut camera = c.camera().ok_or_else(|| Error::Scene(c.problem()))?;
-        if !desc.moving.is_empty() {
+        if !desc.moving.is_empty() || desc.camera_motion.is_some() {
             let [open, close] = desc.shutter;
             if !(open.is_finite() && close.is_finite() && open <= close) {
                 return Err(Error::Scene(format!(
@@ -878,6 +881,7 @@ impl Scene {
                 )));
             }
             camera.shutter = Some(desc.shutter);
+            camera.motion = desc.camera_motion.clone();
             // Their light samples see the scene at time 0 (`transmittance`).
             if !desc.media.is_empty() || desc.materials.iter().any(|(_, m)| m.has_subsurface()) {
                 return Err(Error::Scene(
@@ -1758,9 +1762,9 @@ impl Scene {
         self.any_subsurface
     }
 
-    /// Whether any shape moves while the shutter is open.
+    /// Whether any shape, or the camera, moves while the shutter is open.
     pub fn has_motion(&self) -> bool {
-        !self.movers.is_empty()
+        self.camera.shutter.is_some()
     }
 
     /// The media on the two sides of the surface a hit is on, when it
@@ -2313,6 +2317,21 @@ mod offset_tests {
     }
 }
 
+/// A quad of side `size` at height `z` centred over (0.5, 0.5), its
+/// texture coordinates its x and y over [0, 1]^2 when `size` is 1, as two
+/// triangles of material `m`.
+#[cfg(test)]
+fn test_quad(m: u32, z: f32, size: f32) -> [TriangleDesc; 2] {
+    let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec2::new(x, y));
+    let v = c.map(|c| ((c - Vec2::splat(0.5)) * size + Vec2::splat(0.5)).extend(z));
+    [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
+        vertices: t.map(|i| v[i]),
+        normals: None,
+        uvs: Some(t.map(|i| c[i])),
+        material: m,
+    })
+}
+
 #[cfg(test)]
 mod cutout_tests {
     use super::*;
@@ -2324,16 +2343,7 @@ mod cutout_tests {
     fn scene_with(alpha: Texture, add: impl FnOnce(&mut SceneDesc)) -> Scene {
         let mut d = SceneDesc::empty("cut-outs", builtin::cornell().camera);
         let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
-        let quad = |z: f32, size: f32| {
-            let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec2::new(x, y));
-            let v = c.map(|c| ((c - Vec2::splat(0.5)) * size + Vec2::splat(0.5)).extend(z));
-            [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
-                vertices: t.map(|i| v[i]),
-                normals: None,
-                uvs: Some(t.map(|i| c[i])),
-                material: m,
-            })
-        };
+        let quad = |z: f32, size: f32| test_quad(m, z, size);
         d.triangles.extend(quad(0.0, 1.0));
         d.triangles.extend(quad(-1.0, 10.0));
         d.cutouts.push(Cutout {
@@ -2455,16 +2465,7 @@ mod motion_tests {
     fn scene_with(end: Mat4) -> Scene {
         let mut d = SceneDesc::empty("moving", builtin::cornell().camera);
         let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
-        let quad = |z: f32, size: f32| {
-            let c = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(x, y)| Vec2::new(x, y));
-            let v = c.map(|c| ((c - Vec2::splat(0.5)) * size + Vec2::splat(0.5)).extend(z));
-            [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
-                vertices: t.map(|i| v[i]),
-                normals: None,
-                uvs: Some(t.map(|i| c[i])),
-                material: m,
-            })
-        };
+        let quad = |z: f32, size: f32| test_quad(m, z, size);
         d.triangles.extend(quad(-1.0, 10.0));
         d.triangles.extend(quad(0.0, 1.0));
         d.moving.push(MovingTriangles {

@@ -35,6 +35,17 @@ fn raytracer(args: &[&str]) -> std::process::Output {
         .expect("the binary runs")
 }
 
+/// The image the binary renders of `scene` with `extra` options (quietly).
+fn render_to_image(scene: &Path, extra: &[&str]) -> Film {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.pfm");
+    let mut args = vec!["--scene", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = raytracer(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    read_image(&out).unwrap()
+}
+
 /// Box-averages `img` down by an integer factor.
 fn downsample(img: &Film, width: u32, height: u32) -> Film {
     let (fx, fy) = (img.width / width, img.height / height);
@@ -494,22 +505,7 @@ fn floor_under_disk(light: &str, pre: &str) -> f64 {
         ),
     )
     .unwrap();
-    let out = dir.path().join("out.pfm");
-    let o = raytracer(&[
-        "--scene",
-        p.to_str().unwrap(),
-        "--integrator",
-        "path",
-        "--max-depth",
-        "1",
-        "--spp",
-        "256",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let img = read_image(&out).unwrap();
+    let img = render_to_image(&p, &["--integrator", "path", "--max-depth", "1", "--spp", "256"]);
     img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
 }
 
@@ -1028,36 +1024,31 @@ fn subsurface_scenes_say_which_integrators_leave_their_insides_out() {
     );
 }
 
-/// Row 0 of a render of a black unit square moving one unit along x over
-/// the transformation times [0, 1], in front of a white sky, seen by an
-/// orthographic camera whose 60 columns span x from -1 to 2.
-fn moving_square_row(camera: &str) -> Vec<f64> {
+/// Row 0 of a render of a black unit square before a white sky, seen by
+/// an orthographic camera whose 60 columns span x from -1 to 2: the square
+/// moves one unit along x over the transformation times [0, 1], or with
+/// `camera_moves` the camera does.
+fn moving_square_row(camera: &str, camera_moves: bool) -> Vec<f64> {
+    let (camera_motion, square_motion) = if camera_moves {
+        // Before LookAt, in camera space: the camera's x is the world's.
+        ("ActiveTransform EndTime\nTranslate -1 0 0\nActiveTransform All\n", "")
+    } else {
+        ("", "ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n")
+    };
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("moving.pbrt");
     std::fs::write(
         &p,
         format!(
-            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ] {camera}\n\
+            "{camera_motion}LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ] {camera}\n\
              Film \"rgb\" \"integer xresolution\" [ 60 ] \"integer yresolution\" [ 2 ]\n\
              PixelFilter \"box\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n\
-             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
-             ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
+             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n{square_motion}\
              Shape \"bilinearmesh\" \"point3 P\" [ -0.5 -0.5 0  0.5 -0.5 0  -0.5 0.5 0  0.5 0.5 0 ]\nAttributeEnd\n"
         ),
     )
     .unwrap();
-    let out = dir.path().join("out.pfm");
-    let o = raytracer(&[
-        "--scene",
-        p.to_str().unwrap(),
-        "--spp",
-        "256",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let img = read_image(&out).unwrap();
+    let img = render_to_image(&p, &["--spp", "256"]);
     (0..60).map(|x| luminance(img.get(x, 0)) as f64).collect()
 }
 
@@ -1066,10 +1057,17 @@ fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
     // The square covers x from time x - 0.5 to x + 0.5: the sky shows for
     // the rest of the shutter's time. A shutter closing at 0.5 sees the
     // first half of the motion, and pbrt-v4's film takes half the light.
-    for (camera, close, scale) in [("", 1.0, 1.0), ("\"float shutterclose\" 0.5", 0.5, 0.5)] {
-        let row = moving_square_row(camera);
+    // A camera moving the other way sees the same, mirrored.
+    for (camera, close, scale, camera_moves) in [
+        ("", 1.0, 1.0, false),
+        ("\"float shutterclose\" 0.5", 0.5, 0.5, false),
+        ("", 1.0, 1.0, true),
+        ("\"float shutterclose\" 0.5", 0.5, 0.5, true),
+    ] {
+        let row = moving_square_row(camera, camera_moves);
         for (i, &v) in row.iter().enumerate() {
-            let x = -1.0 + (i as f64 + 0.5) * 0.05;
+            let column = -1.0 + (i as f64 + 0.5) * 0.05;
+            let x = if camera_moves { -column } else { column };
             // Pixels over a kink of the coverage average it away.
             if [-0.5, 0.5, 1.5].iter().any(|k: &f64| (x - k).abs() < 0.03) {
                 continue;
@@ -1078,7 +1076,7 @@ fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
             let expected = scale * (1.0 - covered);
             assert!(
                 (v - expected).abs() < 0.03,
-                "{camera}: column {i} (x {x:.3}): {v} vs {expected}"
+                "{camera} (camera moves: {camera_moves}): column {i} (x {x:.3}): {v} vs {expected}"
             );
         }
     }

@@ -45,6 +45,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         texture_spp: 64,
         moving: vec![],
         shutter: [0.0, 1.0],
+        camera_motion: None,
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));
     let s = 10.0;

@@ -59,6 +59,7 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
         texture_spp: 64,
         moving: vec![],
         shutter: [0.0, 1.0],
+        camera_motion: None,
     };
     let mirror = d.material("mirror", Material::mirror(Vec3::ONE));
     let wall = d.material("wall", Material::diffuse(albedo.x, albedo.y, albedo.z));
@@ -128,6 +129,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
         texture_spp: 64,
         moving: vec![],
         shutter: [0.0, 1.0],
+        camera_motion: None,
     };
     let reflectance = Vec3::new(0.5, 0.8, 1.0);
     let mirror = d.material("mirror", Material::mirror(reflectance));

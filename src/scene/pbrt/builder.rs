@@ -103,7 +103,7 @@ struct PendingShape {
 #[derive(Debug)]
 enum Item {
     Shape(Box<PendingShape>),
-    Instance { name: String, ctm: Mat4, loc: Loc },
+    Instance { name: String, ctm: Ctm, loc: Loc },
 }
 
 struct ObjectDef {
@@ -252,6 +252,7 @@ impl<'a> Builder<'a> {
                     loc: None,
                     camera_from_world: Mat4::IDENTITY,
                     world_from_camera: Mat4::IDENTITY,
+                    world_from_camera_end: None,
                     medium: None,
                 },
                 film: identity_entity("rgb"),
@@ -949,14 +950,14 @@ impl<'a> Builder<'a> {
                         "Camera: the current transformation is not invertible",
                     ));
                 };
-                let camera_from_world = self.ctm_static(&t.loc, "Camera");
                 self.named_coordinate_systems.insert("camera".into(), [inv0, inv1]);
                 self.scene.camera = Camera {
                     ty,
                     params: Params::new(params),
                     loc: Some(t.loc.clone()),
-                    camera_from_world,
+                    camera_from_world: from0,
                     world_from_camera: inv0,
+                    world_from_camera_end: (from0 != from1).then_some(inv1),
                     medium: self.gs.outside_medium.clone(),
                 };
             }
@@ -1235,7 +1236,8 @@ impl<'a> Builder<'a> {
                         format!("ObjectInstance inside the definition of \"{}\"", def.name),
                     ));
                 }
-                let ctm = self.ctm_static(&t.loc, "ObjectInstance");
+                // A moving instance moves its shapes (flattened).
+                let ctm = self.gs.ctm;
                 self.items.push(Item::Instance {
                     name,
                     ctm,
@@ -1291,8 +1293,8 @@ impl<'a> Builder<'a> {
         // that moves.
         let [start, end] = self.gs.ctm;
         let moving = start != end && self.active_object.is_none() && self.gs.area_light.is_none();
-        let (world_from_object, world_from_object_end) = if moving {
-            (start, Some(end))
+        let (world_from_object, motion) = if moving {
+            (start, Some([start, end]))
         } else {
             (self.ctm_static(&t.loc, "Shape"), None)
         };
@@ -1310,7 +1312,7 @@ impl<'a> Builder<'a> {
                 params: Arc::new(params),
                 geometry,
                 world_from_object,
-                world_from_object_end,
+                motion,
                 reverse_orientation: self.gs.reverse_orientation,
                 material: 0,
                 area_light,
@@ -1419,7 +1421,9 @@ impl<'a> Builder<'a> {
                     for p in def.iter() {
                         let mut s = p.shape.clone();
                         s.material = self.resolve_material(&p.material, &s.loc)?;
-                        s.world_from_object = ctm * s.world_from_object;
+                        let [start, end] = ctm;
+                        s.motion = (start != end).then_some(ctm);
+                        s.world_from_object = start * s.world_from_object;
                         s.instance = Some(InstanceUse {
                             object: name.clone(),
                             loc: loc.clone(),

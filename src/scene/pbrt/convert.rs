@@ -43,13 +43,13 @@ use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::bsdf::HairBxdf;
 use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
+use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
 use crate::light::Light;
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
-use crate::scene::motion::Motion;
 use crate::scene::FilmCrop;
 use crate::scene::{
     Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
@@ -184,6 +184,19 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
     let (camera, mirror, crop) = c.camera()?;
     let mut desc = SceneDesc::empty(&name, camera);
     desc.shutter = c.shutter;
+    if let Some(end) = scene.camera.world_from_camera_end {
+        match Motion::new(scene.camera.world_from_camera, end, scene.transform_times) {
+            Ok(m) => desc.camera_motion = Some(m),
+            Err(why) => {
+                let at = scene.camera.loc.clone().unwrap_or_else(|| c.default_loc());
+                c.problem(
+                    Kind::Other,
+                    &at,
+                    format!("a moving camera (ActiveTransform): {why}; --lenient uses the start transformation"),
+                );
+            }
+        }
+    }
     desc.settings = c.settings()?;
     c.lights(&mut desc)?;
     c.shapes(&mut desc)?;
@@ -1335,7 +1348,8 @@ impl<'a> Conv<'a> {
     }
 
     /// Marks the triangles from `first` on, just added for `shape`, as
-    /// moving from `start` to `end` over the transformation times; a motion
+    /// moving as the transformation interpolated from `start` to `end` over
+    /// the transformation times moves what it places; a motion
     /// that cannot be rendered is a problem at the shape, and the triangles
     /// then hold still at the start.
     fn moving(&mut self, desc: &mut SceneDesc, shape: &Shape, first: usize, start: Mat4, end: Mat4, alpha: bool) {
@@ -1428,7 +1442,7 @@ impl<'a> Conv<'a> {
             }
             let m = shape.world_from_object;
             let alpha_given = alpha.is_some();
-            if shape.world_from_object_end.is_some() && !matches!(shape.geometry, Geometry::Mesh(_)) {
+            if shape.motion.is_some() && !matches!(shape.geometry, Geometry::Mesh(_)) {
                 self.problem(
                     Kind::Shape,
                     &shape.loc,
@@ -1519,8 +1533,8 @@ impl<'a> Conv<'a> {
                             let shapes = CutShapes::Triangles(first..desc.triangles.len());
                             desc.cutouts.push(Cutout { alpha, shapes });
                         }
-                        if let Some(end) = shape.world_from_object_end {
-                            self.moving(desc, shape, first, m, end, alpha_given);
+                        if let Some([start, end]) = shape.motion {
+                            self.moving(desc, shape, first, start, end, alpha_given);
                         }
                     }
                 }
@@ -3096,6 +3110,7 @@ fn reflect(desc: &mut SceneDesc) {
     for m in &mut desc.moving {
         m.motion = m.motion.mirrored(r);
     }
+    desc.camera_motion = desc.camera_motion.as_ref().map(|m| m.mirrored(r));
     for (_, m) in &mut desc.media {
         if let Some(g) = &m.density {
             m.density = Some(std::sync::Arc::new(g.reflected(r)));

@@ -46,6 +46,9 @@ pub struct Camera {
     pub loc: Option<Loc>,
     pub camera_from_world: Mat4,
     pub world_from_camera: Mat4,
+    /// Camera to world at the end of the transformation times, for a camera
+    /// that moves (`ActiveTransform`).
+    pub world_from_camera_end: Option<Mat4>,
     /// The outside medium of `MediumInterface` at the `Camera` directive.
     pub medium: Option<String>,
 }
@@ -246,9 +249,12 @@ pub struct Shape {
     /// Object to world: for an instanced shape, the transformation at the
     /// `ObjectInstance` times the one at the `Shape` inside `ObjectBegin`.
     pub world_from_object: Mat4,
-    /// Object to world at the end of the transformation times, for a shape
-    /// that moves (`ActiveTransform`); `None` for one that holds still.
-    pub world_from_object_end: Option<Mat4>,
+    /// For a shape that moves (`ActiveTransform`), the transformations at
+    /// the start and end of the transformation times that are interpolated
+    /// (pbrt-v4's `AnimatedTransform`): the shape's own, or the moving
+    /// `ObjectInstance`'s, whose shapes keep their transformation within it.
+    /// `None` for a shape that holds still.
+    pub motion: Option<[Mat4; 2]>,
     /// `ReverseOrientation` in force at the shape.
     pub reverse_orientation: bool,
     /// Index into `PbrtScene::materials`.

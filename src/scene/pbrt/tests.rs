@@ -533,7 +533,9 @@ fn motion_is_noted_and_transform_blocks_work_as_attribute_blocks() {
     let end = Mat4::from_translation(Vec3::new(1.0, 0.0, 0.0));
     for shape in &s.shapes {
         assert_mat(shape.world_from_object, Mat4::IDENTITY);
-        assert_mat(shape.world_from_object_end.unwrap(), end);
+        let [a, b] = shape.motion.unwrap();
+        assert_mat(a, Mat4::IDENTITY);
+        assert_mat(b, end);
     }
     assert!(s.unsupported.is_empty());
     // A moving area light is noted, at its start transformation.
@@ -542,11 +544,27 @@ fn motion_is_noted_and_transform_blocks_work_as_attribute_blocks() {
          AreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\nShape \"sphere\"\n",
     );
     assert_mat(s.shapes[0].world_from_object, Mat4::IDENTITY);
-    assert!(s.shapes[0].world_from_object_end.is_none() && s.shapes[1].world_from_object_end.is_none());
+    assert!(s.shapes[0].motion.is_none() && s.shapes[1].motion.is_none());
     let lines: Vec<_> = s.unsupported.iter().map(|n| n.loc.line).collect();
     assert_eq!(lines, [7]);
     assert!(s.unsupported[0].message.contains("animated transformation"));
     assert_eq!(parse("TransformTimes 0.5 2\nWorldBegin\n").transform_times, [0.5, 2.0]);
+    // A moving instance: its shapes start where its start transformation
+    // puts them, and move as its own transformation is interpolated (the
+    // shape's within the definition stays out of the interpolation).
+    let s = parse(
+        "WorldBegin\nObjectBegin \"o\"\nScale 2 1 1\nShape \"sphere\"\nObjectEnd\n\
+         Translate 0 1 0\nActiveTransform EndTime\nRotate 90 0 0 1\nActiveTransform All\nObjectInstance \"o\"\n",
+    );
+    let t = Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0));
+    let r = Mat4::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    assert_mat(
+        s.shapes[0].world_from_object,
+        t * Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0)),
+    );
+    let [a, b] = s.shapes[0].motion.unwrap();
+    assert_mat(a, t);
+    assert_mat(b, t * r);
     error(
         "TransformTimes 1 1\n",
         "scene/main.pbrt:1:1: TransformTimes 1 1: the times must be finite and increasing",

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Motion blur against pbrt-v4 itself: bench/scenes/motion-blur.pbrt (a cube
+# sliding, a gold one turning about its axis, one flying forward while it
+# grows and tips, under a sphere light; pbrt-v4's ActiveTransform) rendered
+# by both at the file's size and sample count with the path tracer, and
+# compared: relative MSE and mean luminance ratio, ours over pbrt-v4's.
+# Then bench/scenes/motion-blur-camera.pbrt: the same seen by a camera that
+# turns and slides, and an instanced cube moving by its ObjectInstance.
+# PNG_OUT=file.png writes the first pair side by side (ours left).
+#
+# Usage: PBRT=path/to/pbrt [PNG_OUT=docs/motion-blur.png] bench/motion-blur.sh
+#   (pbrt-v4 built as ../shared/tools/pbrt-v4/ says). Renders are left in
+#   target/motion-blur/.
+set -euo pipefail
+: "${PBRT:?set PBRT to a pbrt-v4 binary}"
+cd "$(dirname "$0")/.."
+cargo build --release --quiet --bin raytracer
+bin=target/release/raytracer
+out=target/motion-blur
+mkdir -p "$out"
+# The camera scene twice for pbrt-v4: in its default rendering space, then in
+# world space (see docs/pbrt.md, ActiveTransform: it interpolates a moving
+# instance in its rendering space).
+for run in "motion-blur" "motion-blur-camera" "motion-blur-camera --render-coord-sys world"; do
+    set -- $run
+    name=$1
+    shift
+    scene=bench/scenes/$name.pbrt
+    start=$(date +%s.%N)
+    "$PBRT" --quiet --nthreads 2 "$@" --outfile "$out/$name-pbrt.pfm" "$scene"
+    echo "$run: pbrt-v4 $(echo "$(date +%s.%N) - $start" | bc) s"
+    if [ $# -eq 0 ]; then
+        start=$(date +%s.%N)
+        "$bin" -q --threads 2 --scene "$scene" -o "$out/$name-ours.pfm"
+        echo "$name: ours $(echo "$(date +%s.%N) - $start" | bc) s"
+    fi
+    "$bin" compare "$out/$name-ours.pfm" "$out/$name-pbrt.pfm" --max-luminance 4
+done
+# Both renderers' noise: pbrt-v4 against itself with another seed.
+"$PBRT" --quiet --nthreads 2 --seed 2 --outfile "$out/motion-blur-pbrt-seed2.pfm" bench/scenes/motion-blur.pbrt
+echo "motion-blur: pbrt-v4 seed 2 against seed 0"
+"$bin" compare "$out/motion-blur-pbrt-seed2.pfm" "$out/motion-blur-pbrt.pfm" --max-luminance 4
+if [ -n "${PNG_OUT:-}" ]; then
+    python3 - "$out" "$PNG_OUT" <<'PY'
+import sys
+sys.path.insert(0, "bench")
+from pfm import load, write_png
+out, png = sys.argv[1], sys.argv[2]
+w, h, ours = load(f"{out}/motion-blur-ours.pfm")
+_, _, pbrt = load(f"{out}/motion-blur-pbrt.pfm")
+write_png(png, w, h, (ours, pbrt))
+print(f"wrote {png}")
+PY
+fi
