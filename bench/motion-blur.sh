@@ -5,7 +5,8 @@
 # by both at the file's size and sample count with the path tracer, and
 # compared: relative MSE and mean luminance ratio, ours over pbrt-v4's.
 # Then bench/scenes/motion-blur-camera.pbrt: the same seen by a camera that
-# turns and slides, and an instanced cube moving by its ObjectInstance.
+# turns and slides, and an instanced cube moving by its ObjectInstance; our
+# photon mapper against our path tracer; pbrt-v4 against itself.
 # PNG_OUT=file.png writes the first pair side by side (ours left).
 #
 # Usage: PBRT=path/to/pbrt [PNG_OUT=docs/motion-blur.png] bench/motion-blur.sh
@@ -35,6 +36,16 @@ for run in "motion-blur" "motion-blur-camera" "motion-blur-camera --render-coord
         echo "$name: ours $(echo "$(date +%s.%N) - $start" | bc) s"
     fi
     "$bin" compare "$out/$name-ours.pfm" "$out/$name-pbrt.pfm" --max-luminance 4
+done
+# Our photon integrators against our path tracer's render of the first
+# scene: SPPM (a moment of the shutter a pass), the photon mapper (one map of
+# photons at times of their own over the shutter).
+for integrator in "sppm --passes 64 --photons 200000 --gather-radius 0.05" photon; do
+    set -- $integrator
+    start=$(date +%s.%N)
+    "$bin" -q --threads 2 --scene bench/scenes/motion-blur.pbrt --integrator "$@" -o "$out/motion-blur-$1.pfm"
+    echo "motion-blur: ours, $integrator, $(echo "$(date +%s.%N) - $start" | bc) s, against our path tracer"
+    "$bin" compare "$out/motion-blur-$1.pfm" "$out/motion-blur-ours.pfm" --max-luminance 4
 done
 # Both renderers' noise: pbrt-v4 against itself with another seed.
 "$PBRT" --quiet --nthreads 2 --seed 2 --outfile "$out/motion-blur-pbrt-seed2.pfm" bench/scenes/motion-blur.pbrt

@@ -320,3 +320,38 @@ AttributeBegin
   Shape "sphere" "float radius" 0.3
 AttributeEnd
 """)
+
+# Motion: a moving mesh, a moving instance, a moving camera and transform
+# times, and the refused kinds (a moving sphere, a moving area light).
+put("pbrt", "motion.pbrt", """TransformTimes 0.25 1.5
+ActiveTransform EndTime
+Rotate 3 0 1 0
+ActiveTransform All
+LookAt 0 1 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 40 ] "float shutteropen" 0.1 "float shutterclose" 1.2
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+Sampler "independent" "integer pixelsamples" [ 2 ]
+WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.5 0.5]
+AttributeBegin
+  ActiveTransform StartTime
+  Translate -1 0 0
+  ActiveTransform EndTime
+  Translate 1 0.5 0
+  Rotate 90 0 0 1
+  Scale 1 2 1
+  ActiveTransform All
+  Shape "trianglemesh" "integer indices" [ 0 1 2 2 3 0 ] "point3 P" [ -0.5 -0.5 0  0.5 -0.5 0  0.5 0.5 0  -0.5 0.5 0 ]
+AttributeEnd
+ObjectBegin "o"
+  Scale 0.5 1 1
+  Shape "bilinearmesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0 ]
+ObjectEnd
+AttributeBegin
+  ActiveTransform EndTime
+  Translate 0 -1 0
+  ActiveTransform All
+  ObjectInstance "o"
+  Shape "sphere" "float radius" 0.2
+AttributeEnd
+""")

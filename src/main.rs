@@ -177,15 +177,17 @@ fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quie
     }
 }
 
-/// Light paths (photons, bdpt's light subpaths) are traced at time 0: say
-/// so when such an integrator renders a scene that moves.
+/// Where the photon mapper's and bdpt's light paths fall short of motion
+/// blur, say so when they render a scene that moves.
 fn report_motion(scene: &Scene, integrator: integrator::IntegratorKind, quiet: bool) {
-    use integrator::IntegratorKind::{Direct, Path};
-    if !quiet && scene.has_motion() && !matches!(integrator, Path | Direct) {
-        eprintln!(
-            "warning: moving shapes are blurred over the shutter only by the path tracer (--integrator path) and --integrator direct; {}'s light paths see them where they are at time 0",
-            integrator.name()
-        );
+    use integrator::IntegratorKind::{Bdpt, Photon};
+    let why = match integrator {
+        Bdpt => "bdpt's light subpaths see moving shapes and the camera where they are at time 0",
+        Photon => "the photon map holds the light of the whole exposure, so near moving shapes its estimate is averaged over the shutter and comes out dark",
+        _ => return,
+    };
+    if !quiet && scene.has_motion() {
+        eprintln!("warning: {why}; the path tracer and sppm render motion blur in full");
     }
 }
 

@@ -63,6 +63,9 @@ pub fn place_and_build(mesh: &Mesh) {
         boundaries: vec![],
         settings: SceneSettings::default(),
         texture_spp: 64,
+        moving: vec![],
+        shutter: [0.0, 1.0],
+        camera_motion: None,
     };
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
     if mesh

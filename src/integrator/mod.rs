@@ -497,6 +497,12 @@ pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, 
 /// (after the pixel position, as pbrt-v4's camera sample); a pinhole takes
 /// none, so its images are what they were before lenses existed.
 pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> Ray {
+    camera_ray_at(cam, pos, sampler, None)
+}
+
+/// `camera_ray` at `time` where things move (`None`: a time drawn from
+/// `sampler`, uniform over the shutter).
+pub fn camera_ray_at(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler, time: Option<f32>) -> Ray {
     let ray = if cam.has_lens() {
         cam.generate_ray_through_lens(pos.x, pos.y, sampler.next_2d())
     } else {
@@ -507,7 +513,7 @@ pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler)
     let Some([open, close]) = cam.shutter else {
         return ray;
     };
-    let time = open + (close - open) * sampler.next_f32();
+    let time = time.unwrap_or_else(|| open + (close - open) * sampler.next_f32());
     match &cam.motion {
         Some(m) => {
             let to = m.relative(time);

@@ -212,7 +212,15 @@ impl checkpoint::Progressive for Progressive<'_> {
         let rw = rect.width();
         // Photon pass: its map is the same for any thread count.
         let start = std::time::Instant::now();
-        let traced = crate::photon::trace::trace(scene, &self.photon, pass_seed(settings.seed, pass));
+        // Where things move, a pass is one moment of the shutter, its camera
+        // rays and photons all at one time (pbrt-v4's SPPM: the radical
+        // inverse of the pass): photons then meet the surfaces the camera
+        // saw, where they were.
+        let time = scene
+            .camera
+            .shutter
+            .map(|[open, close]| open + (close - open) * (pass.reverse_bits() as f64 / 2f64.powi(32)) as f32);
+        let traced = crate::photon::trace::trace_at(scene, &self.photon, pass_seed(settings.seed, pass), time);
         let trace_seconds = start.elapsed().as_secs_f64();
         let (emitted, stored, photon_rays) = (traced.emitted, traced.photons.len(), traced.rays);
         let start = std::time::Instant::now();
@@ -238,7 +246,7 @@ impl checkpoint::Progressive for Progressive<'_> {
                         super::camera_sampler(settings.sampler, settings.seed, x, y, cam.width, settings.passes, pass);
                     let off = settings.filter.sample(sampler.next_2d());
                     let pos = crate::math::Vec2::new(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
-                    let ray = super::camera_ray(cam, pos, &mut sampler);
+                    let ray = super::camera_ray_at(cam, pos, &mut sampler, time);
                     st.camera_rays += 1;
                     if let Some(vp) = visible_point(scene, settings, ray, &mut sampler, &mut st, px) {
                         update(px, &vp, &map, admit, alpha);

@@ -74,6 +74,9 @@ struct Emitter {
     /// The largest emitted photon power, so that stored powers are at most ~1.
     unit: f32,
     n: u64,
+    /// The time every photon leaves at (an SPPM pass's); `None`: each its
+    /// own over the shutter, where things move.
+    time: Option<f32>,
 }
 
 impl Emitter {
@@ -98,6 +101,7 @@ impl Emitter {
             last,
             unit,
             n,
+            time: None,
         })
     }
 
@@ -113,7 +117,13 @@ impl Emitter {
         // An environment map's photons follow its luminance, not its colour:
         // each carries the flux of its own direction.
         let le = light.sample_le_flux(rng.next_2d(), rng.next_2d());
-        let ray = le.ray;
+        let mut ray = le.ray;
+        // Where things move, each photon leaves at a time of its own over
+        // the shutter (as pbrt-v4's SPPM sends them): the map holds the
+        // light of the whole exposure.
+        if let Some([open, close]) = scene.camera.shutter {
+            ray.time = self.time.unwrap_or_else(|| open + (close - open) * rng.next_f32());
+        }
         let power = le.flux / (self.n as f32 * self.weights[li] / self.total) / self.unit;
         (ray, power)
     }
@@ -235,7 +245,16 @@ fn gather_chunks(out: &mut PhotonTrace, chunks: Vec<Chunk>) {
 /// Traces `settings.photons` photons from the scene's lights into the global map.
 /// Photons are reflected and refracted by mirrors and glass, never stored there.
 pub fn trace(scene: &Scene, settings: &PhotonSettings, seed: u64) -> PhotonTrace {
+    trace_at(scene, settings, seed, None)
+}
+
+/// `trace` with every photon leaving at `time` where things move (`None`:
+/// each at a time of its own over the shutter).
+pub fn trace_at(scene: &Scene, settings: &PhotonSettings, seed: u64, time: Option<f32>) -> PhotonTrace {
     let mut t = ResumableTrace::new(scene, settings, seed);
+    if let Some(e) = &mut t.emitter {
+        e.time = time;
+    }
     t.run(scene, &|| false);
     t.finish()
 }
@@ -409,6 +428,65 @@ mod tests {
             store_first_hit: true,
             roulette,
             ..PhotonSettings::default()
+        }
+    }
+
+    #[test]
+    fn photons_leave_at_times_over_the_shutter_and_meet_moving_shapes_there() {
+        // A narrow spot light straight down onto a large quad that slides
+        // out of its beam: the quad covers the beam (radius about 0.1 at
+        // the quad) until its edge at x = -4.5 + 20 t passes it, for 0.225
+        // of the shutter; the floor behind takes the rest.
+        use crate::geometry::motion::Motion;
+        use crate::scene::{builtin, MovingTriangles, SceneDesc, TriangleDesc};
+        let mut d = SceneDesc::empty("beam", builtin::cornell().camera);
+        let m = d.material("grey", crate::material::Material::diffuse(0.5, 0.5, 0.5));
+        let quad = |z: f32, size: f32| {
+            let v = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| Vec3::new(x * size, y * size, z));
+            [[0, 1, 2], [0, 2, 3]].map(|t| TriangleDesc {
+                vertices: t.map(|i| v[i]),
+                normals: None,
+                uvs: None,
+                material: m,
+            })
+        };
+        d.triangles.extend(quad(-1.0, 100.0));
+        d.triangles.extend(quad(0.0, 5.0));
+        d.moving.push(MovingTriangles {
+            triangles: 2..4,
+            motion: Motion::new(
+                glam::Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0)),
+                glam::Mat4::from_translation(Vec3::new(20.5, 0.0, 0.0)),
+                [0.0, 1.0],
+            )
+            .unwrap(),
+        });
+        d.lights.push(Light::Spot {
+            position: Vec3::new(0.0, 0.0, 5.0),
+            direction: -Vec3::Z,
+            intensity: Vec3::ONE,
+            cos_falloff_start: 0.9999,
+            cos_falloff_end: 0.9998,
+        });
+        // Quad placed at its start: x from -4.5 to 5.5.
+        for t in &mut d.triangles[2..4] {
+            t.vertices = t.vertices.map(|v| v + Vec3::new(0.5, 0.0, 0.0));
+        }
+        let scene = crate::scene::Scene::build(d).unwrap();
+        let t = trace(&scene, &settings(20_000, 1, false), 5);
+        let on_quad = t.photons.iter().filter(|p| (2..4).contains(&p.object)).count();
+        let share = on_quad as f64 / t.photons.len() as f64;
+        assert!(
+            t.photons.len() > 19_000 && (share - 0.225).abs() < 0.02,
+            "{share} of {}",
+            t.photons.len()
+        );
+        // An SPPM pass's photons all leave at its time: before the quad
+        // leaves the beam, all on it; after, none.
+        for (time, expected) in [(0.1, 1.0), (0.5, 0.0)] {
+            let t = trace_at(&scene, &settings(2_000, 1, false), 5, Some(time));
+            let on_quad = t.photons.iter().filter(|p| (2..4).contains(&p.object)).count();
+            assert_eq!(on_quad as f64 / t.photons.len() as f64, expected, "time {time}");
         }
     }
 

@@ -530,10 +530,6 @@ fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
 /// Texture coordinates of a triangle without its own: pbrt-v4's.
 const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
 
-/// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
-/// the texture coordinates; with vertex normals, pbrt-v4's shading frame
-/// (dp/du made perpendicular to the shading normal, dp/dv their cross
-/// product) and the normals' derivatives.
 /// `triangle_shading` for a moving triangle, stored as placed at its
 /// motion's start and hit where `to_world` took it.
 fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(ShadingGeometry, [Vec3; 2])> {
@@ -557,6 +553,10 @@ fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(S
     Some((g, [m * dpdu, m * dpdv]))
 }
 
+/// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
+/// the texture coordinates; with vertex normals, pbrt-v4's shading frame
+/// (dp/du made perpendicular to the shading normal, dp/dv their cross
+/// product) and the normals' derivatives.
 fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let uv = t.uvs.unwrap_or(DEFAULT_UV);
     let [p0, p1, p2] = t.vertices;
@@ -802,6 +802,8 @@ pub struct Scene {
     /// Runs of triangles that move while the shutter is open (empty for a
     /// still scene), each with a BVH of its own.
     movers: Vec<Mover>,
+    /// The BVH over the movers' boxes.
+    mover_bvh: BoxBvh,
     /// Triangles in BVH order: the static BVH's, then each mover's.
     triangles: Vec<Triangle>,
     info: Vec<TriInfo>,
@@ -853,19 +855,18 @@ struct Mover {
 }
 
 impl Mover {
-    /// The ray in the movers' start placement, with the transformation from
-    /// there to the ray's time; `None` when the ray misses its box.
-    #[inline(never)]
+    /// The ray in the mover's start placement, with the transformation from
+    /// there to the ray's time; `None` when the ray misses the mover's box
+    /// before `t_max` (the tree over the boxes hands a few movers over
+    /// untested, and carrying a ray costs an interpolation and an inverse).
     fn local_ray(&self, ray: &Ray, t_max: f32) -> Option<(Ray, glam::Mat4)> {
         if !self.bounds.hit_by(ray, t_max) {
             return None;
         }
         let m = self.motion.relative(ray.time);
         let inv = m.inverse();
-        Some((
-            Ray::timed(inv.transform_point3(ray.o), inv.transform_vector3(ray.d), ray.time),
-            m,
-        ))
+        let local = Ray::timed(inv.transform_point3(ray.o), inv.transform_vector3(ray.d), ray.time);
+        Some((local, m))
     }
 }
 
@@ -1063,35 +1064,41 @@ impl Scene {
             let order = bvh.order.clone();
             (bvh, order)
         } else {
-            let members =
-                |run: u32| -> Vec<u32> { (0..tris.len() as u32).filter(|&k| runs[k as usize] == run).collect() };
-            let statics = members(u32::MAX);
+            let statics: Vec<u32> = (0..tris.len() as u32)
+                .filter(|&k| runs[k as usize] == u32::MAX)
+                .collect();
             let bvh = Bvh::build(&statics.iter().map(|&k| tris[k as usize]).collect::<Vec<_>>());
             let order = bvh.order.iter().map(|&j| statics[j as usize]).collect();
             (bvh, order)
         };
+        let mut members = vec![Vec::new(); desc.moving.len()];
+        for (k, &run) in runs.iter().enumerate() {
+            if let Some(m) = members.get_mut(run as usize) {
+                m.push(k as u32);
+            }
+        }
         let mut movers = Vec::with_capacity(desc.moving.len());
-        for (k, m) in desc.moving.iter().enumerate() {
-            let members: Vec<u32> = (0..tris.len() as u32)
-                .filter(|&j| runs[j as usize] == k as u32)
-                .collect();
+        for (m, members) in desc.moving.iter().zip(members).filter(|(_, ms)| !ms.is_empty()) {
             let run_bvh = Bvh::build(&members.iter().map(|&j| tris[j as usize]).collect::<Vec<_>>());
             let base = order.len();
             order.extend(run_bvh.order.iter().map(|&j| members[j as usize]));
-            let bounds = if members.is_empty() {
-                crate::math::Aabb::EMPTY
-            } else {
-                let b = run_bvh.bounds();
-                let (min, max) = m.motion.bounds(b.min, b.max);
-                crate::math::Aabb { min, max }
-            };
+            let b = run_bvh.bounds();
+            let (min, max) = m.motion.bounds(b.min, b.max);
             movers.push(Mover {
                 bvh: run_bvh,
                 base,
                 motion: m.motion.clone(),
-                bounds,
+                bounds: crate::math::Aabb { min, max },
             });
         }
+        if movers.len() > BoxBvh::MAX_BOXES {
+            return Err(Error::Scene(format!(
+                "{} moving meshes; the BVH over them holds at most {}",
+                movers.len(),
+                BoxBvh::MAX_BOXES
+            )));
+        }
+        let mover_bvh = BoxBvh::build(&movers.iter().map(|m| m.bounds).collect::<Vec<_>>());
         let bvh_build_seconds = start.elapsed().as_secs_f64();
         let triangles = order.iter().map(|&i| tris[i as usize]).collect();
         let info = order.iter().map(|&i| info[i as usize]).collect();
@@ -1124,6 +1131,7 @@ impl Scene {
             infinite_lights,
             bvh,
             movers,
+            mover_bvh,
             triangles,
             info,
             vertex_normals,
@@ -1257,17 +1265,16 @@ impl Scene {
     /// triangle is at the ray's time.
     #[inline(never)]
     fn intersect_movers(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let mut best_t = t_max;
+        // The tree offers movers with t_max shrinking: each hit found is
+        // closer than the last.
         let mut best = None;
-        for m in &self.movers {
-            let Some((local, to_world)) = m.local_ray(ray, best_t) else {
-                continue;
-            };
-            if let Some((slot, h)) = m.bvh.intersect(&local, t_min, best_t) {
-                best_t = h.t;
-                best = Some((m.base + slot as usize, h.u, h.v, to_world));
-            }
-        }
+        let (_, best_t) = self.mover_bvh.intersect(ray, t_min, t_max, |id, t_max| {
+            let m = &self.movers[id as usize];
+            let (local, to_world) = m.local_ray(ray, t_max)?;
+            let (slot, h) = m.bvh.intersect(&local, t_min, t_max)?;
+            best = Some((m.base + slot as usize, h.u, h.v, to_world));
+            Some(h.t)
+        })?;
         let (slot, u, v, to_world) = best?;
         let tri = &self.triangles[slot];
         let h = self.triangle_hit(slot, u, v, best_t, tri.v0 + tri.e1 * u + tri.e2 * v);
@@ -1284,7 +1291,8 @@ impl Scene {
     /// Whether a moving triangle blocks the ray before `t_max`.
     #[inline(never)]
     fn movers_block(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.movers.iter().any(|m| {
+        self.mover_bvh.occluded(ray, t_min, t_max, |id| {
+            let m = &self.movers[id as usize];
             m.local_ray(ray, t_max)
                 .is_some_and(|(local, _)| m.bvh.occluded(&local, t_min, t_max))
         })
@@ -2539,6 +2547,40 @@ mod motion_tests {
         assert!(!scene.has_motion() && scene.camera.shutter.is_none());
         let moving = scene_with(Mat4::from_translation(Vec3::X));
         assert_eq!(moving.camera.shutter, Some([0.0, 1.0]));
+    }
+
+    #[test]
+    fn many_moving_quads_are_each_met_at_their_place() {
+        // Twenty quads along x, each rising one unit along y over the
+        // shutter, found through the tree over their boxes.
+        let mut d = SceneDesc::empty("moving", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        for k in 0..20 {
+            let first = d.triangles.len();
+            let shift = Vec3::new(2.0 * k as f32, 0.0, 0.0);
+            d.triangles.extend(test_quad(m, 0.0, 1.0).map(|t| TriangleDesc {
+                vertices: t.vertices.map(|v| v + shift),
+                ..t
+            }));
+            d.moving.push(MovingTriangles {
+                triangles: first..first + 2,
+                motion: Motion::new(Mat4::IDENTITY, Mat4::from_translation(Vec3::Y), [0.0, 1.0]).unwrap(),
+            });
+        }
+        let scene = Scene::build(d).unwrap();
+        for k in 0..20 {
+            for time in [0.0, 0.3, 0.9] {
+                let x = 2.0 * k as f32 + 0.5;
+                let hit = scene.intersect(&down_at(x, 0.9 + time, time), 0.0, f32::INFINITY);
+                let hit = hit.unwrap_or_else(|| panic!("quad {k} at time {time} missed"));
+                assert!(hit.object / 2 == k && (hit.p.z).abs() < 1e-5, "quad {k}: {hit:?}");
+                assert!(scene
+                    .intersect(&down_at(x, 1.1 + time, time), 0.0, f32::INFINITY)
+                    .is_none());
+                assert!(scene.occluded(&down_at(x, 0.9 + time, time), 0.0, 2.0));
+                assert!(!scene.occluded(&down_at(x + 1.0, 0.5 + time, time), 0.0, 2.0));
+            }
+        }
     }
 
     #[test]

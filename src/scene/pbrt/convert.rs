@@ -1355,7 +1355,7 @@ impl<'a> Conv<'a> {
     fn moving(&mut self, desc: &mut SceneDesc, shape: &Shape, first: usize, start: Mat4, end: Mat4, alpha: bool) {
         if alpha {
             let why = "an \"alpha\" cut-out on a moving shape (ActiveTransform) is not supported; --lenient uses the start transformation";
-            self.problem(Kind::Shape, &shape.loc, why);
+            self.problem(Kind::Other, &shape.loc, why);
             return;
         }
         match Motion::new(start, end, self.scene.transform_times) {
@@ -1364,7 +1364,7 @@ impl<'a> Conv<'a> {
                 motion,
             }),
             Err(why) => self.problem(
-                Kind::Shape,
+                Kind::Other,
                 &shape.loc,
                 format!("a moving shape (ActiveTransform): {why}; --lenient uses the start transformation"),
             ),
@@ -1444,7 +1444,7 @@ impl<'a> Conv<'a> {
             let alpha_given = alpha.is_some();
             if shape.motion.is_some() && !matches!(shape.geometry, Geometry::Mesh(_)) {
                 self.problem(
-                    Kind::Shape,
+                    Kind::Other,
                     &shape.loc,
                     format!(
                         "a moving \"{}\" (ActiveTransform) is not supported, only moving meshes; --lenient uses the start transformation",
