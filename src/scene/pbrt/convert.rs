@@ -180,13 +180,17 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         black_emitters: 0,
         imaging_ratio: 1.0,
         shutter: [0.0, 1.0],
+        first_motion: None,
     };
     let (camera, mirror, crop) = c.camera()?;
     let mut desc = SceneDesc::empty(&name, camera);
     desc.shutter = c.shutter;
     if let Some(end) = scene.camera.world_from_camera_end {
         match Motion::new(scene.camera.world_from_camera, end, scene.transform_times) {
-            Ok(m) => desc.camera_motion = Some(m),
+            Ok(m) => {
+                desc.camera_motion = Some(m);
+                c.first_motion = scene.camera.loc.clone();
+            }
             Err(why) => {
                 let at = scene.camera.loc.clone().unwrap_or_else(|| c.default_loc());
                 c.problem(
@@ -216,6 +220,16 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
     }
     // Other integrators than the path tracer are warned of when they render.
     let subsurface = desc.materials.iter().any(|(_, m)| m.has_subsurface());
+    if let Some(at) = c.first_motion.clone().filter(|_| subsurface || !desc.media.is_empty()) {
+        // Light samples through media and below surfaces see time 0.
+        c.problem(
+            Kind::Other,
+            &at,
+            "motion (ActiveTransform) in a scene with participating media or subsurface materials is not supported; --lenient renders it still, at the start transformations",
+        );
+        desc.moving.clear();
+        desc.camera_motion = None;
+    }
     if subsurface && matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
         let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
         c.warn(
@@ -296,6 +310,8 @@ struct Conv<'a> {
     imaging_ratio: f32,
     /// The camera's `shutteropen` and `shutterclose`.
     shutter: [f32; 2],
+    /// Where the first motion kept was given.
+    first_motion: Option<Loc>,
     problems: Vec<Problem>,
     warnings: Vec<String>,
     /// pbrt material index -> this scene's material index.
@@ -1359,10 +1375,13 @@ impl<'a> Conv<'a> {
             return;
         }
         match Motion::new(start, end, self.scene.transform_times) {
-            Ok(motion) => desc.moving.push(MovingTriangles {
-                triangles: first..desc.triangles.len(),
-                motion,
-            }),
+            Ok(motion) => {
+                desc.moving.push(MovingTriangles {
+                    triangles: first..desc.triangles.len(),
+                    motion,
+                });
+                self.first_motion.get_or_insert_with(|| shape.loc.clone());
+            }
             Err(why) => self.problem(
                 Kind::Other,
                 &shape.loc,

@@ -2646,3 +2646,18 @@ fn lights_at_infinity_take_only_the_turn_of_their_transformation() {
         "{e}"
     );
 }
+
+#[test]
+fn motion_with_media_is_refused_at_the_moving_shape() {
+    let text = "WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+                AttributeBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
+                Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n\
+                AttributeBegin\nMediumInterface \"fog\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n";
+    let e = converted(text, Files::default(), false).unwrap_err();
+    assert!(
+        e.starts_with("scene/main.pbrt:7: motion (ActiveTransform) in a scene with participating media"),
+        "{e}"
+    );
+    let c = converted(text, Files::default(), true).unwrap_or_else(|e| panic!("{e}"));
+    assert!(c.desc.moving.is_empty() && !c.desc.media.is_empty());
+}
