@@ -39,13 +39,33 @@ for run in "motion-blur" "motion-blur-camera" "motion-blur-camera --render-coord
 done
 # Our photon integrators against our path tracer's render of the first
 # scene: SPPM (a moment of the shutter a pass), the photon mapper (one map of
-# photons at times of their own over the shutter).
+# photons at times of their own over the shutter, those on moving shapes
+# kept where the shapes start). BLOCKS=1 prints each 40 x 40 block's mean
+# luminance over the path tracer's.
 for integrator in "sppm --passes 64 --photons 200000 --gather-radius 0.05" photon; do
     set -- $integrator
     start=$(date +%s.%N)
     "$bin" -q --threads 2 --scene bench/scenes/motion-blur.pbrt --integrator "$@" -o "$out/motion-blur-$1.pfm"
     echo "motion-blur: ours, $integrator, $(echo "$(date +%s.%N) - $start" | bc) s, against our path tracer"
     "$bin" compare "$out/motion-blur-$1.pfm" "$out/motion-blur-ours.pfm" --max-luminance 4
+    if [ -n "${BLOCKS:-}" ]; then
+        python3 - "$out/motion-blur-ours.pfm" "$out/motion-blur-$1.pfm" <<'PY'
+import sys
+sys.path.insert(0, "bench")
+from pfm import load
+w, h, ref = load(sys.argv[1])
+_, _, img = load(sys.argv[2])
+lum = lambda c: 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+B = 40
+for by in range(h // B):
+    ratios = []
+    for bx in range(w // B):
+        px = [(y * w + x) for y in range(by * B, (by + 1) * B) for x in range(bx * B, (bx + 1) * B)]
+        r = sum(lum(ref[i]) for i in px)
+        ratios.append(sum(lum(img[i]) for i in px) / r if r > 0 else 0.0)
+    print(" ".join(f"{v:6.3f}" for v in ratios))
+PY
+    fi
 done
 # Both renderers' noise: pbrt-v4 against itself with another seed.
 "$PBRT" --quiet --nthreads 2 --seed 2 --outfile "$out/motion-blur-pbrt-seed2.pfm" bench/scenes/motion-blur.pbrt

@@ -177,13 +177,13 @@ fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quie
     }
 }
 
-/// Where the photon mapper's and bdpt's light paths fall short of motion
-/// blur, say so when they render a scene that moves.
+/// Where bdpt's light paths fall short of motion blur, say so when it
+/// renders a scene that moves.
 fn report_motion(scene: &Scene, integrator: integrator::IntegratorKind, quiet: bool) {
-    use integrator::IntegratorKind::{Bdpt, Photon};
     let why = match integrator {
-        Bdpt => "bdpt's light subpaths see moving shapes and the camera where they are at time 0",
-        Photon => "the photon map holds the light of the whole exposure, so near moving shapes its estimate is averaged over the shutter and comes out dark",
+        integrator::IntegratorKind::Bdpt => {
+            "bdpt's light subpaths see moving shapes and the camera where they are at time 0"
+        }
         _ => return,
     };
     if !quiet && scene.has_motion() {

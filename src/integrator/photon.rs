@@ -34,6 +34,7 @@ use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, Bxdf, TransportMode};
 use crate::error::Result;
 use crate::math::{offset_origin, to_world, Ray, Vec3};
+use crate::photon::estimate::Place;
 use crate::photon::estimate::{self, PrecomputedIrradiance};
 use crate::photon::file;
 use crate::photon::map::Neighbour;
@@ -75,21 +76,45 @@ impl PhotonMapping<'_> {
     /// whose BSDF is `bsdf`. A Lambertian BRDF needs only the irradiance
     /// (precomputed, when it was); any other BSDF weighs each photon by
     /// f(wo, wi) (Jensen 2001, 7.1).
-    fn photon_radiance(&self, map: &PhotonMap, hit: &Hit, wo: Vec3, bsdf: &Bsdf, admit: Admit, g: &Gather) -> Vec3 {
-        let n = facing(hit, wo);
+    ///
+    /// On a moving shape the gather reads the photons the shape caught, kept
+    /// where it is at its motion's start (`photon::trace`), around the
+    /// hit carried there; elsewhere those on what stays still.
+    #[allow(clippy::too_many_arguments)]
+    fn photon_radiance(
+        &self,
+        scene: &Scene,
+        map: &PhotonMap,
+        hit: &Hit,
+        wo: Vec3,
+        bsdf: &Bsdf,
+        admit: Admit,
+        g: &Gather,
+    ) -> Vec3 {
+        let rest = scene.rest_frame(hit.object, hit.time);
+        let (p, n, place) = match &rest {
+            None => (hit.p, facing(hit, wo), Place::Still),
+            Some(r) => (
+                r.point(hit.p),
+                r.normal(facing(hit, wo)),
+                Place::of(Some(r.objects.clone())),
+            ),
+        };
+        let admit = admit.at(place);
         SCRATCH.with(|s| {
             let scratch = &mut s.borrow_mut();
             if let Bxdf::Diffuse(d) = bsdf.bxdf {
                 let e = match self.precomputed {
                     // Built with the admission this integrator reads the global map with.
                     Some(pre) if std::ptr::eq(map, self.map.unwrap_or(map)) && g == &self.gather => pre
-                        .lookup(hit.p, n, scratch)
-                        .unwrap_or_else(|| estimate::irradiance(map, g, hit.p, n, admit, scratch)),
-                    _ => estimate::irradiance(map, g, hit.p, n, admit, scratch),
+                        .lookup(p, n, place, scratch)
+                        .unwrap_or_else(|| estimate::irradiance(map, g, p, n, admit, scratch)),
+                    _ => estimate::irradiance(map, g, p, n, admit, scratch),
                 };
                 return e * d.r * std::f32::consts::FRAC_1_PI;
             }
-            estimate::radiance(map, g, hit.p, n, admit, scratch, |wi| {
+            estimate::radiance(map, g, p, n, admit, scratch, |wi| {
+                let wi = rest.as_ref().map_or(wi, |r| r.direction_back(wi));
                 bsdf.f(wo, wi, TransportMode::Radiance)
             })
         })
@@ -97,7 +122,7 @@ impl PhotonMapping<'_> {
 
     /// Caustic radiance from the caustic map: a plain fixed-radius estimate
     /// with its own, smaller radius.
-    fn caustic_radiance(&self, v: &DiffuseVertex) -> Vec3 {
+    fn caustic_radiance(&self, scene: &Scene, v: &DiffuseVertex) -> Vec3 {
         let Some(map) = self.caustics else {
             return Vec3::ZERO;
         };
@@ -107,7 +132,7 @@ impl PhotonMapping<'_> {
             cone: false,
             filter: self.gather.filter,
         };
-        self.photon_radiance(map, &v.hit, v.wo, &v.bsdf, Admit::ALL, &g)
+        self.photon_radiance(scene, map, &v.hit, v.wo, &v.bsdf, Admit::ALL, &g)
     }
 
     /// Indirect light reflected at a diffuse vertex, by final gathering: rays
@@ -165,7 +190,7 @@ impl PhotonMapping<'_> {
                 bsdf.carry(beta);
                 let flags = bsdf.flags();
                 if flags.is_diffuse() {
-                    sum += beta * (m.le() + self.photon_radiance(map, &y, wo, &bsdf, Admit::ALL, &self.gather));
+                    sum += beta * (m.le() + self.photon_radiance(scene, map, &y, wo, &bsdf, Admit::ALL, &self.gather));
                     break;
                 }
                 let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
@@ -185,7 +210,7 @@ impl PhotonMapping<'_> {
     /// Light reflected at a camera path's diffuse vertex: direct by shadow
     /// rays, caustics by the caustic map, the rest by the global map.
     fn shade(&self, scene: &Scene, v: &DiffuseVertex, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
-        let mut l = direct_radiance(scene, v, self.shadow_samples, sampler, stats) + self.caustic_radiance(v);
+        let mut l = direct_radiance(scene, v, self.shadow_samples, sampler, stats) + self.caustic_radiance(scene, v);
         if let Some(map) = self.map {
             l += if self.final_gather > 0 {
                 self.final_gather(scene, map, v, sampler, stats)
@@ -193,8 +218,9 @@ impl PhotonMapping<'_> {
                 let admit = Admit {
                     direct: self.shadow_samples == 0,
                     caustic: false,
+                    place: Place::Still,
                 };
-                self.photon_radiance(map, &v.hit, v.wo, &v.bsdf, admit, &self.gather)
+                self.photon_radiance(scene, map, &v.hit, v.wo, &v.bsdf, admit, &self.gather)
             };
         }
         l
@@ -227,6 +253,7 @@ pub fn global_admit(settings: &super::RenderSettings) -> Admit {
         Admit {
             direct: settings.shadow_samples == 0,
             caustic: false,
+            place: Place::Still,
         }
     }
 }
@@ -332,12 +359,20 @@ pub struct PhotonPipeline {
 
 impl PhotonPipeline {
     /// Precomputes the irradiance if the settings ask for it.
-    pub fn new(mut maps: PhotonMaps, settings: &super::RenderSettings) -> Self {
+    pub fn new(scene: &Scene, mut maps: PhotonMaps, settings: &super::RenderSettings) -> Self {
         let ps = map_settings(settings);
         let precomputed = match &maps.global {
             Some(map) if ps.precompute_irradiance => {
                 let start = std::time::Instant::now();
-                let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings));
+                let place = |ph: &crate::photon::Photon| match ph.is_moving() {
+                    true => Place::of(
+                        scene
+                            .moving_run(ph.object)
+                            .map(|m| m.triangles.start as u32..m.triangles.end as u32),
+                    ),
+                    false => Place::Still,
+                };
+                let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings), place);
                 maps.stats.precompute_seconds = start.elapsed().as_secs_f64();
                 Some(pre)
             }
@@ -375,7 +410,7 @@ pub fn render(
     settings: &super::RenderSettings,
     on_tile: super::Progress,
 ) -> Result<((crate::Film, RayStats, u64), Option<PhotonStats>)> {
-    let pipeline = PhotonPipeline::new(photon_maps(scene, settings)?, settings);
+    let pipeline = PhotonPipeline::new(scene, photon_maps(scene, settings)?, settings);
     let out = super::render_tiles(scene, settings, &pipeline.estimator(), on_tile);
     let maps = pipeline.maps();
     let any = maps.global.is_some() || maps.caustic.is_some();

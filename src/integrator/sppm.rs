@@ -127,9 +127,12 @@ impl<'a> Progressive<'a> {
         photon.caustic_photons = 0;
         // Without shadow rays the photons carry the direct light too.
         photon.store_first_hit = settings.shadow_samples == 0;
+        // A pass's photons all leave at its time, so they lie where the
+        // shapes are then, moving or not: none is kept at a motion's start.
         let admit = Admit {
             direct: settings.shadow_samples == 0,
             caustic: true,
+            place: crate::photon::estimate::Place::Still,
         };
         let pixel = PixelState {
             direct: Vec3::ZERO,

@@ -30,27 +30,69 @@ impl GatherFilter {
 }
 
 /// Which photons that reached a surface with no diffuse bounce before it a
-/// gather may use; photons after a diffuse bounce (indirect light) always count.
+/// gather may use; photons after a diffuse bounce (indirect light) always
+/// count, if they lie on the same kind of surface (`Place`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Admit {
     /// First hits straight from a light (direct light).
     pub direct: bool,
     /// First diffuse hits after mirrors or glass only (caustics).
     pub caustic: bool,
+    pub place: Place,
+}
+
+/// Where a gather's photons lie: on what stays still, or on one moving run
+/// of triangles, kept where it is at its motion's start (`Photon::moving`).
+/// A moving shape carries its photons along; the still world keeps its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Place {
+    Still,
+    /// The run's objects, `first..end`.
+    Moving {
+        first: u32,
+        end: u32,
+    },
+}
+
+impl Place {
+    /// Where photons on objects `run` lie (`None`: on still ones).
+    pub fn of(run: Option<std::ops::Range<u32>>) -> Place {
+        match run {
+            Some(r) => Place::Moving {
+                first: r.start,
+                end: r.end,
+            },
+            None => Place::Still,
+        }
+    }
+
+    fn holds(&self, ph: &Photon) -> bool {
+        match *self {
+            Place::Still => !ph.is_moving(),
+            Place::Moving { first, end } => ph.is_moving() && (first..end).contains(&ph.object),
+        }
+    }
 }
 
 impl Admit {
     pub const ALL: Admit = Admit {
         direct: true,
         caustic: true,
+        place: Place::Still,
     };
     pub const INDIRECT: Admit = Admit {
         direct: false,
         caustic: false,
+        place: Place::Still,
     };
 
+    /// The same admission on a moving run of triangles (or the still world).
+    pub fn at(self, place: Place) -> Admit {
+        Admit { place, ..self }
+    }
+
     pub fn accepts(&self, ph: &Photon) -> bool {
-        (self.direct || !ph.is_direct()) && (self.caustic || !ph.is_caustic())
+        (self.direct || !ph.is_direct()) && (self.caustic || !ph.is_caustic()) && self.place.holds(ph)
     }
 }
 
@@ -188,7 +230,14 @@ impl PrecomputedIrradiance {
     /// Estimates the irradiance at every `PRECOMPUTE_STRIDE`-th photon of
     /// `map`, with the photon's surface normal (in parallel; the result does
     /// not depend on the thread count). `admit` as for [`irradiance`].
-    pub fn build(map: &PhotonMap, g: &Gather, admit: Admit) -> PrecomputedIrradiance {
+    /// `place` says where a photon lies; a site's estimate reads the photons
+    /// lying there.
+    pub fn build(
+        map: &PhotonMap,
+        g: &Gather,
+        admit: Admit,
+        place: impl Fn(&Photon) -> Place + Sync,
+    ) -> PrecomputedIrradiance {
         use rayon::prelude::*;
         let photons = map.photons();
         let estimates: Vec<Vec3> = (0..photons.len())
@@ -196,7 +245,7 @@ impl PrecomputedIrradiance {
             .step_by(PRECOMPUTE_STRIDE)
             .map_init(Vec::new, |scratch, i| {
                 let ph = &photons[i];
-                irradiance(map, g, ph.p, ph.normal(), admit, scratch)
+                irradiance(map, g, ph.p, ph.normal(), admit.at(place(ph)), scratch)
             })
             .collect();
         // Stored as f16 relative to a unit that puts the largest estimate well
@@ -212,7 +261,14 @@ impl PrecomputedIrradiance {
             .iter()
             .step_by(PRECOMPUTE_STRIDE)
             .zip(&estimates)
-            .map(|(ph, e)| Photon::new(ph.p, ph.wi(), ph.normal(), *e / unit, ph.object, ph.is_direct()))
+            .map(|(ph, e)| {
+                let site = Photon::new(ph.p, ph.wi(), ph.normal(), *e / unit, ph.object, ph.is_direct());
+                if ph.is_moving() {
+                    site.moving()
+                } else {
+                    site
+                }
+            })
             .collect();
         PrecomputedIrradiance {
             sites: PhotonMap::build(sites, unit),
@@ -234,8 +290,8 @@ impl PrecomputedIrradiance {
     /// photons), so the caller gathers them instead: read as zero, the
     /// sparse places (faint indirect light beside bright direct light) came
     /// out dark.
-    pub fn lookup(&self, p: Vec3, n: Vec3, scratch: &mut Vec<Neighbour>) -> Option<Vec3> {
-        let accept = |s: &Photon| s.arrived_from(n) && s.normal().dot(n) > self.min_cos;
+    pub fn lookup(&self, p: Vec3, n: Vec3, place: Place, scratch: &mut Vec<Neighbour>) -> Option<Vec3> {
+        let accept = |s: &Photon| place.holds(s) && s.arrived_from(n) && s.normal().dot(n) > self.min_cos;
         self.sites.k_nearest(p, 1, self.radius * self.radius, accept, scratch);
         scratch
             .first()
@@ -276,11 +332,11 @@ mod tests {
         };
         for unit in [1e-3f32, 1.0, 1e6] {
             let map = PhotonMap::build(photons.clone(), unit);
-            let pre = PrecomputedIrradiance::build(&map, &g, Admit::ALL);
+            let pre = PrecomputedIrradiance::build(&map, &g, Admit::ALL, |_| Place::Still);
             let mut scratch = vec![];
             for ph in map.photons().iter().step_by(97) {
                 let full = irradiance(&map, &g, ph.p, Vec3::Z, Admit::ALL, &mut scratch);
-                let near = pre.lookup(ph.p, Vec3::Z, &mut scratch).unwrap();
+                let near = pre.lookup(ph.p, Vec3::Z, Place::Still, &mut scratch).unwrap();
                 assert!(full.x > 0.0 && near.x > 0.0);
                 // The nearest site's estimate: the same density within the
                 // photon noise, and never clipped (f16 would stop at 65504).

@@ -29,7 +29,7 @@ use super::PhotonSettings;
 use crate::bsdf::TransportMode;
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::Rng;
-use crate::scene::Scene;
+use crate::scene::{Hit, Scene};
 use rayon::prelude::*;
 
 /// Photons per parallel work item.
@@ -119,13 +119,42 @@ impl Emitter {
         let le = light.sample_le_flux(rng.next_2d(), rng.next_2d());
         let mut ray = le.ray;
         // Where things move, each photon leaves at a time of its own over
-        // the shutter (as pbrt-v4's SPPM sends them): the map holds the
-        // light of the whole exposure.
+        // the shutter, unless all leave at an SPPM pass's: the map holds
+        // the light of the whole exposure (and `record` keeps what moving
+        // shapes catch with them).
         if let Some([open, close]) = scene.camera.shutter {
             ray.time = self.time.unwrap_or_else(|| open + (close - open) * rng.next_f32());
         }
         let power = le.flux / (self.n as f32 * self.weights[li] / self.total) / self.unit;
         (ray, power)
+    }
+}
+
+impl Emitter {
+    /// The record of a photon stored at `hit`. On a moving shape, when
+    /// photons leave at times of their own, it is kept where the shape is at
+    /// its motion's start (`Scene::rest_frame`): a gather at any time of the
+    /// shutter then finds the photons the shape caught over the whole
+    /// exposure, where it finds the shape, instead of those that fell on the
+    /// spot while the shape passed (a share of the shutter). Its power is
+    /// divided by how much the motion stretches the surface there, since
+    /// gathers measure area at the start's placement.
+    fn record(&self, scene: &Scene, hit: &Hit, wi: Vec3, n: Vec3, power: Vec3, direct: bool) -> Photon {
+        let rest = match self.time {
+            None => scene.rest_frame(hit.object, hit.time),
+            Some(_) => None,
+        };
+        let Some(r) = rest else {
+            return Photon::new(hit.p, wi, n, power, hit.object, direct);
+        };
+        let n_rest = r.normal(n);
+        let scale = r.area_scale(n_rest);
+        let power = if scale > 0.0 && scale.is_finite() {
+            power / scale
+        } else {
+            power
+        };
+        Photon::new(r.point(hit.p), r.direction(wi), n_rest, power, hit.object, direct).moving()
     }
 }
 
@@ -179,14 +208,14 @@ fn trace_chunk(
                 match keep {
                     Keep::Caustics => {
                         if caustic {
-                            photons.push(Photon::new(hit.p, wi, ng, power, hit.object, false).caustic());
+                            photons.push(em.record(scene, &hit, wi, ng, power, false).caustic());
                         }
                         break;
                     }
                     Keep::Global => {
                         // Caustic first hits too: shadow rays cannot reach them.
                         if !first || caustic || settings.store_first_hit {
-                            let ph = Photon::new(hit.p, wi, ng, power, hit.object, first && !caustic);
+                            let ph = em.record(scene, &hit, wi, ng, power, first && !caustic);
                             photons.push(if caustic { ph.caustic() } else { ph });
                         }
                     }
@@ -481,12 +510,33 @@ mod tests {
             "{share} of {}",
             t.photons.len()
         );
+        // Those on the quad are kept where the quad is at its start: the
+        // beam at x = 0 meets it at x = -20 t there, over the quad's first
+        // 4.5 units; those on the floor where they fell.
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for p in &t.photons {
+            let on_quad = (2..4).contains(&p.object);
+            assert_eq!(p.is_moving(), on_quad);
+            if on_quad {
+                assert!(
+                    p.p.z.abs() < 1e-4 && p.p.y.abs() < 0.15 && p.p.x > -4.55 && p.p.x < 0.15,
+                    "{:?}",
+                    p.p
+                );
+                (lo, hi) = (lo.min(p.p.x), hi.max(p.p.x));
+            } else {
+                assert!(p.p.x.abs() < 0.15 && (p.p.z + 1.0).abs() < 1e-4, "{:?}", p.p);
+            }
+        }
+        assert!(lo < -4.3 && hi > -0.2, "{lo} {hi}");
         // An SPPM pass's photons all leave at its time: before the quad
-        // leaves the beam, all on it; after, none.
+        // leaves the beam, all on it; after, none. Its visible points are
+        // at that time too, so the photons stay where they fell.
         for (time, expected) in [(0.1, 1.0), (0.5, 0.0)] {
             let t = trace_at(&scene, &settings(2_000, 1, false), 5, Some(time));
             let on_quad = t.photons.iter().filter(|p| (2..4).contains(&p.object)).count();
             assert_eq!(on_quad as f64 / t.photons.len() as f64, expected, "time {time}");
+            assert!(t.photons.iter().all(|p| !p.is_moving() && p.p.x.abs() < 0.15));
         }
     }
 

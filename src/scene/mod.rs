@@ -386,6 +386,47 @@ pub struct SceneDesc {
     pub camera_motion: Option<motion::Motion>,
 }
 
+/// A moving run of triangles at its motion's start, from one time of the
+/// shutter (`Scene::rest_frame`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RestFrame {
+    /// The run's triangles (`Hit::object`s).
+    pub objects: std::ops::Range<u32>,
+    /// From the time's placement to the start's.
+    pub to_rest: glam::Mat4,
+    /// From the start's placement to the time's.
+    pub from_rest: glam::Mat4,
+}
+
+impl RestFrame {
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.to_rest.transform_point3(p)
+    }
+
+    /// A unit direction carried to the start's placement.
+    pub fn direction(&self, d: Vec3) -> Vec3 {
+        self.to_rest.transform_vector3(d).normalize_or_zero()
+    }
+
+    /// A unit direction carried back from the start's placement.
+    pub fn direction_back(&self, d: Vec3) -> Vec3 {
+        self.from_rest.transform_vector3(d).normalize_or_zero()
+    }
+
+    /// A unit surface normal carried to the start's placement (by the
+    /// inverse transpose, so that it stays normal under a stretch).
+    pub fn normal(&self, n: Vec3) -> Vec3 {
+        (glam::Mat3::from_mat4(self.from_rest).transpose() * n).normalize_or_zero()
+    }
+
+    /// How much larger a piece of surface with unit normal `n_rest` (at
+    /// the start's placement) is at the time's: 1 for a rigid motion.
+    pub fn area_scale(&self, n_rest: Vec3) -> f32 {
+        let l = glam::Mat3::from_mat4(self.from_rest);
+        l.determinant().abs() * (l.inverse().transpose() * n_rest).length()
+    }
+}
+
 /// Triangles `triangles` of a scene, moving by `motion`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MovingTriangles {
@@ -1300,15 +1341,30 @@ impl Scene {
 
     /// The motion of object `object` (a `Hit::object`), if it moves.
     fn motion_of(&self, object: u32) -> Option<&motion::Motion> {
+        self.moving_run(object).map(|m| &m.motion)
+    }
+
+    /// Where moving triangle `object` was at its motion's start, seen from
+    /// `time`; `None` when it does not move. Photons traced over the
+    /// shutter are kept there, so that the light a moving shape carries
+    /// with it gathers where the shape is.
+    pub fn rest_frame(&self, object: u32, time: f32) -> Option<RestFrame> {
+        let m = self.moving_run(object)?;
+        let from_rest = m.motion.relative(time);
+        Some(RestFrame {
+            objects: m.triangles.start as u32..m.triangles.end as u32,
+            to_rest: from_rest.inverse(),
+            from_rest,
+        })
+    }
+
+    /// The moving run of triangles object `object` (a `Hit::object`) is in.
+    pub fn moving_run(&self, object: u32) -> Option<&MovingTriangles> {
         if self.movers.is_empty() {
             return None;
         }
         let i = object as usize;
-        self.desc
-            .moving
-            .iter()
-            .find(|m| m.triangles.contains(&i))
-            .map(|m| &m.motion)
+        self.desc.moving.iter().find(|m| m.triangles.contains(&i))
     }
 
     /// The closest hit on what does not move.
@@ -2485,6 +2541,42 @@ mod motion_tests {
 
     fn down_at(x: f32, y: f32, time: f32) -> Ray {
         Ray::timed(Vec3::new(x, y, 1.0), -Vec3::Z, time)
+    }
+
+    #[test]
+    fn a_hit_on_a_moving_quad_is_carried_to_its_start() {
+        // Stretched to twice its width along x and moved up by 1 at time 1:
+        // at time 0.5, 1.5 times as wide and 0.5 up.
+        let end = Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)) * Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0));
+        let scene = scene_with(end);
+        assert!(scene.rest_frame(0, 0.5).is_none() && scene.moving_run(1).is_none());
+        let hit = scene.intersect(&down_at(1.2, 0.9, 0.5), 0.0, f32::INFINITY).unwrap();
+        assert!((2..4).contains(&hit.object), "{}", hit.object);
+        let r = scene.rest_frame(hit.object, hit.time).unwrap();
+        assert_eq!(r.objects, 2..4);
+        let p = r.point(hit.p);
+        assert!((p - Vec3::new(0.8, 0.4, 0.0)).length() < 1e-5, "{p}");
+        assert!((r.point(r.from_rest.transform_point3(p)) - p).length() < 1e-5);
+        // A slanted direction and the normal, there and back.
+        let d = Vec3::new(1.0, 0.0, 1.0).normalize();
+        let rest_d = r.direction(d);
+        assert!(
+            (rest_d - Vec3::new(1.0, 0.0, 1.5).normalize()).length() < 1e-5,
+            "{rest_d}"
+        );
+        assert!((r.direction_back(rest_d) - d).length() < 1e-5);
+        let n = r.normal(Vec3::Z);
+        assert!((n - Vec3::Z).length() < 1e-6, "{n}");
+        // A slanted surface's normal stays normal to it: its tangent
+        // (1, 0, -1) at time 0.5 is (1, 0, -1.5) / 1.5 at the start.
+        let n = r.normal(Vec3::new(1.0, 0.0, 1.0).normalize());
+        assert!(
+            n.dot(Vec3::Y).abs() < 1e-6 && n.dot(Vec3::new(1.0, 0.0, -1.5)).abs() < 1e-5,
+            "{n}"
+        );
+        // The quad's area is 1.5 times its start's; a face across x keeps its own.
+        assert!((r.area_scale(Vec3::Z) - 1.5).abs() < 1e-5);
+        assert!((r.area_scale(Vec3::X) - 1.0).abs() < 1e-5);
     }
 
     #[test]

@@ -161,7 +161,7 @@ impl ViewIntegrator for PhotonView {
         // The rest as offline; neither part is cancellable, and both take a
         // fraction of the global trace's time.
         let maps = with_caustics(scene, &self.settings, global, stats);
-        self.pipeline = Some(PhotonPipeline::new(maps, &self.settings));
+        self.pipeline = Some(PhotonPipeline::new(scene, maps, &self.settings));
         true
     }
 

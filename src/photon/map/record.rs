@@ -14,6 +14,7 @@ use half::f16;
 const AXIS_MASK: u8 = 0b11;
 const DIRECT: u8 = 0b100;
 const CAUSTIC: u8 = 0b1000;
+const MOVING: u8 = 0b1_0000;
 
 /// One stored photon: where it landed, what it carried, where it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +24,8 @@ pub struct Photon {
     /// f16 bits of power / map unit.
     power: [u16; 3],
     /// Bits 0-1: split axis of the kd-tree node; bit 2: a first-hit (direct)
-    /// photon; bit 3: a caustic photon (first diffuse hit after specular ones).
+    /// photon; bit 3: a caustic photon (first diffuse hit after specular ones);
+    /// bit 4: on a moving shape, kept where the shape is at its motion's start.
     flags: u8,
     _pad: u8,
     /// Octahedral code of the unit direction the photon came from.
@@ -108,7 +110,11 @@ impl Photon {
             f32::from_bits(u32_at(8)),
         );
         let flags = b[18];
-        if !p.is_finite() || flags & AXIS_MASK > 2 || flags & !(AXIS_MASK | DIRECT | CAUSTIC) != 0 || b[19] != 0 {
+        if !p.is_finite()
+            || flags & AXIS_MASK > 2
+            || flags & !(AXIS_MASK | DIRECT | CAUSTIC | MOVING) != 0
+            || b[19] != 0
+        {
             return None;
         }
         Some(Photon {
@@ -132,6 +138,18 @@ impl Photon {
     /// Whether the photon came from the light through specular surfaces only.
     pub fn is_caustic(&self) -> bool {
         self.flags & CAUSTIC != 0
+    }
+
+    /// Marks the photon as one on a moving shape, its position, direction
+    /// and normal given where the shape is at its motion's start
+    /// (`Scene::rest_frame`).
+    pub fn moving(mut self) -> Photon {
+        self.flags |= MOVING;
+        self
+    }
+
+    pub fn is_moving(&self) -> bool {
+        self.flags & MOVING != 0
     }
 
     pub(super) fn axis(&self) -> usize {
@@ -214,7 +232,10 @@ mod tests {
         assert!(e.abs().max_element() < 1e-3, "{:?}", p.power());
         assert!(p.is_direct() && !p.is_caustic() && p.object == 7);
         let c = p.caustic();
-        assert!(c.is_caustic() && c.is_direct() && c.power() == p.power());
+        assert!(c.is_caustic() && c.is_direct() && c.power() == p.power() && !c.is_moving());
+        // The moving bit survives a file's record, apart from the others.
+        let m = Photon::from_le_bytes(&p.moving().to_le_bytes()).unwrap();
+        assert!(m.is_moving() && m.is_direct() && !m.is_caustic() && m.object == 7);
         assert!((p.wi() - Vec3::Y).length() < 1e-6 && (p.normal() + Vec3::Z).length() < 1e-6);
     }
 
