@@ -36,9 +36,11 @@ pub struct Motion {
     times: [f32; 2],
     /// The inverse of the start transformation.
     start_inverse: Mat4,
-    /// A reflection of the whole scene applied after the motion was given
-    /// (`mirrored`), identity otherwise.
-    mirror: Mat4,
+    /// The frame the motion is given in (`in_frame`), with its inverse:
+    /// identity unless the motion was given about a pivot or the scene was
+    /// reflected after it was given.
+    frame: Mat4,
+    frame_inverse: Mat4,
 }
 
 impl Motion {
@@ -74,7 +76,8 @@ impl Motion {
             ends: [a, b],
             times,
             start_inverse,
-            mirror: Mat4::IDENTITY,
+            frame: Mat4::IDENTITY,
+            frame_inverse: Mat4::IDENTITY,
         })
     }
 
@@ -99,18 +102,32 @@ impl Motion {
     /// place at `time`.
     pub fn relative(&self, time: f32) -> Mat4 {
         let m = self.at(time) * self.start_inverse;
-        if self.mirror == Mat4::IDENTITY {
+        if self.frame == Mat4::IDENTITY {
             m
         } else {
-            self.mirror * m * self.mirror
+            self.frame * m * self.frame_inverse
         }
     }
 
     /// The same motion seen in a scene reflected by `mirror` (a reflection:
     /// its own inverse).
     pub fn mirrored(&self, mirror: Mat4) -> Motion {
+        self.in_frame(mirror, mirror)
+    }
+
+    /// The motion given in a frame whose origin is `pivot`: what it turns
+    /// and stretches about stays on the straight line its translation
+    /// takes, where about the world's origin it would swing along an arc.
+    pub fn about(&self, pivot: Vec3) -> Motion {
+        self.in_frame(Mat4::from_translation(pivot), Mat4::from_translation(-pivot))
+    }
+
+    /// Conjugated by `frame` (with its inverse): relative(t) becomes
+    /// frame * relative(t) * frame^-1.
+    fn in_frame(&self, frame: Mat4, inverse: Mat4) -> Motion {
         Motion {
-            mirror: mirror * self.mirror,
+            frame: frame * self.frame,
+            frame_inverse: self.frame_inverse * inverse,
             ..self.clone()
         }
     }

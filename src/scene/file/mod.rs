@@ -9,9 +9,11 @@
 //! The file's types are in `types`; here is one parse function per table.
 
 use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
+use super::motion::Motion;
 use super::transform::{Fit, Transform};
 use super::{
-    Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
+    Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, MovingTriangles, SceneDesc,
+    SphereDesc, TriangleDesc,
 };
 use crate::camera::{SphericalMapping, ThinLens};
 use crate::error::{Error, Result};
@@ -22,6 +24,7 @@ use crate::math::{Vec2, Vec3};
 use crate::medium::{Emission, Medium, MediumInterface};
 use crate::settings::{self, Kind, Origin, SceneSettings, Value};
 use crate::texture::Texture;
+use glam::Mat4;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -93,6 +96,22 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
             .unwrap_or_default()
     });
     let mut desc = SceneDesc::empty(&name, camera);
+    if let Some(shutter) = &file.camera.get_ref().shutter {
+        desc.shutter = match shutter.get_ref()[..] {
+            [open, close] if open.0 <= close.0 => [open.0, close.0],
+            [open, close] => {
+                let m = format!(
+                    "camera: the shutter closes at {}, before it opens at {}",
+                    close.0, open.0
+                );
+                return Err(src.error(shutter.span(), m));
+            }
+            _ => {
+                let m = "camera: `shutter` needs two numbers, [open, close]";
+                return Err(src.error(shutter.span(), m));
+            }
+        };
+    }
     if let Some(table) = &file.settings {
         desc.settings = scene_settings(&src, table)?;
     }
@@ -128,6 +147,14 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     // Materials no shape uses still belong to the scene, after the used ones.
     for (name, m) in &materials {
         desc.material(name, m.clone());
+    }
+    if let Some(at) = file.shapes.iter().find_map(|s| s.get_ref().motion.as_ref()) {
+        // Light samples through media and below surfaces would see the
+        // shapes where they start.
+        if !desc.media.is_empty() || desc.materials.iter().any(|(_, m)| m.has_subsurface()) {
+            let m = "`motion` in a scene with participating media or subsurface materials is not supported";
+            return Err(src.error(at.span(), m));
+        }
     }
     // Only the path tracer renders media: a scene with them that names no
     // integrator gets it, in place of its preset's or the default.
@@ -428,6 +455,23 @@ fn shapes(
                 meshes.push(report);
             }
         }
+        if let Some(motion) = &s.motion {
+            let triangles = first_triangle..desc.triangles.len();
+            let placed = &desc.triangles[triangles.clone()];
+            let at = |m: String| src.error(motion.span(), format!("{kind} shape: `motion`: {m}"));
+            if alpha.is_some() {
+                return Err(at("an `alpha` cut-out on a moving shape is not supported".into()));
+            }
+            let (lo, hi) = placed
+                .iter()
+                .flat_map(|t| t.vertices)
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            let (end, about) = motion_end(motion.get_ref(), (lo + hi) * 0.5).map_err(at)?;
+            let motion = Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).map_err(at)?.about(about);
+            desc.moving.push(MovingTriangles { triangles, motion });
+        }
         let shapes = match s.kind {
             ShapeKind::Sphere => CutShapes::Sphere(sphere),
             ShapeKind::Disk => CutShapes::Disk(disk),
@@ -466,6 +510,29 @@ fn shapes(
         }
     }
     Ok(meshes)
+}
+
+/// Where a shape's `motion` takes it: the transformation from its place
+/// at time 0 to its place at time 1, in a frame whose origin is the point
+/// it turns and grows about (returned too; `centre`, the centre of its
+/// bounding box, by default), so that this point moves in a straight line.
+fn motion_end(m: &MotionSpec, centre: Vec3) -> std::result::Result<(Mat4, Vec3), String> {
+    let scale = match m.scale {
+        None => Vec3::ONE,
+        Some(ScaleSpec::Uniform(k)) => Vec3::splat(k.0),
+        Some(ScaleSpec::PerAxis(v)) => v.0,
+    };
+    if scale.cmple(Vec3::ZERO).any() {
+        return Err(format!("scale {:?} must be positive", scale.to_array()));
+    }
+    let about = m.about.map_or(centre, |a| a.0);
+    let rotate = super::transform::rotation(m.rotate.map_or(Vec3::ZERO, |r| r.0));
+    let translate = m.translate.map_or(Vec3::ZERO, |t| t.0);
+    let end = Mat4::from_translation(translate) * Mat4::from_mat3(rotate) * Mat4::from_scale(scale);
+    if !end.is_finite() || !about.is_finite() {
+        return Err("the motion is not finite".into());
+    }
+    Ok((end, about))
 }
 
 /// The `[settings]` table: each key a setting of the table in

@@ -469,6 +469,117 @@ fn any_shape_may_be_cut_out_by_an_alpha() {
 }
 
 #[test]
+fn shapes_move_by_their_motion_and_bad_motions_are_refused() {
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        shutter = [0.25, 0.75]
+        [materials.grey]
+        [[shapes]]
+        type = "quad"
+        material = "grey"
+        vertices = [[-3, -3, 2], [3, -3, 2], [3, 3, 2], [-3, 3, 2]]
+        [[shapes]]
+        type = "box"
+        material = "grey"
+        min = [0, 0, 0]
+        max = [1, 2, 1]
+        motion = { translate = [1, 0, 0], rotate = [0, 90, 0] }
+        [[shapes]]
+        type = "sphere"
+        material = "grey"
+        centre = [0, 0, 3]
+        radius = 1
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    assert_eq!(d.shutter, [0.25, 0.75]);
+    assert_eq!(d.moving.len(), 1);
+    assert_eq!(d.moving[0].triangles, 2..14);
+    // The box turns a quarter about its centre (0.5, 1, 0.5) while it
+    // slides one unit along x: its corner (0, 0, 0) ends at (1, 0, 1).
+    let m = &d.moving[0].motion;
+    let centre = Vec3::new(0.5, 1.0, 0.5);
+    for (t, at) in [
+        (0.0, centre),
+        (0.5, centre + Vec3::new(0.5, 0.0, 0.0)),
+        (1.0, centre + Vec3::X),
+    ] {
+        assert!((m.relative(t).transform_point3(centre) - at).length() < 1e-5, "{t}");
+    }
+    let corner = m.relative(1.0).transform_point3(Vec3::ZERO);
+    assert!((corner - Vec3::new(1.0, 0.0, 1.0)).length() < 1e-5, "{corner}");
+    // About a point of its own, the box swings around it.
+    let about = parse_str(&text.replace("rotate = [0, 90, 0] }", "rotate = [0, 90, 0], about = [0, 0, 0] }"))
+        .unwrap()
+        .desc;
+    let swung = about.moving[0].motion.relative(1.0).transform_point3(centre);
+    assert!((swung - Vec3::new(1.5, 1.0, -0.5)).length() < 1e-5, "{swung}");
+    // Rays at the shutter's times meet it where it is then.
+    let scene = Scene::build(d).unwrap();
+    assert!(scene.has_motion() && scene.camera.shutter == Some([0.25, 0.75]));
+    let down = |x: f32, time: f32| crate::math::Ray::timed(Vec3::new(x, 1.0, -5.0), Vec3::Z, time);
+    let hit = |x: f32, time: f32| scene.intersect(&down(x, time), 0.0, f32::INFINITY).map(|h| h.p.z);
+    assert_eq!(hit(1.7, 0.0).map(|z| (z * 1e4).round()), Some(2e4));
+    assert!(
+        hit(1.7, 1.0).is_some_and(|z| (z - 0.0).abs() < 1e-4),
+        "{:?}",
+        hit(1.7, 1.0)
+    );
+    assert!(hit(0.3, 0.0).is_some_and(|z| z.abs() < 1e-4));
+    for (from, to, line, why) in [
+        (
+            "radius = 1",
+            "radius = 1\n        motion = { translate = [1, 0, 0] }",
+            18,
+            "`motion` does not apply to a sphere",
+        ),
+        (
+            "rotate = [0, 90, 0] }",
+            "rotate = [0, 90, 0] }\n        alpha = 0.5",
+            17,
+            "an `alpha` cut-out on a moving shape is not supported",
+        ),
+        (
+            "rotate = [0, 90, 0] }",
+            "scale = 0 }",
+            17,
+            "scale [0.0, 0.0, 0.0] must be positive",
+        ),
+        ("rotate = [0, 90, 0] }", "speed = 2 }", 17, "unknown field `speed`"),
+        (
+            "shutter = [0.25, 0.75]",
+            "shutter = [0.75, 0.25]",
+            6,
+            "closes at 0.25, before it opens at 0.75",
+        ),
+        ("shutter = [0.25, 0.75]", "shutter = [1]", 6, "needs two numbers"),
+    ] {
+        let e = parse_str(&text.replace(from, to)).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("test.toml:{line}:")) && e.contains(why),
+            "{why}: {e}"
+        );
+    }
+    // A medium the camera is in.
+    let e = parse_str(
+        &text
+            .replace("fov_y = 40", "fov_y = 40\n        medium = \"fog\"")
+            .replace(
+                "[materials.grey]",
+                "[materials.grey]\n        [media.fog]\n        sigma_s = 0.1",
+            ),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("test.toml:20:") && e.contains("`motion` in a scene with participating media"),
+        "{e}"
+    );
+}
+
+#[test]
 fn coated_conductor_materials_are_read_and_checked() {
     let text = format!(
         "{CAMERA}[materials.rims]\ntype = \"coatedconductor\"\nroughness = 0.1\nmetal = \"Al\"\n\

@@ -124,6 +124,9 @@ pub(super) struct CameraSpec {
     pub(super) medium: Option<Spanned<String>>,
     /// A spherical camera's layout: "equalarea" or "equirectangular".
     pub(super) spherical: Option<String>,
+    /// When the shutter opens and closes, as fractions of shapes'
+    /// `motion` (which runs from 0 to 1).
+    pub(super) shutter: Option<Spanned<Vec<Num>>>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -231,11 +234,26 @@ pub(super) struct ShapeSpec {
     /// normal), when it bounds any.
     pub(super) medium_inside: Option<Spanned<String>>,
     pub(super) medium_outside: Option<Spanned<String>>,
+    /// Where the shape moves to while the shutter is open.
+    pub(super) motion: Option<Spanned<MotionSpec>>,
+}
+
+/// A shape's `motion`: from where the shape is placed when the shutter
+/// opens to where this takes it when it closes: scaled, then rotated
+/// (degrees about x, then y, then z) about `about` (the centre of the
+/// shape's bounding box unless given), then translated.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MotionSpec {
+    pub(super) translate: Option<Vec3Spec>,
+    pub(super) rotate: Option<Vec3Spec>,
+    pub(super) scale: Option<ScaleSpec>,
+    pub(super) about: Option<Vec3Spec>,
 }
 
 impl ShapeSpec {
     /// The optional keys that are present, by name.
-    pub(super) fn given(&self) -> [(&'static str, bool); 19] {
+    pub(super) fn given(&self) -> [(&'static str, bool); 20] {
         [
             ("uvs", self.uvs.is_some()),
             ("material", self.material.is_some()),
@@ -256,6 +274,7 @@ impl ShapeSpec {
             ("alpha", self.alpha.is_some()),
             ("medium_inside", self.medium_inside.is_some()),
             ("medium_outside", self.medium_outside.is_some()),
+            ("motion", self.motion.is_some()),
         ]
     }
 }
@@ -278,9 +297,9 @@ impl ShapeKind {
     /// Keys each shape type reads besides `type`.
     pub(super) fn keys(self) -> &'static [&'static str] {
         match self {
-            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha", MI, MO],
-            ShapeKind::Quad => &["material", "vertices", "uvs", "alpha", MI, MO],
-            ShapeKind::Box => &["material", "min", "max", "alpha", MI, MO],
+            ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha", MI, MO, "motion"],
+            ShapeKind::Quad => &["material", "vertices", "uvs", "alpha", MI, MO, "motion"],
+            ShapeKind::Box => &["material", "min", "max", "alpha", MI, MO, "motion"],
             ShapeKind::Sphere => &["material", "centre", "radius", "alpha", MI, MO],
             ShapeKind::Disk => &[
                 "material",
@@ -303,6 +322,7 @@ impl ShapeKind {
                 "alpha",
                 MI,
                 MO,
+                "motion",
             ],
         }
     }
