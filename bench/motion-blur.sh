@@ -6,7 +6,7 @@
 # compared: relative MSE and mean luminance ratio, ours over pbrt-v4's.
 # Then bench/scenes/motion-blur-camera.pbrt: the same seen by a camera that
 # turns and slides, and an instanced cube moving by its ObjectInstance; our
-# photon mapper against our path tracer; pbrt-v4 against itself.
+# photon mappers and bdpt against our path tracer; pbrt-v4 against itself.
 # PNG_OUT=file.png writes the first pair side by side (ours left).
 #
 # Usage: PBRT=path/to/pbrt [PNG_OUT=docs/motion-blur.png] bench/motion-blur.sh
@@ -67,6 +67,14 @@ for by in range(h // B):
 PY
     fi
 done
+# bdpt on the moving camera's scene (its light subpaths at the camera ray's
+# time, light tracing's particles at times of their own) against our path
+# tracer's render of it.
+start=$(date +%s.%N)
+"$bin" -q --threads 2 --scene bench/scenes/motion-blur-camera.pbrt --integrator bdpt --spp 64 \
+    -o "$out/motion-blur-camera-bdpt.pfm"
+echo "motion-blur-camera: ours, bdpt 64 spp, $(echo "$(date +%s.%N) - $start" | bc) s, against our path tracer"
+"$bin" compare "$out/motion-blur-camera-bdpt.pfm" "$out/motion-blur-camera-ours.pfm" --max-luminance 4
 # Both renderers' noise: pbrt-v4 against itself with another seed.
 "$PBRT" --quiet --nthreads 2 --seed 2 --outfile "$out/motion-blur-pbrt-seed2.pfm" bench/scenes/motion-blur.pbrt
 echo "motion-blur: pbrt-v4 seed 2 against seed 0"

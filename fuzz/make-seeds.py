@@ -125,6 +125,50 @@ scale = [1, 2, 1]
 fit = { height = 0.5, bottom_centre = [0.5, 1, 0.5] }
 """)
 
+# Motion: the shutter, and every kind of shape that may move.
+put("scene", "motion.toml", """name = "motion"
+[camera]
+position = [0, 0, -3]
+look_at = [0, 0, 0]
+fov_y = 40
+width = 16
+height = 12
+shutter = [0.25, 0.75]
+
+[materials]
+white = { albedo = [0.7, 0.7, 0.7] }
+
+[[lights]]
+type = "sphere"
+centre = [0, -1, 0]
+radius = 0.1
+power = 20
+
+[[shapes]]
+type = "quad"
+material = "white"
+vertices = [[-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1]]
+motion = { translate = [0.1, 0, 0] }
+
+[[shapes]]
+type = "box"
+material = "white"
+min = [-0.3, 0.2, -0.3]
+max = [0.3, 0.8, 0.3]
+motion = { translate = [0.5, 0, 0], rotate = [0, 45, 10], scale = [1, 2, 1], about = [0, 1, 0] }
+
+[[shapes]]
+type = "triangle"
+material = "white"
+vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+motion = { scale = 0.5 }
+
+[[shapes]]
+type = "mesh"
+path = "a.obj"
+motion = { rotate = [90, 0, 0] }
+""")
+
 # pbrt-v4 scenes: the input up to its first NUL is the scene; what follows is
 # served as any .ply (or .ply.gz) it names; virtual/inc.pbrt is a fixed file
 # (see fuzz_targets/pbrt.rs). Written for the fuzzer in the syntax of the

@@ -323,6 +323,37 @@ impl Camera {
         ))
     }
 
+    /// Where the camera moves at `time`: from its placement to its place
+    /// then (`None` when it stays).
+    fn moved(&self, time: f32) -> Option<glam::Mat4> {
+        self.motion.as_ref().map(|m| m.relative(time))
+    }
+
+    /// The pinhole's place at `time`.
+    pub fn position_at(&self, time: f32) -> Vec3 {
+        self.moved(time)
+            .map_or(self.position, |m| m.transform_point3(self.position))
+    }
+
+    /// [`Camera::project`] of the camera where it is at `time`.
+    pub fn project_at(&self, p: Vec3, time: f32) -> Option<(f32, f32)> {
+        match self.moved(time) {
+            None => self.project(p),
+            Some(m) => self.project(m.inverse().transform_point3(p)),
+        }
+    }
+
+    /// [`Camera::pdf_dir`] of the camera where it is at `time`.
+    pub fn pdf_dir_at(&self, d: Vec3, time: f32) -> f32 {
+        match self.moved(time) {
+            None => self.pdf_dir(d),
+            Some(m) => match m.inverse().transform_vector3(d).try_normalize() {
+                Some(d) => self.pdf_dir(d),
+                None => 0.0,
+            },
+        }
+    }
+
     /// A perspective camera without a lens: one point every ray leaves,
     /// which light tracing can connect to.
     pub fn is_pinhole(&self) -> bool {

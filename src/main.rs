@@ -177,20 +177,6 @@ fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quie
     }
 }
 
-/// Where bdpt's light paths fall short of motion blur, say so when it
-/// renders a scene that moves.
-fn report_motion(scene: &Scene, integrator: integrator::IntegratorKind, quiet: bool) {
-    let why = match integrator {
-        integrator::IntegratorKind::Bdpt => {
-            "bdpt's light subpaths see moving shapes and the camera where they are at time 0"
-        }
-        _ => return,
-    };
-    if !quiet && scene.has_motion() {
-        eprintln!("warning: {why}; the path tracer and sppm render motion blur in full");
-    }
-}
-
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     // Installed first, so that a signal during loading is not a silent death.
@@ -205,7 +191,6 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let scene = Scene::build(loaded.desc)?;
     report_dropped(&scene, args.quiet);
     report_subsurface(&scene, settings.integrator, args.quiet);
-    report_motion(&scene, settings.integrator, args.quiet);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {

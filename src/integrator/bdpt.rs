@@ -93,6 +93,9 @@ struct Vertex {
     /// Scattered by a specular lobe: no connection can end here.
     delta: bool,
     mode: TransportMode,
+    /// The time of the shutter the vertex is at (its subpath's): the
+    /// camera's, where the camera moves.
+    time: f32,
 }
 
 impl Vertex {
@@ -109,6 +112,15 @@ impl Vertex {
             pdf_rev: 0.0,
             delta: false,
             mode,
+            time: 0.0,
+        }
+    }
+
+    /// The camera's vertex at `p` (where it is at `time`).
+    fn camera(p: Vec3, time: f32) -> Vertex {
+        Vertex {
+            time,
+            ..Vertex::endpoint(Kind::Camera, p, Vec3::ZERO, TransportMode::Radiance)
         }
     }
 
@@ -117,6 +129,7 @@ impl Vertex {
             kind: Kind::Surface,
             p: hit.p,
             ng: hit.ng,
+            time: hit.time,
             hit: Some(hit),
             bsdf: Some(bsdf),
             wo,
@@ -198,7 +211,7 @@ impl Vertex {
         match self.kind {
             Kind::Light(li) => self.pdf_light(scene, li, next),
             Kind::Infinity(_) => self.convert_density(disk_density(scene), next),
-            Kind::Camera => self.convert_density(scene.camera.pdf_dir(wn), next),
+            Kind::Camera => self.convert_density(scene.camera.pdf_dir_at(wn, self.time), next),
             Kind::Surface => {
                 let (Some(hit), Some(bsdf), Some(prev)) = (&self.hit, &self.bsdf, prev) else {
                     return 0.0;
@@ -386,15 +399,10 @@ impl Bdpt {
         let mut ray = *ray;
         let mut beta = Vec3::ONE;
         let mut roulette = Vec3::ONE;
-        let mut pdf_fwd = scene.camera.pdf_dir(ray.d);
+        let mut pdf_fwd = scene.camera.pdf_dir_at(ray.d, ray.time);
         let mut diffs: Option<Differentials> = None;
         let max_vertices = self.limit(1);
-        path.push(Vertex::endpoint(
-            Kind::Camera,
-            ray.o,
-            Vec3::ZERO,
-            TransportMode::Radiance,
-        ));
+        path.push(Vertex::camera(ray.o, ray.time));
         loop {
             let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
                 // Into the environment: a vertex at infinity, weighed as
@@ -523,14 +531,23 @@ impl Bdpt {
     /// The light subpath: a light chosen by power, a particle leaving it
     /// and its bounces. A particle from a light at infinity starts on a
     /// disk across the scene, its first vertex at infinity.
-    fn light_subpath(&self, scene: &Scene, sampler: &mut Sampler, stats: &mut RayStats, path: &mut Vec<Vertex>) {
+    /// A light subpath through the scene as it is at `time`.
+    fn light_subpath(
+        &self,
+        scene: &Scene,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        path: &mut Vec<Vertex>,
+        time: f32,
+    ) {
         let u = sampler.next_2d();
         let u2 = sampler.next_2d();
         let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
             return;
         };
         let light = &scene.lights[li];
-        let le = light.sample_le_flux(Vec2::new(ux, u.y), u2);
+        let mut le = light.sample_le_flux(Vec2::new(ux, u.y), u2);
+        le.ray.time = time;
         let (pdf_pos, pdf_dir) = light.pdf_le(&le.ray, le.n);
         // The next vertex's density: from a light at infinity, the start's
         // on the disk (projected by `convert_density`); else the direction's.
@@ -675,7 +692,7 @@ impl Bdpt {
         let o = offset_origin(pt.p, hit.ng, w);
         let span = offset_origin(qs.p, qhit.ng, -w) - o;
         let len = span.length();
-        if len > 0.0 && scene.occluded(&Ray::new(o, span / len), 0.0, len * (1.0 - 1e-4)) {
+        if len > 0.0 && scene.occluded(&Ray::timed(o, span / len, hit.time), 0.0, len * (1.0 - 1e-4)) {
             return Vec3::ZERO;
         }
         l * self.mis_weight(scene, lights, cameras, None, s, t)
@@ -749,27 +766,29 @@ impl Bdpt {
             return None;
         }
         let (qbsdf, qhit) = (qs.bsdf.as_ref()?, qs.hit.as_ref()?);
-        let cam = &scene.camera;
-        let d = cam.position - qs.p;
+        // The camera where it is at the particle's time.
+        let (cam, time) = (&scene.camera, qs.time);
+        let position = cam.position_at(time);
+        let d = position - qs.p;
         let d2 = d.length_squared();
         let w = d.try_normalize()?;
-        let pdf_dir = cam.pdf_dir(-w);
+        let pdf_dir = cam.pdf_dir_at(-w, time);
         if pdf_dir <= 0.0 {
             return None;
         }
-        let (x, y) = cam.project(qs.p)?;
+        let (x, y) = cam.project_at(qs.p, time)?;
         let l = qs.beta * qs.f(w) * (w.dot(qbsdf.frame.z).abs() * pdf_dir / d2);
         if l == Vec3::ZERO || !l.is_finite() {
             return None;
         }
         stats.shadow_rays += 1;
         let o = offset_origin(qs.p, qhit.ng, w);
-        let span = cam.position - o;
+        let span = position - o;
         let len = span.length();
-        if len > 0.0 && scene.occluded(&Ray::new(o, span / len), 0.0, len * (1.0 - 1e-4)) {
+        if len > 0.0 && scene.occluded(&Ray::timed(o, span / len, time), 0.0, len * (1.0 - 1e-4)) {
             return None;
         }
-        let camera = Vertex::endpoint(Kind::Camera, cam.position, Vec3::ZERO, TransportMode::Radiance);
+        let camera = Vertex::camera(position, time);
         let w = self.mis_weight(scene, lights, &[], Some(&camera), s, 1);
         Some((Vec2::new(x, y), l * w))
     }
@@ -784,7 +803,12 @@ impl Bdpt {
         splat: &mut impl FnMut(Vec2, Vec3),
     ) {
         let mut lights = Vec::with_capacity(8);
-        self.light_subpath(scene, sampler, stats, &mut lights);
+        // Where things move, the particle's own time over the shutter.
+        let time = match scene.camera.shutter {
+            Some([open, close]) => open + (close - open) * sampler.next_f32(),
+            None => 0.0,
+        };
+        self.light_subpath(scene, sampler, stats, &mut lights, time);
         for s in 2..=lights.len() {
             if self.max_depth.is_some_and(|d| s - 1 > d as usize) {
                 break;
@@ -806,7 +830,8 @@ impl RadianceEstimator for Bdpt {
         let mut light_sampler = sampler.stream(LIGHT_SUBPATH_STREAM);
         let mut nee_sampler = sampler.stream(LIGHT_SAMPLE_STREAM);
         let mut l = self.camera_subpath(scene, ray, sampler, stats, &mut cameras);
-        self.light_subpath(scene, &mut light_sampler, stats, &mut lights);
+        // The light subpath through the scene as the camera ray sees it.
+        self.light_subpath(scene, &mut light_sampler, stats, &mut lights, ray.time);
         let depth_ok = |s: usize, t: usize| self.max_depth.is_none_or(|d| s + t - 2 <= d as usize);
         for t in 2..=cameras.len() {
             // s = 1 samples a light afresh, with or without a light subpath.
@@ -1025,6 +1050,41 @@ mod tests {
             let bd = render(&scene, &bdpt(1024, depth), &|| {}).unwrap().film;
             assert_agrees(&bd, &path, &format!("depth {depth:?}"));
         }
+    }
+
+    #[test]
+    fn agrees_with_the_path_tracer_where_things_and_the_camera_move() {
+        // The default room, its short block sliding and turning, the camera
+        // sliding: light subpaths, their connections and light tracing all
+        // see the scene at the camera ray's or the particle's time. With
+        // them all at time 0, the first block checked was 8% off in green.
+        use crate::geometry::motion::Motion;
+        use glam::Mat4;
+        let mut d = crate::scene::builtin::cornell();
+        (d.camera.width, d.camera.height) = (24, 24);
+        let end = Mat4::from_translation(Vec3::new(0.4, 0.0, 0.2)) * Mat4::from_rotation_y(0.8);
+        let block = 10..20;
+        let centre = d.triangles[block.clone()]
+            .iter()
+            .flat_map(|t| t.vertices)
+            .fold(Vec3::ZERO, |a, v| a + v / 30.0);
+        d.moving.push(crate::scene::MovingTriangles {
+            triangles: block,
+            motion: Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).unwrap().about(centre),
+        });
+        d.camera_motion = Some(
+            Motion::new(
+                Mat4::IDENTITY,
+                Mat4::from_translation(Vec3::new(0.1, 0.0, 0.0)),
+                [0.0, 1.0],
+            )
+            .unwrap(),
+        );
+        let scene = Scene::build(d).unwrap();
+        assert!(scene.camera.is_pinhole() && scene.has_motion());
+        let path = render(&scene, &path_settings(4096, None), &|| {}).unwrap().film;
+        let bd = render(&scene, &bdpt(1024, None), &|| {}).unwrap().film;
+        assert_agrees(&bd, &path, "moving");
     }
 
     /// A floor under a rough metal ball, a rough glass ball and a coated
