@@ -148,7 +148,18 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     for (name, m) in &materials {
         desc.material(name, m.clone());
     }
-    if let Some(at) = file.shapes.iter().find_map(|s| s.get_ref().motion.as_ref()) {
+    if let Some(motion) = &file.camera.get_ref().motion {
+        let at = |m: String| src.error(motion.span(), format!("camera: `motion`: {m}"));
+        let (end, about) = motion_end(motion.get_ref(), desc.camera.position).map_err(at)?;
+        desc.camera_motion = Some(Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).map_err(at)?.about(about));
+    }
+    let camera_motion = file.camera.get_ref().motion.as_ref();
+    if let Some(at) = file
+        .shapes
+        .iter()
+        .find_map(|s| s.get_ref().motion.as_ref())
+        .or(camera_motion)
+    {
         // Light samples through media and below surfaces would see the
         // shapes where they start.
         if !desc.media.is_empty() || desc.materials.iter().any(|(_, m)| m.has_subsurface()) {

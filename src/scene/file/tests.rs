@@ -580,6 +580,36 @@ fn shapes_move_by_their_motion_and_bad_motions_are_refused() {
 }
 
 #[test]
+fn the_camera_may_move_turning_about_its_position() {
+    let text = "[camera]\nposition = [0, 0, -3]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+                motion = { translate = [1, 0, 0], rotate = [0, 90, 0] }\n";
+    let d = parse_str(text).unwrap().desc;
+    let m = d.camera_motion.as_ref().unwrap();
+    let p = Vec3::new(0.0, 0.0, -3.0);
+    // Its position slides straight along x while the view turns a quarter
+    // about it: what it looked at, 3 ahead, is 3 along x from it at time 1.
+    assert!((m.relative(0.5).transform_point3(p) - Vec3::new(0.5, 0.0, -3.0)).length() < 1e-5);
+    let target = m.relative(1.0).transform_point3(Vec3::ZERO);
+    assert!((target - Vec3::new(4.0, 0.0, -3.0)).length() < 1e-4, "{target}");
+    assert!(Scene::build(d).unwrap().has_motion());
+    let e =
+        parse_str(&format!("{text}[media.fog]\nsigma_s = 0.1\n").replace("fov_y = 40", "fov_y = 40\nmedium = \"fog\""))
+            .unwrap_err()
+            .to_string();
+    assert!(
+        e.starts_with("test.toml:6:") && e.contains("`motion` in a scene with participating media"),
+        "{e}"
+    );
+    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "scale = -1"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:5:") && e.contains("camera: `motion`: scale"),
+        "{e}"
+    );
+}
+
+#[test]
 fn coated_conductor_materials_are_read_and_checked() {
     let text = format!(
         "{CAMERA}[materials.rims]\ntype = \"coatedconductor\"\nroughness = 0.1\nmetal = \"Al\"\n\

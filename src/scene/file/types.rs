@@ -127,6 +127,9 @@ pub(super) struct CameraSpec {
     /// When the shutter opens and closes, as fractions of shapes'
     /// `motion` (which runs from 0 to 1).
     pub(super) shutter: Option<Spanned<Vec<Num>>>,
+    /// Where the camera moves while the shutter is open (turning about
+    /// its position unless `about` is given).
+    pub(super) motion: Option<Spanned<MotionSpec>>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
