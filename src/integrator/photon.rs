@@ -91,7 +91,10 @@ impl PhotonMapping<'_> {
         admit: Admit,
         g: &Gather,
     ) -> Vec3 {
-        let rest = scene.rest_frame(hit.object, hit.time);
+        let rest = match scene.has_motion() {
+            true => scene.rest_frame(hit.object, hit.time),
+            false => None,
+        };
         let (p, n, place) = match &rest {
             None => (hit.p, facing(hit, wo), Place::Still),
             Some(r) => (

@@ -66,10 +66,22 @@ impl Place {
         }
     }
 
+    /// Small enough to stay inside the gathers' loops with a still scene's
+    /// photons; a moving one's range is checked out of line.
+    #[inline(always)]
     fn holds(&self, ph: &Photon) -> bool {
+        if ph.is_moving() {
+            self.holds_moving(ph)
+        } else {
+            *self == Place::Still
+        }
+    }
+
+    #[inline(never)]
+    fn holds_moving(&self, ph: &Photon) -> bool {
         match *self {
-            Place::Still => !ph.is_moving(),
-            Place::Moving { first, end } => ph.is_moving() && (first..end).contains(&ph.object),
+            Place::Still => false,
+            Place::Moving { first, end } => (first..end).contains(&ph.object),
         }
     }
 }

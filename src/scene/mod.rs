@@ -1348,6 +1348,7 @@ impl Scene {
     /// `time`; `None` when it does not move. Photons traced over the
     /// shutter are kept there, so that the light a moving shape carries
     /// with it gathers where the shape is.
+    #[inline]
     pub fn rest_frame(&self, object: u32, time: f32) -> Option<RestFrame> {
         let m = self.moving_run(object)?;
         let from_rest = m.motion.relative(time);
@@ -1359,6 +1360,7 @@ impl Scene {
     }
 
     /// The moving run of triangles object `object` (a `Hit::object`) is in.
+    #[inline]
     pub fn moving_run(&self, object: u32) -> Option<&MovingTriangles> {
         if self.movers.is_empty() {
             return None;

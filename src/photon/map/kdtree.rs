@@ -104,19 +104,19 @@ impl PhotonMap {
         while sp > 0 {
             sp -= 1;
             let (lo, hi) = stack[sp];
-            if (hi - lo) as usize <= LEAF {
-                for i in lo..hi {
-                    if dist2(ph[i as usize].p, q) <= r2 {
-                        f(i, &ph[i as usize]);
-                    }
+            // A leaf's photons, or an inner node's own: one call of `f`,
+            // which the compiler then keeps inline.
+            let (leaf, m) = ((hi - lo) as usize <= LEAF, lo + (hi - lo) / 2);
+            let own = if leaf { lo..hi } else { m..m + 1 };
+            for i in own {
+                if dist2(ph[i as usize].p, q) <= r2 {
+                    f(i, &ph[i as usize]);
                 }
+            }
+            if leaf {
                 continue;
             }
-            let m = lo + (hi - lo) / 2;
             let node = &ph[m as usize];
-            if dist2(node.p, q) <= r2 {
-                f(m, node);
-            }
             let d = q[node.axis()] - node.p[node.axis()];
             let (near, far) = if d < 0.0 {
                 ((lo, m), (m + 1, hi))
@@ -152,27 +152,8 @@ impl PhotonMap {
         let mut heap = BinaryHeap::from(std::mem::take(out));
         let mut r2 = r2_max;
         let ph = &self.photons[..];
-        let consider = |i: u32, heap: &mut BinaryHeap<Neighbour>, r2: &mut f32| {
-            let p = &ph[i as usize];
-            let d2 = dist2(p.p, q);
-            if d2 > *r2 || !accept(p) {
-                return;
-            }
-            let nb = Neighbour { d2, index: i };
-            if heap.len() < k {
-                heap.push(nb);
-            } else if heap.peek().is_some_and(|top| nb < *top) {
-                heap.pop();
-                heap.push(nb);
-            } else {
-                return;
-            }
-            if heap.len() == k {
-                if let Some(top) = heap.peek() {
-                    *r2 = top.d2;
-                }
-            }
-        };
+        let consider =
+            |i: u32, heap: &mut BinaryHeap<Neighbour>, r2: &mut f32| consider_nearest(ph, q, k, &accept, i, heap, r2);
         // Each stacked range carries a lower bound on its photons' squared
         // distance (from the splitting planes crossed to reach it); it is
         // skipped when popped if the radius has shrunk below that bound.
@@ -211,6 +192,41 @@ impl PhotonMap {
         }
         *out = heap.into_vec();
         r2
+    }
+}
+
+/// Offers photon `i` to a k-nearest search around `q` (the heap of the
+/// nearest so far, `r2` the radius they reach once k are found). Forced
+/// inline: as a closure it was left out of line once `accept` grew, and
+/// the call cost the default render 8%.
+#[inline(always)]
+fn consider_nearest(
+    ph: &[Photon],
+    q: Vec3,
+    k: usize,
+    accept: &impl Fn(&Photon) -> bool,
+    i: u32,
+    heap: &mut BinaryHeap<Neighbour>,
+    r2: &mut f32,
+) {
+    let p = &ph[i as usize];
+    let d2 = dist2(p.p, q);
+    if d2 > *r2 || !accept(p) {
+        return;
+    }
+    let nb = Neighbour { d2, index: i };
+    if heap.len() < k {
+        heap.push(nb);
+    } else if heap.peek().is_some_and(|top| nb < *top) {
+        heap.pop();
+        heap.push(nb);
+    } else {
+        return;
+    }
+    if heap.len() == k {
+        if let Some(top) = heap.peek() {
+            *r2 = top.d2;
+        }
     }
 }
 
