@@ -528,10 +528,10 @@ impl Bdpt {
         (beta.is_finite() && beta.max_element() > 0.0).then_some(fwd)
     }
 
-    /// The light subpath: a light chosen by power, a particle leaving it
-    /// and its bounces. A particle from a light at infinity starts on a
-    /// disk across the scene, its first vertex at infinity.
-    /// A light subpath through the scene as it is at `time`.
+    /// The light subpath through the scene as it is at `time`: a light
+    /// chosen by power, a particle leaving it and its bounces. A particle
+    /// from a light at infinity starts on a disk across the scene, its
+    /// first vertex at infinity.
     fn light_subpath(
         &self,
         scene: &Scene,
@@ -1080,11 +1080,19 @@ mod tests {
             )
             .unwrap(),
         );
-        let scene = Scene::build(d).unwrap();
-        assert!(scene.camera.is_pinhole() && scene.has_motion());
-        let path = render(&scene, &path_settings(4096, None), &|| {}).unwrap().film;
-        let bd = render(&scene, &bdpt(1024, None), &|| {}).unwrap().film;
-        assert_agrees(&bd, &path, "moving");
+        // And the camera alone moving (turning): hits then still carry
+        // the camera ray's time, though no shape needs it.
+        let mut camera_only = d.clone();
+        camera_only.moving.clear();
+        let turn = Motion::new(Mat4::IDENTITY, Mat4::from_rotation_y(0.2), [0.0, 1.0]).unwrap();
+        camera_only.camera_motion = Some(turn.about(camera_only.camera.position));
+        for (what, d) in [("moving", d), ("the camera alone moving", camera_only)] {
+            let scene = Scene::build(d).unwrap();
+            assert!(scene.camera.is_pinhole() && scene.has_motion());
+            let path = render(&scene, &path_settings(4096, None), &|| {}).unwrap().film;
+            let bd = render(&scene, &bdpt(1024, None), &|| {}).unwrap().film;
+            assert_agrees(&bd, &path, what);
+        }
     }
 
     /// A floor under a rough metal ball, a rough glass ball and a coated

@@ -1125,6 +1125,12 @@ impl Scene {
             order.extend(run_bvh.order.iter().map(|&j| members[j as usize]));
             let b = run_bvh.bounds();
             let (min, max) = m.motion.bounds(b.min, b.max);
+            if !(min.is_finite() && max.is_finite()) {
+                return Err(Error::Scene(format!(
+                    "moving triangles {}..{}: their motion takes them beyond finite coordinates",
+                    m.triangles.start, m.triangles.end
+                )));
+            }
             movers.push(Mover {
                 bvh: run_bvh,
                 base,
@@ -1295,9 +1301,11 @@ impl Scene {
         let mut hit = self.intersect_still(ray, t_min, t_max);
         if !self.movers.is_empty() {
             hit = self.intersect_movers(ray, t_min, hit.map_or(t_max, |h| h.t)).or(hit);
-            if let Some(h) = &mut hit {
-                h.time = ray.time;
-            }
+        }
+        // Also where only the camera moves: light tracing joins a hit to
+        // the camera where it is at the hit's time.
+        if let Some(h) = &mut hit {
+            h.time = ray.time;
         }
         hit
     }
@@ -2579,6 +2587,23 @@ mod motion_tests {
         // The quad's area is 1.5 times its start's; a face across x keeps its own.
         assert!((r.area_scale(Vec3::Z) - 1.5).abs() < 1e-5);
         assert!((r.area_scale(Vec3::X) - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_motion_beyond_finite_coordinates_is_refused() {
+        let mut d = SceneDesc::empty("far", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        d.triangles.extend(test_quad(m, 0.0, 1.0));
+        let half_turn = Motion::new(Mat4::IDENTITY, Mat4::from_rotation_y(std::f32::consts::PI), [0.0, 1.0]).unwrap();
+        d.moving.push(MovingTriangles {
+            triangles: 0..2,
+            motion: half_turn.about(Vec3::new(3e38, 0.0, 0.0)),
+        });
+        let e = Scene::build(d).err().unwrap().to_string();
+        assert!(
+            e.contains("moving triangles 0..2: their motion takes them beyond finite coordinates"),
+            "{e}"
+        );
     }
 
     #[test]

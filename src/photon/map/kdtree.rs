@@ -198,7 +198,7 @@ impl PhotonMap {
 /// Offers photon `i` to a k-nearest search around `q` (the heap of the
 /// nearest so far, `r2` the radius they reach once k are found). Forced
 /// inline: as a closure it was left out of line once `accept` grew, and
-/// the call cost the default render 8%.
+/// the call cost the default render 7%.
 #[inline(always)]
 fn consider_nearest(
     ph: &[Photon],

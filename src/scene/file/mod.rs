@@ -150,8 +150,15 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     }
     if let Some(motion) = &file.camera.get_ref().motion {
         let at = |m: String| src.error(motion.span(), format!("camera: `motion`: {m}"));
+        // A camera that grows or shrinks would change the solid angle its
+        // rays cover, which light tracing's densities do not follow.
+        if motion.get_ref().scale.is_some() {
+            return Err(at(
+                "a camera does not scale; give `translate`, `rotate` and `about`".into()
+            ));
+        }
         let (end, about) = motion_end(motion.get_ref(), desc.camera.position).map_err(at)?;
-        desc.camera_motion = Some(Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).map_err(at)?.about(about));
+        desc.camera_motion = Some(moving(end, about).map_err(at)?);
     }
     let camera_motion = file.camera.get_ref().motion.as_ref();
     if let Some(at) = file
@@ -480,7 +487,7 @@ fn shapes(
                     (lo.min(v), hi.max(v))
                 });
             let (end, about) = motion_end(motion.get_ref(), (lo + hi) * 0.5).map_err(at)?;
-            let motion = Motion::new(Mat4::IDENTITY, end, [0.0, 1.0]).map_err(at)?.about(about);
+            let motion = moving(end, about).map_err(at)?;
             desc.moving.push(MovingTriangles { triangles, motion });
         }
         let shapes = match s.kind {
@@ -544,6 +551,17 @@ fn motion_end(m: &MotionSpec, centre: Vec3) -> std::result::Result<(Mat4, Vec3),
         return Err("the motion is not finite".into());
     }
     Ok((end, about))
+}
+
+/// The motion from the identity at time 0 to `end` at time 1, given about
+/// `about`.
+fn moving(end: Mat4, about: Vec3) -> std::result::Result<Motion, String> {
+    let motion = Motion::new(Mat4::IDENTITY, end, [0.0, 1.0])?.about(about);
+    // Turning about a far point can carry a shape beyond finite numbers.
+    if !motion.relative(1.0).is_finite() {
+        return Err("the motion takes it beyond finite coordinates".into());
+    }
+    Ok(motion)
 }
 
 /// The `[settings]` table: each key a setting of the table in

@@ -600,11 +600,19 @@ fn the_camera_may_move_turning_about_its_position() {
         e.starts_with("test.toml:6:") && e.contains("`motion` in a scene with participating media"),
         "{e}"
     );
-    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "scale = -1"))
+    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "scale = 2"))
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("test.toml:5:") && e.contains("camera: `motion`: scale"),
+        e.starts_with("test.toml:5:") && e.contains("camera: `motion`: a camera does not scale"),
+        "{e}"
+    );
+    // Turning half round a point far away would throw it beyond f32.
+    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "rotate = [0, 180, 0], about = [3e38, 0, 0]"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("test.toml:5:") && e.contains("beyond finite coordinates"),
         "{e}"
     );
 }
