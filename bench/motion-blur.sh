@@ -5,8 +5,9 @@
 # by both at the file's size and sample count with the path tracer, and
 # compared: relative MSE and mean luminance ratio, ours over pbrt-v4's.
 # Then bench/scenes/motion-blur-camera.pbrt: the same seen by a camera that
-# turns and slides, and an instanced cube moving by its ObjectInstance; our
-# photon mappers and bdpt against our path tracer; pbrt-v4 against itself.
+# turns and slides, and an instanced cube moving by its ObjectInstance; and
+# bench/scenes/motion-blur-spheres.pbrt, moving spheres and a disk, by both.
+# Our photon mappers and bdpt against our path tracer; pbrt-v4 against itself.
 # PNG_OUT=file.png writes the first pair side by side (ours left).
 #
 # Usage: PBRT=path/to/pbrt [PNG_OUT=docs/motion-blur.png] bench/motion-blur.sh
@@ -22,7 +23,7 @@ mkdir -p "$out"
 # The camera scene twice for pbrt-v4: in its default rendering space, then in
 # world space (see docs/pbrt.md, ActiveTransform: it interpolates a moving
 # instance in its rendering space).
-for run in "motion-blur" "motion-blur-camera" "motion-blur-camera --render-coord-sys world"; do
+for run in "motion-blur" "motion-blur-camera" "motion-blur-camera --render-coord-sys world" "motion-blur-spheres"; do
     set -- $run
     name=$1
     shift

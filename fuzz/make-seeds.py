@@ -167,6 +167,21 @@ motion = { scale = 0.5 }
 type = "mesh"
 path = "a.obj"
 motion = { rotate = [90, 0, 0] }
+
+[[shapes]]
+type = "sphere"
+material = "white"
+centre = [0.5, 0.5, 0]
+radius = 0.2
+motion = { translate = [0, -0.5, 0], scale = [1, 1.5, 1] }
+
+[[shapes]]
+type = "disk"
+material = "white"
+centre = [-0.5, 0.5, 0]
+normal = [0, -1, 0]
+radius = 0.3
+motion = { rotate = [30, 0, 0], about = [-0.8, 0.5, 0] }
 """)
 
 # pbrt-v4 scenes: the input up to its first NUL is the scene; what follows is

@@ -400,9 +400,15 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     if scene.has_motion() {
         let d = &scene.desc;
         let triangles: usize = d.moving.iter().map(|m| m.triangles.len()).sum();
+        let spheres = d
+            .moving_shapes
+            .iter()
+            .filter(|m| matches!(m.shape, raytracer::scene::CutShapes::Sphere(_)))
+            .count();
         println!(
-            "moving: {} meshes ({triangles} triangles){}, shutter open from {} to {}",
+            "moving: {} meshes ({triangles} triangles), {spheres} spheres, {} disks{}, shutter open from {} to {}",
             d.moving.len(),
+            d.moving_shapes.len() - spheres,
             if d.camera_motion.is_some() {
                 " and the camera"
             } else {

@@ -64,6 +64,7 @@ pub fn place_and_build(mesh: &Mesh) {
         settings: SceneSettings::default(),
         texture_spp: 64,
         moving: vec![],
+        moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
     };

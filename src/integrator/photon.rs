@@ -368,11 +368,7 @@ impl PhotonPipeline {
             Some(map) if ps.precompute_irradiance => {
                 let start = std::time::Instant::now();
                 let place = |ph: &crate::photon::Photon| match ph.is_moving() {
-                    true => Place::of(
-                        scene
-                            .moving_run(ph.object)
-                            .map(|m| m.triangles.start as u32..m.triangles.end as u32),
-                    ),
+                    true => Place::of(scene.moving_object(ph.object).map(|(r, _)| r)),
                     false => Place::Still,
                 };
                 let pre = PrecomputedIrradiance::build(map, &ps.gather, global_admit(settings), place);

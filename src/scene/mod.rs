@@ -379,6 +379,9 @@ pub struct SceneDesc {
     /// Runs of `triangles` that move while the shutter is open (placed as
     /// at their motion's start).
     pub moving: Vec<MovingTriangles>,
+    /// Spheres and disks that move while the shutter is open (placed as at
+    /// their motion's start).
+    pub moving_shapes: Vec<MovingShape>,
     /// The times the shutter opens and closes: camera rays' times are
     /// uniform between them when anything moves.
     pub shutter: [f32; 2],
@@ -427,6 +430,14 @@ impl RestFrame {
     }
 }
 
+/// A sphere or a disk of a scene (`CutShapes::Sphere` or `CutShapes::Disk`,
+/// indices into `SceneDesc::spheres` or `disks`), moving by `motion`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingShape {
+    pub shape: CutShapes,
+    pub motion: motion::Motion,
+}
+
 /// Triangles `triangles` of a scene, moving by `motion`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MovingTriangles {
@@ -453,6 +464,7 @@ impl SceneDesc {
             settings: SceneSettings::default(),
             texture_spp: 64,
             moving: vec![],
+            moving_shapes: vec![],
             shutter: [0.0, 1.0],
             camera_motion: None,
         }
@@ -573,7 +585,11 @@ const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::n
 
 /// `triangle_shading` for a moving triangle, stored as placed at its
 /// motion's start and hit where `to_world` took it.
-fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(ShadingGeometry, [Vec3; 2])> {
+fn moved_shading(
+    hit: &Hit,
+    to_world: glam::Mat4,
+    shading: impl FnOnce(&Hit) -> Option<(ShadingGeometry, [Vec3; 2])>,
+) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let m = glam::Mat3::from_mat4(to_world);
     let (back, normals) = (m.inverse(), m.inverse().transpose());
     let placed = Hit {
@@ -583,7 +599,7 @@ fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(S
         dpdu: back * hit.dpdu,
         ..*hit
     };
-    let (g, [dpdu, dpdv]) = triangle_shading(t, &placed)?;
+    let (g, [dpdu, dpdv]) = shading(&placed)?;
     let g = ShadingGeometry {
         n: (normals * g.n).normalize(),
         dpdu: m * g.dpdu,
@@ -592,6 +608,28 @@ fn moved_shading(t: &TriangleDesc, hit: &Hit, to_world: glam::Mat4) -> Option<(S
         dndv: normals * g.dndv,
     };
     Some((g, [m * dpdu, m * dpdv]))
+}
+
+/// A ray carried back from its time into a moving shape's start placement,
+/// and the transformation from there to the ray's time.
+fn carried_back(m: &motion::Motion, ray: &Ray) -> (Ray, glam::Mat4) {
+    let to_world = m.relative(ray.time);
+    let inv = to_world.inverse();
+    let local = Ray::timed(inv.transform_point3(ray.o), inv.transform_vector3(ray.d), ray.time);
+    (local, to_world)
+}
+
+/// A hit found in a moving shape's start placement, placed where the shape
+/// is by `to_world`.
+fn placed_hit(h: Hit, to_world: glam::Mat4) -> Hit {
+    let normals = glam::Mat3::from_mat4(to_world).inverse().transpose();
+    Hit {
+        p: to_world.transform_point3(h.p),
+        ng: (normals * h.ng).normalize(),
+        ns: (normals * h.ns).normalize(),
+        dpdu: to_world.transform_vector3(h.dpdu),
+        ..h
+    }
 }
 
 /// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
@@ -860,6 +898,9 @@ pub struct Scene {
     /// sphere i, then come the disks, then the curves (`desc.curves`, not
     /// copied: a scene of hair may hold millions).
     shapes: BoxBvh,
+    /// The motion of each sphere and disk (ids as in `shapes`; empty when
+    /// none moves).
+    shape_motions: Vec<Option<motion::Motion>>,
     /// The cut-outs' alpha textures.
     alphas: Vec<Texture>,
     /// Participating media (`SceneDesc::media`, without their names).
@@ -904,10 +945,7 @@ impl Mover {
         if !self.bounds.hit_by(ray, t_max) {
             return None;
         }
-        let m = self.motion.relative(ray.time);
-        let inv = m.inverse();
-        let local = Ray::timed(inv.transform_point3(ray.o), inv.transform_vector3(ray.d), ray.time);
-        Some((local, m))
+        Some(carried_back(&self.motion, ray))
     }
 }
 
@@ -915,7 +953,7 @@ impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
         let mut camera = c.camera().ok_or_else(|| Error::Scene(c.problem()))?;
-        if !desc.moving.is_empty() || desc.camera_motion.is_some() {
+        if !desc.moving.is_empty() || !desc.moving_shapes.is_empty() || desc.camera_motion.is_some() {
             let [open, close] = desc.shutter;
             if !(open.is_finite() && close.is_finite() && open <= close) {
                 return Err(Error::Scene(format!(
@@ -1164,7 +1202,8 @@ impl Scene {
                 )));
             }
         }
-        let shapes = shape_bvh(&spheres, &disks, &desc.curves)?;
+        let shape_motions = shape_motions(&desc, &spheres, &disks)?;
+        let shapes = shape_bvh(&spheres, &disks, &desc.curves, &shape_motions)?;
         let (media, object_interfaces, interfaces) = media_tables(&desc, lights.len())?;
         let footprint = camera.pixel_footprint(desc.texture_spp);
         let mut scene = Scene {
@@ -1187,6 +1226,7 @@ impl Scene {
             spheres,
             disks,
             shapes,
+            shape_motions,
             alphas,
             media,
             camera_medium: desc.camera_medium,
@@ -1327,14 +1367,7 @@ impl Scene {
         let (slot, u, v, to_world) = best?;
         let tri = &self.triangles[slot];
         let h = self.triangle_hit(slot, u, v, best_t, tri.v0 + tri.e1 * u + tri.e2 * v);
-        let normals = glam::Mat3::from_mat4(to_world).inverse().transpose();
-        Some(Hit {
-            p: to_world.transform_point3(h.p),
-            ng: (normals * h.ng).normalize(),
-            ns: (normals * h.ns).normalize(),
-            dpdu: to_world.transform_vector3(h.dpdu),
-            ..h
-        })
+        Some(placed_hit(h, to_world))
     }
 
     /// Whether a moving triangle blocks the ray before `t_max`.
@@ -1358,13 +1391,34 @@ impl Scene {
     /// with it gathers where the shape is.
     #[inline]
     pub fn rest_frame(&self, object: u32, time: f32) -> Option<RestFrame> {
-        let m = self.moving_run(object)?;
-        let from_rest = m.motion.relative(time);
+        let (objects, motion) = self.moving_object(object)?;
+        let from_rest = motion.relative(time);
         Some(RestFrame {
-            objects: m.triangles.start as u32..m.triangles.end as u32,
+            objects,
             to_rest: from_rest.inverse(),
             from_rest,
         })
+    }
+
+    /// The objects moving together with object `object` (a `Hit::object`:
+    /// its run of triangles, or the sphere or disk alone) and their motion;
+    /// `None` when it does not move.
+    #[inline]
+    pub fn moving_object(&self, object: u32) -> Option<(std::ops::Range<u32>, &motion::Motion)> {
+        if let Some(m) = self.moving_run(object) {
+            return Some((m.triangles.start as u32..m.triangles.end as u32, &m.motion));
+        }
+        if self.shape_motions.is_empty() {
+            return None;
+        }
+        let k = (object as usize).checked_sub(self.desc.triangles.len())?;
+        let id = match k.checked_sub(self.desc.spheres.len()) {
+            None => k,
+            Some(j) if j < self.desc.disks.len() => self.spheres.len() + j,
+            Some(_) => return None,
+        };
+        let m = self.shape_motions.get(id)?.as_ref()?;
+        Some((object..object + 1, m))
     }
 
     /// The moving run of triangles object `object` (a `Hit::object`) is in.
@@ -1418,6 +1472,16 @@ impl Scene {
             }
             Found::Shape(id) => id as usize,
         };
+        if let Some(Some(m)) = self.shape_motions.get(idx) {
+            let (local, to_world) = carried_back(m, ray);
+            return Some(placed_hit(self.shape_record(idx, &local, t_min, best_t), to_world));
+        }
+        Some(self.shape_record(idx, ray, t_min, best_t))
+    }
+
+    /// The hit record of sphere, disk or curve `idx` (ids as `shapes`'s),
+    /// met by `ray` at `best_t`.
+    fn shape_record(&self, idx: usize, ray: &Ray, t_min: f32, best_t: f32) -> Hit {
         let p = ray.at(best_t);
         let before = self.desc.triangles.len() + self.desc.spheres.len() + self.desc.disks.len();
         if let Some(s) = self.spheres.get(idx) {
@@ -1425,7 +1489,7 @@ impl Scene {
             let p = c + (p - c) * (s.sphere.radius / (p - c).length());
             let n = (p - c) / s.sphere.radius;
             let (uv, dpdu) = s.uv_dpdu(n);
-            return Some(Hit {
+            return Hit {
                 t: best_t,
                 p,
                 ng: n,
@@ -1444,16 +1508,16 @@ impl Scene {
                 },
                 light: s.light,
                 time: 0.0,
-            });
+            };
         }
         let j = idx - self.spheres.len();
         if j >= self.disks.len() {
-            return Some(self.curve_hit(j - self.disks.len(), ray, t_min, best_t));
+            return self.curve_hit(j - self.disks.len(), ray, t_min, best_t);
         }
         let d = &self.disks[j];
         let p = p - d.disk.normal * (p - d.disk.centre).dot(d.disk.normal);
         let (uv, dpdu) = d.disk.uv_dpdu(p);
-        Some(Hit {
+        Hit {
             t: best_t,
             p,
             ng: d.disk.normal,
@@ -1472,7 +1536,7 @@ impl Scene {
             },
             light: d.light,
             time: 0.0,
-        })
+        }
     }
 
     /// The hit record of curve `k`, met by `ray` at `t` (its intersection
@@ -1512,6 +1576,17 @@ impl Scene {
     /// has cut-outs: without, the test is the plain one it always was).
     #[inline(always)]
     fn shape_hit<const CUT: bool>(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        if let Some(Some(m)) = self.shape_motions.get(id as usize) {
+            // Met in its start placement by the ray carried back from its
+            // time (the same t along both: the map is affine).
+            let (local, _) = carried_back(m, ray);
+            return self.shape_hit_placed::<CUT>(id, &local, t_min, t_max);
+        }
+        self.shape_hit_placed::<CUT>(id, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn shape_hit_placed<const CUT: bool>(&self, id: u32, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         match self.spheres.get(id as usize) {
             Some(s) => {
                 let t = s.sphere.intersect(ray, t_min, t_max)?;
@@ -1714,9 +1789,30 @@ impl Scene {
                 let t = self.desc.triangles.get(hit.object as usize)?;
                 match self.motion_of(hit.object) {
                     None => triangle_shading(t, hit),
-                    Some(m) => moved_shading(t, hit, m.relative(hit.time)),
+                    Some(m) => moved_shading(hit, m.relative(hit.time), |h| triangle_shading(t, h)),
                 }
             }
+            PrimKind::Sphere | PrimKind::Disk => {
+                // Spheres' ids in `shapes` are their objects' after the
+                // triangles'; disks' come after every sphere's.
+                let k = (hit.object as usize).checked_sub(tris)?;
+                let id = match hit.kind {
+                    PrimKind::Sphere => k,
+                    _ => self.spheres.len() + k.checked_sub(self.desc.spheres.len())?,
+                };
+                match self.shape_motions.get(id).and_then(Option::as_ref) {
+                    None => self.shape_shading(hit),
+                    Some(m) => moved_shading(hit, m.relative(hit.time), |h| self.shape_shading(h)),
+                }
+            }
+            PrimKind::Curve | PrimKind::Light => None,
+        }
+    }
+
+    /// `shading_geometry` of a sphere or disk as placed in the description.
+    fn shape_shading(&self, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
+        let tris = self.desc.triangles.len();
+        match hit.kind {
             PrimKind::Sphere => {
                 let object = self.spheres.get((hit.object as usize).checked_sub(tris)?)?;
                 let s = &object.sphere;
@@ -1757,7 +1853,7 @@ impl Scene {
                 };
                 Some((g, [hit.dpdu, dpdv]))
             }
-            PrimKind::Curve | PrimKind::Light => None,
+            _ => None,
         }
     }
 
@@ -1972,7 +2068,7 @@ impl Scene {
             }
         }
         // The count is unchanged, so this cannot fail.
-        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.desc.curves) {
+        if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.desc.curves, &self.shape_motions) {
             self.shapes = shapes;
         }
     }
@@ -1987,11 +2083,16 @@ impl Scene {
         for m in &self.movers {
             b = b.union(&m.bounds);
         }
-        for s in &self.spheres {
-            b = b.union(&s.sphere.bounds());
-        }
-        for d in &self.disks {
-            b = b.union(&d.disk.bounds());
+        let shapes = self.spheres.iter().map(|s| s.sphere.bounds());
+        for (k, sb) in shapes.chain(self.disks.iter().map(|d| d.disk.bounds())).enumerate() {
+            // A moving sphere's or disk's box over its whole motion.
+            b = match self.shape_motions.get(k).and_then(Option::as_ref) {
+                None => b.union(&sb),
+                Some(m) => {
+                    let (min, max) = m.bounds(sb.min, sb.max);
+                    b.union(&crate::math::Aabb { min, max })
+                }
+            };
         }
         for c in &self.desc.curves {
             b = b.union(&c.curve.bounds());
@@ -2003,15 +2104,66 @@ impl Scene {
     }
 }
 
+/// The motions of the spheres and disks (ids as `shape_bvh`'s: every
+/// sphere, lights' included, then every disk), empty when none moves.
+fn shape_motions(
+    desc: &SceneDesc,
+    spheres: &[SphereObject],
+    disks: &[DiskObject],
+) -> Result<Vec<Option<motion::Motion>>> {
+    if desc.moving_shapes.is_empty() {
+        return Ok(vec![]);
+    }
+    let mut motions = vec![None; spheres.len() + disks.len()];
+    for m in &desc.moving_shapes {
+        let (id, cut) = match m.shape {
+            CutShapes::Sphere(i) if i < desc.spheres.len() => (i, spheres[i].alpha.is_some()),
+            CutShapes::Disk(j) if j < desc.disks.len() => (spheres.len() + j, disks[j].alpha.is_some()),
+            ref other => {
+                return Err(Error::Scene(format!(
+                    "a moving shape names {other:?}, not a sphere or disk of the scene"
+                )))
+            }
+        };
+        if cut {
+            return Err(Error::Scene(format!(
+                "moving {:?}: an alpha cut-out on a moving shape is not supported",
+                m.shape
+            )));
+        }
+        if motions[id].replace(m.motion.clone()).is_some() {
+            return Err(Error::Scene(format!("{:?} is given two motions", m.shape)));
+        }
+    }
+    Ok(motions)
+}
+
 /// The BVH over the spheres', the disks' and the curves' boxes (ids:
 /// spheres, then disks, then curves).
-fn shape_bvh(spheres: &[SphereObject], disks: &[DiskObject], curves: &[CurveDesc]) -> Result<BoxBvh> {
-    let boxes: Vec<crate::math::Aabb> = spheres
+fn shape_bvh(
+    spheres: &[SphereObject],
+    disks: &[DiskObject],
+    curves: &[CurveDesc],
+    motions: &[Option<motion::Motion>],
+) -> Result<BoxBvh> {
+    let mut boxes: Vec<crate::math::Aabb> = spheres
         .iter()
         .map(|s| s.sphere.bounds())
         .chain(disks.iter().map(|d| d.disk.bounds()))
         .chain(curves.iter().map(|c| c.curve.bounds()))
         .collect();
+    // A moving shape's box holds it over its whole motion.
+    for (b, m) in boxes.iter_mut().zip(motions) {
+        if let Some(m) = m {
+            let (min, max) = m.bounds(b.min, b.max);
+            if !(min.is_finite() && max.is_finite()) {
+                return Err(Error::Scene(
+                    "a moving sphere or disk: its motion takes it beyond finite coordinates".into(),
+                ));
+            }
+            *b = crate::math::Aabb { min, max };
+        }
+    }
     if boxes.len() > BoxBvh::MAX_BOXES {
         return Err(Error::Scene(format!(
             "{} spheres, disks and curve pieces; the BVH holds at most {}",
@@ -2587,6 +2739,74 @@ mod motion_tests {
         // The quad's area is 1.5 times its start's; a face across x keeps its own.
         assert!((r.area_scale(Vec3::Z) - 1.5).abs() < 1e-5);
         assert!((r.area_scale(Vec3::X) - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn moving_spheres_and_disks_are_met_where_they_are_at_the_rays_time() {
+        // A bump-mapped sphere (so that hits carry shading geometry)
+        // sliding 2 along x and a disk sliding 2 along y over [0, 1],
+        // against the same placed still where they are at time 0.5.
+        let scene_of = |moving: bool| {
+            let mut d = SceneDesc::empty("balls", builtin::cornell().camera);
+            let base = Box::new(Material::diffuse(0.5, 0.5, 0.5));
+            let displacement = Texture::from(Vec3::ZERO);
+            let m = d.material("bumped", Material::Bumped { base, displacement });
+            let (ball, plate) = if moving {
+                (Vec3::ZERO, Vec3::new(0.0, 0.0, -2.0))
+            } else {
+                (Vec3::X, Vec3::new(0.0, 1.0, -2.0))
+            };
+            d.spheres.push(SphereDesc {
+                sphere: Sphere {
+                    centre: ball,
+                    radius: 0.5,
+                },
+                material: m,
+                axes: None,
+            });
+            d.disks.push(DiskDesc::new(plate, Vec3::Z, 0.5, 0.0, m));
+            if moving {
+                let slide = |v: Vec3| Motion::new(Mat4::IDENTITY, Mat4::from_translation(v), [0.0, 1.0]).unwrap();
+                d.moving_shapes.push(MovingShape {
+                    shape: CutShapes::Sphere(0),
+                    motion: slide(2.0 * Vec3::X),
+                });
+                d.moving_shapes.push(MovingShape {
+                    shape: CutShapes::Disk(0),
+                    motion: slide(2.0 * Vec3::Y),
+                });
+            }
+            Scene::build(d).unwrap()
+        };
+        let (moving, still) = (scene_of(true), scene_of(false));
+        assert!(moving.has_motion());
+        let down = |x: f32, y: f32, time: f32| Ray::timed(Vec3::new(x, y, 5.0), -Vec3::Z, time);
+        for (x, y) in [(1.2, 0.1), (0.1, 1.2), (0.9, -0.2)] {
+            let a = moving.intersect(&down(x, y, 0.5), 0.0, f32::INFINITY).unwrap();
+            let b = still.intersect(&down(x, y, 0.0), 0.0, f32::INFINITY).unwrap();
+            assert!((a.p - b.p).length() < 1e-5 && (a.t - b.t).abs() < 1e-5, "{a:?} {b:?}");
+            assert!((a.ng - b.ng).length() < 1e-5 && (a.dpdu - b.dpdu).length() < 1e-4);
+            assert_eq!((a.kind, a.object), (b.kind, b.object));
+            assert!((a.uv - b.uv).length() < 1e-5);
+            let (ga, gb) = (moving.surface(&a).shading.unwrap(), still.surface(&b).shading.unwrap());
+            assert!(
+                (ga.n - gb.n).length() < 1e-5 && (ga.dpdv - gb.dpdv).length() < 1e-4,
+                "{ga:?} {gb:?}"
+            );
+            // The photon map's frame carries the hit back to the start.
+            let r = moving.rest_frame(a.object, 0.5).unwrap();
+            assert_eq!(r.objects, a.object..a.object + 1);
+            let back = if a.kind == PrimKind::Sphere { Vec3::X } else { Vec3::Y };
+            assert!((r.point(a.p) - (a.p - back)).length() < 1e-5);
+            // At time 0 the ray passes where the shapes were not.
+            assert!(moving.intersect(&down(x, y, 0.0), 0.0, f32::INFINITY).is_none());
+            assert!(moving.occluded(&down(x, y, 0.5), 0.0, 10.0) && !moving.occluded(&down(x, y, 0.0), 0.0, 10.0));
+        }
+        // A sphere cut out, or given two motions, is refused.
+        let mut d = moving.desc.clone();
+        d.moving_shapes.push(d.moving_shapes[0].clone());
+        let e = Scene::build(d).err().unwrap().to_string();
+        assert!(e.contains("Sphere(0) is given two motions"), "{e}");
     }
 
     #[test]

@@ -1024,11 +1024,14 @@ fn subsurface_scenes_say_which_integrators_leave_their_insides_out() {
     );
 }
 
-/// Row 0 of a render of a black unit square before a white sky, seen by
-/// an orthographic camera whose 60 columns span x from -1 to 2: the square
-/// moves one unit along x over the transformation times [0, 1], or with
-/// `camera_moves` the camera does.
-fn moving_square_row(camera: &str, camera_moves: bool, options: &[&str]) -> Vec<f64> {
+/// A unit square about the origin in the plane z = 0.
+const SQUARE: &str = "Shape \"bilinearmesh\" \"point3 P\" [ -0.5 -0.5 0  0.5 -0.5 0  -0.5 0.5 0  0.5 0.5 0 ]";
+
+/// Row 0 of a render of a black `shape` (as `SQUARE`) before a white sky,
+/// seen by an orthographic camera whose 60 columns span x from -1 to 2:
+/// the shape moves one unit along x over the transformation times [0, 1],
+/// or with `camera_moves` the camera does.
+fn moving_shape_row(shape: &str, camera: &str, camera_moves: bool, options: &[&str]) -> Vec<f64> {
     let (camera_motion, square_motion) = if camera_moves {
         // Before LookAt, in camera space: the camera's x is the world's.
         ("ActiveTransform EndTime\nTranslate -1 0 0\nActiveTransform All\n", "")
@@ -1043,8 +1046,7 @@ fn moving_square_row(camera: &str, camera_moves: bool, options: &[&str]) -> Vec<
             "{camera_motion}LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ] {camera}\n\
              Film \"rgb\" \"integer xresolution\" [ 60 ] \"integer yresolution\" [ 2 ]\n\
              PixelFilter \"box\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n\
-             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n{square_motion}\
-             Shape \"bilinearmesh\" \"point3 P\" [ -0.5 -0.5 0  0.5 -0.5 0  -0.5 0.5 0  0.5 0.5 0 ]\nAttributeEnd\n"
+             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n{square_motion}{shape}\nAttributeEnd\n"
         ),
     )
     .unwrap();
@@ -1052,22 +1054,23 @@ fn moving_square_row(camera: &str, camera_moves: bool, options: &[&str]) -> Vec<
     (0..60).map(|x| luminance(img.get(x, 0)) as f64).collect()
 }
 
-/// Row 0 of a render of a grey unit square lit head-on by a distant light
-/// of irradiance pi (so that where the square stays, it shows radiance
-/// 0.5), sliding one unit along x over the shutter, before a black sky:
-/// the orthographic camera's 60 columns span x from -1 to 2.
-fn lit_moving_square_row(options: &[&str]) -> Vec<f64> {
+/// Row 0 of a render of a grey flat `shape` (as `SQUARE`) lit head-on by
+/// a distant light of irradiance pi (so that where the shape stays, it
+/// shows radiance 0.5), sliding one unit along x over the shutter, before
+/// a black sky: the orthographic camera's 60 columns span x from -1 to 2.
+fn lit_moving_shape_row(shape: &str, options: &[&str]) -> Vec<f64> {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("lit.pbrt");
     std::fs::write(
         &p,
-        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ]\n\
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [ -1 2 -0.05 0.05 ]\n\
          Film \"rgb\" \"integer xresolution\" [ 60 ] \"integer yresolution\" [ 2 ]\n\
          PixelFilter \"box\"\nWorldBegin\n\
          LightSource \"distant\" \"point3 from\" [ 0 0 -5 ] \"point3 to\" [ 0 0 0 ] \"rgb L\" [ 3.14159265 3.14159265 3.14159265 ]\n\
          AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
-         ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n\
-         Shape \"bilinearmesh\" \"point3 P\" [ -0.5 -0.5 0  0.5 -0.5 0  -0.5 0.5 0  0.5 0.5 0 ]\nAttributeEnd\n",
+         ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n{shape}\nAttributeEnd\n"
+        ),
     )
     .unwrap();
     let img = render_to_image(&p, options);
@@ -1095,8 +1098,17 @@ fn photons_on_a_moving_shape_light_it_wherever_it_is() {
         "64",
     ];
     let precomputed = [photon, &["--precompute-irradiance"]].concat();
-    for options in [&["--spp", "64"][..], photon, &precomputed] {
-        let row = lit_moving_square_row(options);
+    // A disk of radius 0.5 spans the square's x along the row (its chord
+    // at the row's edge, 0.05 off centre, is 0.995 long).
+    let disk = "Shape \"disk\" \"float radius\" 0.5";
+    let cases = [
+        (SQUARE, &["--spp", "64"][..]),
+        (SQUARE, photon),
+        (SQUARE, &precomputed),
+        (disk, photon),
+    ];
+    for (shape, options) in cases {
+        let row = lit_moving_shape_row(shape, options);
         for (i, &v) in row.iter().enumerate() {
             let x = -1.0 + (i as f64 + 0.5) * 0.05;
             if [-0.5, 0.5, 1.5].iter().any(|k: &f64| (x - k).abs() < 0.03) {
@@ -1109,7 +1121,7 @@ fn photons_on_a_moving_shape_light_it_wherever_it_is() {
             let tolerance = 0.04 + 0.01 / covered.max(0.1);
             assert!(
                 (v - 0.5 * covered).abs() < tolerance,
-                "{options:?}: column {i} (x {x:.3}): {v} vs {}",
+                "{shape} {options:?}: column {i} (x {x:.3}): {v} vs {}",
                 0.5 * covered
             );
         }
@@ -1123,17 +1135,29 @@ fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
     // first half of the motion, and pbrt-v4's film takes half the light.
     // A camera moving the other way sees the same, mirrored. SPPM renders
     // a moment of the shutter a pass.
+    // A sphere and a disk of radius 0.5 in the square's place span its x
+    // along the row to 0.5%. bdpt's light subpaths see the shapes where
+    // its camera ray does.
     let path: &[&str] = &["--spp", "256"];
     let sppm: &[&str] = &["--integrator", "sppm", "--passes", "256", "--photons", "1000"];
-    for (camera, close, scale, camera_moves, options) in [
-        ("", 1.0, 1.0, false, path),
-        ("\"float shutterclose\" 0.5", 0.5, 0.5, false, path),
-        ("", 1.0, 1.0, true, path),
-        ("\"float shutterclose\" 0.5", 0.5, 0.5, true, path),
-        ("", 1.0, 1.0, false, sppm),
-        ("", 1.0, 1.0, true, sppm),
+    let bdpt: &[&str] = &["--integrator", "bdpt", "--spp", "128"];
+    let (sphere, disk) = (
+        "Shape \"sphere\" \"float radius\" 0.5",
+        "Shape \"disk\" \"float radius\" 0.5",
+    );
+    for (shape, camera, close, scale, camera_moves, options) in [
+        (SQUARE, "", 1.0, 1.0, false, path),
+        (SQUARE, "\"float shutterclose\" 0.5", 0.5, 0.5, false, path),
+        (SQUARE, "", 1.0, 1.0, true, path),
+        (SQUARE, "\"float shutterclose\" 0.5", 0.5, 0.5, true, path),
+        (SQUARE, "", 1.0, 1.0, false, sppm),
+        (SQUARE, "", 1.0, 1.0, true, sppm),
+        (SQUARE, "", 1.0, 1.0, true, bdpt),
+        (sphere, "", 1.0, 1.0, false, path),
+        (disk, "\"float shutterclose\" 0.5", 0.5, 0.5, true, path),
+        (sphere, "", 1.0, 1.0, false, sppm),
     ] {
-        let row = moving_square_row(camera, camera_moves, options);
+        let row = moving_shape_row(shape, camera, camera_moves, options);
         for (i, &v) in row.iter().enumerate() {
             let column = -1.0 + (i as f64 + 0.5) * 0.05;
             let x = if camera_moves { -column } else { column };
@@ -1145,7 +1169,7 @@ fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
             let expected = scale * (1.0 - covered);
             assert!(
                 (v - expected).abs() < 0.03,
-                "{camera} {options:?} (camera moves: {camera_moves}): column {i} (x {x:.3}): {v} vs {expected}"
+                "{shape} {camera} {options:?} (camera moves: {camera_moves}): column {i} (x {x:.3}): {v} vs {expected}"
             );
         }
     }

@@ -44,6 +44,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         settings: SceneSettings::default(),
         texture_spp: 64,
         moving: vec![],
+        moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
     };

@@ -58,6 +58,7 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
         settings: SceneSettings::default(),
         texture_spp: 64,
         moving: vec![],
+        moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
     };
@@ -128,6 +129,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
         settings: SceneSettings::default(),
         texture_spp: 64,
         moving: vec![],
+        moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
     };

@@ -12,8 +12,8 @@ use super::mesh::{load_mesh_timed_from, Disk, FileSource, MeshReport};
 use super::motion::Motion;
 use super::transform::{Fit, Transform};
 use super::{
-    Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, MovingTriangles, SceneDesc,
-    SphereDesc, TriangleDesc,
+    Boundary, CameraDesc, CutShapes, Cutout, DiskDesc, LoadOptions, LoadedScene, MovingShape, MovingTriangles,
+    SceneDesc, SphereDesc, TriangleDesc,
 };
 use crate::camera::{SphericalMapping, ThinLens};
 use crate::error::{Error, Result};
@@ -475,20 +475,37 @@ fn shapes(
         }
         if let Some(motion) = &s.motion {
             let triangles = first_triangle..desc.triangles.len();
-            let placed = &desc.triangles[triangles.clone()];
             let at = |m: String| src.error(motion.span(), format!("{kind} shape: `motion`: {m}"));
             if alpha.is_some() {
                 return Err(at("an `alpha` cut-out on a moving shape is not supported".into()));
             }
-            let (lo, hi) = placed
-                .iter()
-                .flat_map(|t| t.vertices)
-                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                });
-            let (end, about) = motion_end(motion.get_ref(), (lo + hi) * 0.5).map_err(at)?;
+            // What it turns about by default: its centre, or its box's.
+            let centre = match s.kind {
+                ShapeKind::Sphere => desc.spheres[sphere].sphere.centre,
+                ShapeKind::Disk => desc.disks[disk].centre,
+                _ => {
+                    let (lo, hi) = desc.triangles[triangles.clone()]
+                        .iter()
+                        .flat_map(|t| t.vertices)
+                        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+                            (lo.min(v), hi.max(v))
+                        });
+                    (lo + hi) * 0.5
+                }
+            };
+            let (end, about) = motion_end(motion.get_ref(), centre).map_err(at)?;
             let motion = moving(end, about).map_err(at)?;
-            desc.moving.push(MovingTriangles { triangles, motion });
+            match s.kind {
+                ShapeKind::Sphere => desc.moving_shapes.push(MovingShape {
+                    shape: CutShapes::Sphere(sphere),
+                    motion,
+                }),
+                ShapeKind::Disk => desc.moving_shapes.push(MovingShape {
+                    shape: CutShapes::Disk(disk),
+                    motion,
+                }),
+                _ => desc.moving.push(MovingTriangles { triangles, motion }),
+            }
         }
         let shapes = match s.kind {
             ShapeKind::Sphere => CutShapes::Sphere(sphere),

@@ -528,13 +528,20 @@ fn shapes_move_by_their_motion_and_bad_motions_are_refused() {
         hit(1.7, 1.0)
     );
     assert!(hit(0.3, 0.0).is_some_and(|z| z.abs() < 1e-4));
+    // A sphere moves about its centre.
+    let ball = parse_str(&text.replace(
+        "radius = 1",
+        "radius = 1\n        motion = { translate = [1, 0, 0], scale = 2 }",
+    ))
+    .unwrap()
+    .desc;
+    assert_eq!(ball.moving_shapes.len(), 1);
+    assert_eq!(ball.moving_shapes[0].shape, crate::scene::CutShapes::Sphere(0));
+    let m = ball.moving_shapes[0].motion.relative(1.0);
+    let centre = Vec3::new(0.0, 0.0, 3.0);
+    assert!((m.transform_point3(centre) - (centre + Vec3::X)).length() < 1e-5);
+    assert!((m.transform_point3(centre + Vec3::Y) - (centre + Vec3::new(1.0, 2.0, 0.0))).length() < 1e-5);
     for (from, to, line, why) in [
-        (
-            "radius = 1",
-            "radius = 1\n        motion = { translate = [1, 0, 0] }",
-            18,
-            "`motion` does not apply to a sphere",
-        ),
         (
             "rotate = [0, 90, 0] }",
             "rotate = [0, 90, 0] }\n        alpha = 0.5",

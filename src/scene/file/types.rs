@@ -303,7 +303,7 @@ impl ShapeKind {
             ShapeKind::Triangle => &["material", "vertices", "normals", "uvs", "alpha", MI, MO, "motion"],
             ShapeKind::Quad => &["material", "vertices", "uvs", "alpha", MI, MO, "motion"],
             ShapeKind::Box => &["material", "min", "max", "alpha", MI, MO, "motion"],
-            ShapeKind::Sphere => &["material", "centre", "radius", "alpha", MI, MO],
+            ShapeKind::Sphere => &["material", "centre", "radius", "alpha", MI, MO, "motion"],
             ShapeKind::Disk => &[
                 "material",
                 "centre",
@@ -313,6 +313,7 @@ impl ShapeKind {
                 "alpha",
                 MI,
                 MO,
+                "motion",
             ],
             ShapeKind::Mesh => &[
                 "material",

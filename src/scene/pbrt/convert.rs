@@ -54,7 +54,7 @@ use crate::scene::FilmCrop;
 use crate::scene::{
     Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
 };
-use crate::scene::{CurveDesc, DiskDesc, MovingTriangles};
+use crate::scene::{CurveDesc, DiskDesc, MovingShape, MovingTriangles};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -228,6 +228,7 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             "motion (ActiveTransform) in a scene with participating media or subsurface materials is not supported; --lenient renders it still, at the start transformations",
         );
         desc.moving.clear();
+        desc.moving_shapes.clear();
         desc.camera_motion = None;
     }
     if subsurface && matches!(scene.integrator.ty.as_str(), "path" | "simplepath") {
@@ -1363,12 +1364,12 @@ impl<'a> Conv<'a> {
         Ok(index)
     }
 
-    /// Marks the triangles from `first` on, just added for `shape`, as
-    /// moving as the transformation interpolated from `start` to `end` over
-    /// the transformation times moves what it places; a motion
-    /// that cannot be rendered is a problem at the shape, and the triangles
-    /// then hold still at the start.
-    fn moving(&mut self, desc: &mut SceneDesc, shape: &Shape, first: usize, start: Mat4, end: Mat4, alpha: bool) {
+    /// Marks `moved`, just added for `shape` (its triangles, or a sphere or
+    /// disk), as moving as the transformation interpolated from `start` to
+    /// `end` over the transformation times moves what it places; a motion
+    /// that cannot be rendered is a problem at the shape, and the shape
+    /// then holds still at the start.
+    fn moving(&mut self, desc: &mut SceneDesc, shape: &Shape, moved: CutShapes, [start, end]: [Mat4; 2], alpha: bool) {
         if alpha {
             let why = "an \"alpha\" cut-out on a moving shape (ActiveTransform) is not supported; --lenient uses the start transformation";
             self.problem(Kind::Other, &shape.loc, why);
@@ -1376,10 +1377,10 @@ impl<'a> Conv<'a> {
         }
         match Motion::new(start, end, self.scene.transform_times) {
             Ok(motion) => {
-                desc.moving.push(MovingTriangles {
-                    triangles: first..desc.triangles.len(),
-                    motion,
-                });
+                match moved {
+                    CutShapes::Triangles(triangles) => desc.moving.push(MovingTriangles { triangles, motion }),
+                    shape => desc.moving_shapes.push(MovingShape { shape, motion }),
+                }
                 self.first_motion.get_or_insert_with(|| shape.loc.clone());
             }
             Err(why) => self.problem(
@@ -1461,12 +1462,17 @@ impl<'a> Conv<'a> {
             }
             let m = shape.world_from_object;
             let alpha_given = alpha.is_some();
-            if shape.motion.is_some() && !matches!(shape.geometry, Geometry::Mesh(_)) {
+            if shape.motion.is_some()
+                && !matches!(
+                    shape.geometry,
+                    Geometry::Mesh(_) | Geometry::Sphere(_) | Geometry::Disk(_)
+                )
+            {
                 self.problem(
                     Kind::Other,
                     &shape.loc,
                     format!(
-                        "a moving \"{}\" (ActiveTransform) is not supported, only moving meshes; --lenient uses the start transformation",
+                        "a moving \"{}\" (ActiveTransform) is not supported, only moving meshes, spheres and disks; --lenient uses the start transformation",
                         shape.ty
                     ),
                 );
@@ -1552,8 +1558,9 @@ impl<'a> Conv<'a> {
                             let shapes = CutShapes::Triangles(first..desc.triangles.len());
                             desc.cutouts.push(Cutout { alpha, shapes });
                         }
-                        if let Some([start, end]) = shape.motion {
-                            self.moving(desc, shape, first, start, end, alpha_given);
+                        if let Some(ends) = shape.motion {
+                            let moved = CutShapes::Triangles(first..desc.triangles.len());
+                            self.moving(desc, shape, moved, ends, alpha_given);
                         }
                     }
                 }
@@ -1609,6 +1616,10 @@ impl<'a> Conv<'a> {
                         );
                         let axes = (axes != glam::Mat3::IDENTITY).then_some(axes);
                         desc.spheres.push(SphereDesc { sphere, material, axes });
+                        if let Some(ends) = shape.motion {
+                            let moved = CutShapes::Sphere(desc.spheres.len() - 1);
+                            self.moving(desc, shape, moved, ends, alpha_given);
+                        }
                     }
                 }
                 Geometry::Disk(d) => {
@@ -1665,6 +1676,10 @@ impl<'a> Conv<'a> {
                             desc.cutouts.push(Cutout { alpha, shapes });
                         }
                         desc.disks.push(disk);
+                        if let Some(ends) = shape.motion {
+                            let moved = CutShapes::Disk(desc.disks.len() - 1);
+                            self.moving(desc, shape, moved, ends, alpha_given);
+                        }
                     }
                 }
                 Geometry::Curves(c) => {
@@ -3127,6 +3142,9 @@ fn reflect(desc: &mut SceneDesc) {
         point(Vec3::ZERO).extend(1.0),
     );
     for m in &mut desc.moving {
+        m.motion = m.motion.mirrored(r);
+    }
+    for m in &mut desc.moving_shapes {
         m.motion = m.motion.mirrored(r);
     }
     desc.camera_motion = desc.camera_motion.as_ref().map(|m| m.mirrored(r));

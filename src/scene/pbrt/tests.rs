@@ -1694,7 +1694,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
     let files = Files::default().with(
         "scene/s.pbrt",
         "Shape \"sphere\" \"float zmax\" 0.5\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
-         Shape \"disk\"\n",
+         Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
     );
     // Moving shapes: two problems on each line of s.pbrt.
     let e = converted(
@@ -1706,7 +1706,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
     .unwrap_err();
     assert_eq!(e.matches("a partial sphere").count(), 1, "{e}");
     assert_eq!(e.matches("\"ribbon\" curves").count(), 1, "{e}");
-    assert_eq!(e.matches("a moving \"disk\" (ActiveTransform)").count(), 1, "{e}");
+    assert_eq!(e.matches("a moving \"curve\" (ActiveTransform)").count(), 1, "{e}");
 }
 
 #[test]
