@@ -599,29 +599,19 @@ fn the_camera_may_move_turning_about_its_position() {
     let target = m.relative(1.0).transform_point3(Vec3::ZERO);
     assert!((target - Vec3::new(4.0, 0.0, -3.0)).length() < 1e-4, "{target}");
     assert!(Scene::build(d).unwrap().has_motion());
-    let e =
-        parse_str(&format!("{text}[media.fog]\nsigma_s = 0.1\n").replace("fov_y = 40", "fov_y = 40\nmedium = \"fog\""))
-            .unwrap_err()
-            .to_string();
-    assert!(
-        e.starts_with("test.toml:6:") && e.contains("`motion` in a scene with participating media"),
-        "{e}"
-    );
-    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "scale = 2"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.starts_with("test.toml:5:") && e.contains("camera: `motion`: a camera does not scale"),
-        "{e}"
-    );
-    // Turning half round a point far away would throw it beyond f32.
-    let e = parse_str(&text.replace("rotate = [0, 90, 0]", "rotate = [0, 180, 0], about = [3e38, 0, 0]"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.starts_with("test.toml:5:") && e.contains("beyond finite coordinates"),
-        "{e}"
-    );
+    // A camera in fog; one that would grow; one turning half round a point
+    // so far away that it would leave f32's range.
+    let fog = format!("{text}[media.fog]\nsigma_s = 0.1\n").replace("fov_y = 40", "fov_y = 40\nmedium = \"fog\"");
+    let grows = text.replace("rotate = [0, 90, 0]", "scale = 2");
+    let far = text.replace("rotate = [0, 90, 0]", "rotate = [0, 180, 0], about = [3e38, 0, 0]");
+    for (bad, line, why) in [
+        (fog, 6, "`motion` in a scene with participating media"),
+        (grows, 5, "camera: `motion`: a camera does not scale"),
+        (far, 5, "beyond finite coordinates"),
+    ] {
+        let e = parse_str(&bad).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("test.toml:{line}:")) && e.contains(why), "{e}");
+    }
 }
 
 #[test]
