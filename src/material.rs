@@ -12,6 +12,7 @@ use crate::bssrdf::{Bssrdf, BssrdfTable};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
 use crate::texture::{Footprint, TexCoord, TexImage, Texture, WrapMode};
+use glam::Affine3A;
 use std::sync::Arc;
 
 /// Microfacet roughness as pbrt-v4's materials take it: `uroughness` and
@@ -60,10 +61,10 @@ pub enum MaterialRoughness {
 }
 
 impl MaterialRoughness {
-    fn has_image(&self) -> bool {
+    fn needs_footprint(&self) -> bool {
         match self {
             MaterialRoughness::Constant(_) => false,
-            MaterialRoughness::Textured { u, v, .. } => u.has_image() || v.has_image(),
+            MaterialRoughness::Textured { u, v, .. } => u.needs_footprint() || v.needs_footprint(),
         }
     }
 
@@ -272,6 +273,15 @@ pub struct ShadingGeometry {
     pub dndv: Vec3,
 }
 
+/// A reflectance or transmittance looked up at `tc`, kept within [0, 1] as
+/// pbrt-v4's diffuse, coated diffuse and diffuse transmission materials keep
+/// theirs: a texture may leave that range (a scaled image, a noise pattern
+/// below zero) where a surface cannot.
+#[inline]
+fn albedo(t: &Texture, tc: &TexCoord) -> Vec3 {
+    t.evaluate(tc).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
 /// The step along u or v of a bump map's finite differences without a
 /// footprint (pbrt-v4's when its derivatives are zero).
 const BUMP_STEP: f32 = 0.0005;
@@ -288,7 +298,8 @@ impl SurfacePoint {
             return *self;
         };
         let f = self.footprint;
-        let at = |uv: Vec2, p: Vec3| d.evaluate_scalar(&TexCoord { uv, p, footprint: f });
+        let n = self.ng;
+        let at = |uv: Vec2, p: Vec3| d.evaluate_scalar(&TexCoord { uv, p, n, footprint: f });
         let step = |d: f32| if d == 0.0 { BUMP_STEP } else { d };
         let du = step(0.5 * (f.dudx.abs() + f.dudy.abs()));
         let dv = step(0.5 * (f.dvdx.abs() + f.dvdy.abs()));
@@ -410,59 +421,127 @@ impl Material {
         }
     }
 
-    /// The material as it shades a reflected scene: normal maps turn their
-    /// frames' handedness (a bump map's normal follows from the reflected
-    /// surface itself).
-    pub fn reflect(&mut self) {
+    /// The material as it shades a scene reflected by `r`: normal maps turn
+    /// their frames' handedness (a bump map's normal follows from the
+    /// reflected surface itself), and textures of space look up the point
+    /// carried back ([`Texture::reflected`]).
+    pub fn reflect(&mut self, r: &Affine3A) {
+        let tex = |t: &mut Texture| *t = t.reflected(r);
+        let rough = |m: &mut MaterialRoughness| {
+            if let MaterialRoughness::Textured { u, v, .. } = m {
+                // One texture for both stays one.
+                let same = Arc::ptr_eq(u, v);
+                *u = Arc::new(u.reflected(r));
+                *v = if same { u.clone() } else { Arc::new(v.reflected(r)) };
+            }
+        };
+        let fresnel = |f: &mut ConductorFresnel| {
+            if let ConductorFresnel::Reflectance(t) = f {
+                *t = t.reflected(r);
+            }
+        };
         match self {
             Material::NormalMapped { base, mirrored, .. } => {
                 *mirrored = !*mirrored;
-                base.reflect();
+                base.reflect(r);
             }
-            Material::Bumped { base, .. } => base.reflect(),
-            Material::Mix { materials, .. } => materials.iter_mut().for_each(Material::reflect),
-            _ => {}
+            Material::Bumped { base, displacement } => {
+                tex(displacement);
+                base.reflect(r)
+            }
+            Material::Mix { materials, amount } => {
+                tex(amount);
+                materials.iter_mut().for_each(|m| m.reflect(r))
+            }
+            Material::Diffuse { reflectance } => tex(reflectance),
+            Material::Conductor { fresnel: f, roughness } => {
+                fresnel(f);
+                rough(roughness)
+            }
+            Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => rough(roughness),
+            Material::CoatedDiffuse {
+                reflectance, roughness, ..
+            } => {
+                tex(reflectance);
+                rough(roughness)
+            }
+            Material::CoatedConductor {
+                interface_roughness,
+                conductor,
+                conductor_roughness,
+                ..
+            } => {
+                rough(interface_roughness);
+                fresnel(conductor);
+                rough(conductor_roughness)
+            }
+            Material::DiffuseTransmission {
+                reflectance,
+                transmittance,
+            } => {
+                tex(reflectance);
+                tex(transmittance)
+            }
+            Material::Subsurface(s) => {
+                rough(&mut s.roughness);
+                match &mut s.scattering {
+                    SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => {
+                        tex(sigma_a);
+                        tex(sigma_s)
+                    }
+                    SubsurfaceScattering::Reflectance { reflectance, mfp } => {
+                        tex(reflectance);
+                        tex(mfp)
+                    }
+                }
+            }
+            Material::Interface
+            | Material::Emissive { .. }
+            | Material::ThinDielectric { .. }
+            | Material::Hair { .. } => {}
         }
     }
 
     /// Whether the material (or one it mixes) looks up an image texture or
     /// is bump mapped: its lookups then take the surface's footprint.
     pub fn needs_footprint(&self) -> bool {
-        let fresnel = |f: &ConductorFresnel| matches!(f, ConductorFresnel::Reflectance(r) if r.has_image());
+        let fresnel = |f: &ConductorFresnel| matches!(f, ConductorFresnel::Reflectance(r) if r.needs_footprint());
         match self {
-            Material::Diffuse { reflectance } => reflectance.has_image(),
+            Material::Diffuse { reflectance } => reflectance.needs_footprint(),
             Material::Emissive { .. }
             | Material::ThinDielectric { .. }
             | Material::Interface
             | Material::Hair { .. } => false,
-            Material::Conductor { fresnel: f, roughness } => fresnel(f) || roughness.has_image(),
-            Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => roughness.has_image(),
+            Material::Conductor { fresnel: f, roughness } => fresnel(f) || roughness.needs_footprint(),
+            Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => {
+                roughness.needs_footprint()
+            }
             Material::CoatedDiffuse {
                 reflectance, roughness, ..
-            } => reflectance.has_image() || roughness.has_image(),
+            } => reflectance.needs_footprint() || roughness.needs_footprint(),
             Material::CoatedConductor {
                 interface_roughness,
                 conductor,
                 conductor_roughness,
                 ..
-            } => interface_roughness.has_image() || fresnel(conductor) || conductor_roughness.has_image(),
+            } => interface_roughness.needs_footprint() || fresnel(conductor) || conductor_roughness.needs_footprint(),
             Material::DiffuseTransmission {
                 reflectance,
                 transmittance,
-            } => reflectance.has_image() || transmittance.has_image(),
+            } => reflectance.needs_footprint() || transmittance.needs_footprint(),
             Material::Mix { materials, amount } => {
-                amount.has_image() || materials.iter().any(Material::needs_footprint)
+                amount.needs_footprint() || materials.iter().any(Material::needs_footprint)
             }
             Material::Bumped { .. } => true,
             Material::NormalMapped { base, .. } => base.needs_footprint(),
             Material::Subsurface(s) => {
-                s.roughness.has_image()
+                s.roughness.needs_footprint()
                     || match &s.scattering {
                         SubsurfaceScattering::Coefficients { sigma_a, sigma_s } => {
-                            sigma_a.has_image() || sigma_s.has_image()
+                            sigma_a.needs_footprint() || sigma_s.needs_footprint()
                         }
                         SubsurfaceScattering::Reflectance { reflectance, mfp } => {
-                            reflectance.has_image() || mfp.has_image()
+                            reflectance.needs_footprint() || mfp.needs_footprint()
                         }
                     }
             }
@@ -504,6 +583,7 @@ impl Material {
         let tc = TexCoord {
             uv: sp.uv,
             p: sp.p,
+            n: sp.ng,
             footprint: sp.footprint,
         };
         if let Material::Mix { .. } = self {
@@ -516,7 +596,7 @@ impl Material {
             return base.bsdf(&sp.normal_mapped(map, *mirrored), wo);
         }
         let bxdf = match self {
-            Material::Diffuse { reflectance } => Bxdf::diffuse(reflectance.evaluate(&tc)),
+            Material::Diffuse { reflectance } => Bxdf::diffuse(albedo(reflectance, &tc)),
             Material::Emissive { albedo, .. } => Bxdf::diffuse(*albedo),
             Material::Conductor { fresnel, roughness } => {
                 let d = roughness.distribution(&tc);
@@ -541,7 +621,7 @@ impl Material {
                 roughness,
                 eta,
                 thickness,
-            } => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, reflectance.evaluate(&tc), *thickness),
+            } => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, albedo(reflectance, &tc), *thickness),
             Material::CoatedConductor {
                 interface_roughness,
                 eta,
@@ -562,7 +642,7 @@ impl Material {
             Material::DiffuseTransmission {
                 reflectance,
                 transmittance,
-            } => Bxdf::diffuse_transmission(reflectance.evaluate(&tc), transmittance.evaluate(&tc)),
+            } => Bxdf::diffuse_transmission(albedo(reflectance, &tc), albedo(transmittance, &tc)),
             Material::Hair {
                 sigma_a,
                 eta,
@@ -605,6 +685,7 @@ impl Material {
         let tc = TexCoord {
             uv: sp.uv,
             p: sp.p,
+            n: sp.ng,
             footprint: sp.footprint,
         };
         match self {
@@ -706,9 +787,8 @@ mod tests {
         let wide = SurfacePoint {
             footprint: Footprint {
                 dudx: 0.25,
-                dvdx: 0.0,
-                dudy: 0.0,
                 dvdy: 0.25,
+                ..Footprint::NONE
             },
             ..sp
         };
@@ -904,12 +984,7 @@ mod tests {
     /// `even` and `odd` over (u, v), four squares per unit of u.
     fn checkered_conductor(even: f32, odd: f32) -> Material {
         let c = |r: f32| Arc::new(Texture::from(Vec3::splat(r)));
-        let check = Arc::new(Texture::Checkerboard {
-            even: c(even),
-            odd: c(odd),
-            u_scale: 4.0,
-            v_scale: 1.0,
-        });
+        let check = Arc::new(Texture::checkerboard(c(even), c(odd), 4.0, 1.0));
         Material::Conductor {
             fresnel: ConductorFresnel::Reflectance(Texture::from(Vec3::ONE)),
             roughness: MaterialRoughness::Textured {

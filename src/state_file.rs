@@ -595,12 +595,12 @@ mod tests {
         use std::sync::Arc;
         let with = |odd: f32| {
             let mut d = crate::scene::builtin::cornell();
-            let check = Arc::new(Texture::Checkerboard {
-                even: Arc::new(Texture::from(Vec3::splat(0.3))),
-                odd: Arc::new(Texture::from(Vec3::splat(odd))),
-                u_scale: 4.0,
-                v_scale: 4.0,
-            });
+            let check = Arc::new(Texture::checkerboard(
+                Arc::new(Texture::from(Vec3::splat(0.3))),
+                Arc::new(Texture::from(Vec3::splat(odd))),
+                4.0,
+                4.0,
+            ));
             d.materials[0].1 = Material::Conductor {
                 fresnel: ConductorFresnel::Reflectance(Texture::from(Vec3::ONE)),
                 roughness: MaterialRoughness::Textured {

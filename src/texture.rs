@@ -9,9 +9,14 @@
 //! an `Arc`, decoded once per file; see [`load_image`]).
 
 use crate::math::{Vec2, Vec3};
+use glam::Affine3A;
 use std::sync::Arc;
 
 mod imagemap;
+pub(crate) mod noise;
+mod procedural;
+
+pub use procedural::{Mapping2D, NoiseTexture, Pattern};
 
 pub use imagemap::{
     decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, MipFilter, TexImage, UvMapping,
@@ -19,37 +24,45 @@ pub use imagemap::{
 };
 
 /// Where a texture is looked up: the surface's (u, v), the point itself,
-/// and how far (u, v) moves from one pixel to the next there.
+/// the surface's geometric normal there, and how far the point and (u, v)
+/// move from one pixel to the next.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TexCoord {
     pub uv: Vec2,
     pub p: Vec3,
+    pub n: Vec3,
     pub footprint: Footprint,
 }
 
 impl TexCoord {
-    /// A lookup at a point, with no footprint: an image's finest level.
-    pub fn at(uv: Vec2, p: Vec3) -> TexCoord {
+    /// A lookup at a point with normal `n`, with no footprint: an image's
+    /// finest level, every octave of noise.
+    pub fn at(uv: Vec2, p: Vec3, n: Vec3) -> TexCoord {
         TexCoord {
             uv,
             p,
+            n,
             footprint: Footprint::NONE,
         }
     }
 }
 
-/// The change of (u, v) from one pixel to the next at a surface point, along
-/// the image's x and y (pbrt-v4's dudx, dvdx, dudy, dvdy, estimated as its
-/// `SurfaceInteraction::ComputeDifferentials` does and scaled, as there, by
-/// the sampling rate). It chooses an image's MIP level and a bump map's
-/// finite-difference step. Zero: no footprint (the finest level, pbrt-v4's
-/// default step).
+/// The change of the point and of (u, v) from one pixel to the next at a
+/// surface point, along the image's x and y (pbrt-v4's dpdx, dpdy, dudx,
+/// dvdx, dudy, dvdy, estimated as its `SurfaceInteraction::
+/// ComputeDifferentials` does and scaled, as there, by the sampling rate).
+/// It chooses an image's MIP level, a bump map's finite-difference step,
+/// how many octaves of noise show and how much a checkerboard's edges are
+/// blurred. Zero: no footprint (the finest level, pbrt-v4's default step,
+/// every octave, sharp edges).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Footprint {
     pub dudx: f32,
     pub dvdx: f32,
     pub dudy: f32,
     pub dvdy: f32,
+    pub dpdx: Vec3,
+    pub dpdy: Vec3,
 }
 
 impl Footprint {
@@ -58,19 +71,54 @@ impl Footprint {
         dvdx: 0.0,
         dudy: 0.0,
         dvdy: 0.0,
+        dpdx: Vec3::ZERO,
+        dpdy: Vec3::ZERO,
     };
 }
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
     Constant(Vec3),
-    /// Two textures alternating over a `u_scale` x `v_scale` grid of squares
-    /// per unit of (u, v) (pbrt-v4 `checkerboard`, 2D, no filtering).
+    /// Two textures alternating over the unit squares of a 2D mapping,
+    /// `even` where the cell indices sum to an even number, filtered over
+    /// the footprint (pbrt-v4 `checkerboard`).
     Checkerboard {
         even: Arc<Texture>,
         odd: Arc<Texture>,
-        u_scale: f32,
-        v_scale: f32,
+        mapping: Arc<Mapping2D>,
+    },
+    /// The same over the unit cubes of the texture's space (pbrt-v4
+    /// `checkerboard` of `dimension` 3); the transformation is from the world.
+    Checkerboard3D {
+        even: Arc<Texture>,
+        odd: Arc<Texture>,
+        to_texture: Arc<Affine3A>,
+    },
+    /// `inside` in polka dots over a 2D mapping, `outside` between (pbrt-v4
+    /// `dots`).
+    Dots {
+        inside: Arc<Texture>,
+        outside: Arc<Texture>,
+        mapping: Arc<Mapping2D>,
+    },
+    /// Bilinear between four values at the corners of the unit square of a
+    /// 2D mapping, [v00, v01, v10, v11] at (s, t) = (0, 0), (0, 1), (1, 0),
+    /// (1, 1), and extrapolated beyond it (pbrt-v4 `bilerp`).
+    Bilerp(Arc<([Vec3; 4], Mapping2D)>),
+    /// |n . dir| a + (1 - |n . dir|) b for the surface normal n (pbrt-v4
+    /// `directionmix`; `dir` a unit vector of the world).
+    DirectionMix {
+        a: Arc<Texture>,
+        b: Arc<Texture>,
+        dir: Arc<Vec3>,
+    },
+    /// A pattern of noise (pbrt-v4 `fbm`, `wrinkled`, `windy`, `marble`).
+    Noise(Arc<NoiseTexture>),
+    /// A texture looked up at the (s, t) of a mapping other than (u, v)
+    /// (an image under a spherical, cylindrical or planar mapping).
+    Mapped {
+        mapping: Arc<Mapping2D>,
+        tex: Arc<Texture>,
     },
     /// The product of two textures (pbrt-v4 `scale`).
     Scale {
@@ -90,6 +138,20 @@ pub enum Texture {
 impl Texture {
     pub fn constant(v: Vec3) -> Texture {
         Texture::Constant(v)
+    }
+
+    /// `even` and `odd` alternating over a `u_scale` x `v_scale` grid of
+    /// squares per unit of (u, v).
+    pub fn checkerboard(even: Arc<Texture>, odd: Arc<Texture>, u_scale: f32, v_scale: f32) -> Texture {
+        Texture::Checkerboard {
+            even,
+            odd,
+            mapping: Arc::new(Mapping2D::Uv(UvMapping {
+                su: u_scale,
+                sv: v_scale,
+                ..UvMapping::default()
+            })),
+        }
     }
 
     /// The texture's value at `tc`. Inlined for the constant case, which
@@ -121,20 +183,49 @@ impl Texture {
     fn eval<V: TexValue>(&self, tc: &TexCoord) -> V {
         match self {
             Texture::Constant(v) => V::constant(*v),
-            Texture::Checkerboard {
-                even,
-                odd,
-                u_scale,
-                v_scale,
+            Texture::Checkerboard { even, odd, mapping } => {
+                let st = mapping.map(tc);
+                blend(even, odd, procedural::checkerboard_weight(st.uv, &st.footprint), tc)
+            }
+            Texture::Checkerboard3D { even, odd, to_texture } => {
+                blend(even, odd, procedural::checkerboard_weight_3d(to_texture, tc), tc)
+            }
+            Texture::Dots {
+                inside,
+                outside,
+                mapping,
             } => {
-                let (su, sv) = ((tc.uv.x * u_scale).floor(), (tc.uv.y * v_scale).floor());
-                // Parity of the square; rem_euclid keeps negative coordinates alternating too.
-                if (su + sv).rem_euclid(2.0) == 0.0 {
-                    even.eval(tc)
+                if procedural::inside_polka_dot(mapping.map(tc).uv) {
+                    inside.eval(tc)
                 } else {
-                    odd.eval(tc)
+                    outside.eval(tc)
                 }
             }
+            Texture::Bilerp(b) => {
+                let ([v00, v01, v10, v11], mapping) = &**b;
+                let st = mapping.map(tc).uv;
+                let (s, t) = (st.x, st.y);
+                V::constant(
+                    *v00 * ((1.0 - s) * (1.0 - t)) + *v10 * (s * (1.0 - t)) + *v01 * ((1.0 - s) * t) + *v11 * (s * t),
+                )
+            }
+            Texture::DirectionMix { a, b, dir } => {
+                let amount = tc.n.dot(**dir).abs();
+                // As pbrt-v4: a texture whose weight is zero is not looked up.
+                let first = if amount != 0.0 {
+                    a.eval::<V>(tc) * amount
+                } else {
+                    V::zero()
+                };
+                let second = if amount != 1.0 {
+                    b.eval::<V>(tc) * (1.0 - amount)
+                } else {
+                    V::zero()
+                };
+                first + second
+            }
+            Texture::Noise(n) => V::constant(n.evaluate(tc)),
+            Texture::Mapped { mapping, tex } => tex.eval(&mapping.map(tc)),
             Texture::Scale { tex, scale } => tex.eval::<V>(tc) * scale.eval::<V>(tc),
             Texture::Mix { a, b, amount } => {
                 let t: f32 = amount.eval(tc);
@@ -144,15 +235,75 @@ impl Texture {
         }
     }
 
-    /// Whether an image is looked up anywhere in the texture (its lookups
-    /// then want a footprint).
-    pub fn has_image(&self) -> bool {
+    /// Whether the texture's value depends on the pixel's footprint (an
+    /// image's MIP level, a checkerboard's blurred edges, the octaves of
+    /// noise that show): its lookups then want one.
+    pub fn needs_footprint(&self) -> bool {
         match self {
-            Texture::Constant(_) => false,
-            Texture::Checkerboard { even, odd, .. } => even.has_image() || odd.has_image(),
-            Texture::Scale { tex, scale } => tex.has_image() || scale.has_image(),
-            Texture::Mix { a, b, amount } => a.has_image() || b.has_image() || amount.has_image(),
-            Texture::Image(_) => true,
+            Texture::Constant(_) | Texture::Bilerp(_) => false,
+            Texture::Checkerboard { .. } | Texture::Checkerboard3D { .. } | Texture::Noise(_) | Texture::Image(_) => {
+                true
+            }
+            Texture::Dots {
+                inside: a, outside: b, ..
+            }
+            | Texture::DirectionMix { a, b, .. }
+            | Texture::Scale { tex: a, scale: b } => a.needs_footprint() || b.needs_footprint(),
+            Texture::Mix { a, b, amount } => a.needs_footprint() || b.needs_footprint() || amount.needs_footprint(),
+            Texture::Mapped { tex, .. } => tex.needs_footprint(),
+        }
+    }
+
+    /// The texture of a scene reflected by `r` (its own inverse): a texture
+    /// of space looks up the point carried back, a direction mix turns its
+    /// direction with the scene; what reads (u, v) is unchanged.
+    pub fn reflected(&self, r: &Affine3A) -> Texture {
+        let re = |t: &Arc<Texture>| Arc::new(t.reflected(r));
+        let map = |m: &Arc<Mapping2D>| Arc::new(m.reflected(r));
+        match self {
+            Texture::Constant(_) | Texture::Image(_) => self.clone(),
+            Texture::Checkerboard { even, odd, mapping } => Texture::Checkerboard {
+                even: re(even),
+                odd: re(odd),
+                mapping: map(mapping),
+            },
+            Texture::Checkerboard3D { even, odd, to_texture } => Texture::Checkerboard3D {
+                even: re(even),
+                odd: re(odd),
+                to_texture: Arc::new(**to_texture * *r),
+            },
+            Texture::Dots {
+                inside,
+                outside,
+                mapping,
+            } => Texture::Dots {
+                inside: re(inside),
+                outside: re(outside),
+                mapping: map(mapping),
+            },
+            Texture::Bilerp(b) => Texture::Bilerp(Arc::new((b.0, b.1.reflected(r)))),
+            Texture::DirectionMix { a, b, dir } => Texture::DirectionMix {
+                a: re(a),
+                b: re(b),
+                dir: Arc::new(r.transform_vector3(**dir)),
+            },
+            Texture::Noise(n) => Texture::Noise(Arc::new(NoiseTexture {
+                to_texture: n.to_texture * *r,
+                pattern: n.pattern,
+            })),
+            Texture::Mapped { mapping, tex } => Texture::Mapped {
+                mapping: map(mapping),
+                tex: re(tex),
+            },
+            Texture::Scale { tex, scale } => Texture::Scale {
+                tex: re(tex),
+                scale: re(scale),
+            },
+            Texture::Mix { a, b, amount } => Texture::Mix {
+                a: re(a),
+                b: re(b),
+                amount: re(amount),
+            },
         }
     }
 
@@ -169,11 +320,32 @@ impl Texture {
     pub fn max_value(&self) -> Vec3 {
         match self {
             Texture::Constant(v) => *v,
-            Texture::Checkerboard { even, odd, .. } => even.max_value().max(odd.max_value()),
+            Texture::Checkerboard { even: a, odd: b, .. }
+            | Texture::Checkerboard3D { even: a, odd: b, .. }
+            | Texture::Dots {
+                inside: a, outside: b, ..
+            }
+            | Texture::DirectionMix { a, b, .. }
+            | Texture::Mix { a, b, .. } => a.max_value().max(b.max_value()),
+            // Within the unit square; beyond it a ramp has no bound.
+            Texture::Bilerp(b) => b.0.iter().fold(Vec3::ZERO, |m, v| m.max(*v)),
+            Texture::Noise(n) => Vec3::splat(n.max_value()),
+            Texture::Mapped { tex, .. } => tex.max_value(),
             Texture::Scale { tex, scale } => tex.max_value() * scale.max_value(),
-            Texture::Mix { a, b, .. } => a.max_value().max(b.max_value()),
             Texture::Image(img) => img.max_value(),
         }
+    }
+}
+
+/// `even` and `odd` weighed by 1 - w and w, the one whose weight is zero not
+/// looked up (as pbrt-v4's checkerboard).
+fn blend<V: TexValue>(even: &Texture, odd: &Texture, w: f32, tc: &TexCoord) -> V {
+    if w == 0.0 {
+        even.eval(tc)
+    } else if w == 1.0 {
+        odd.eval(tc)
+    } else {
+        even.eval::<V>(tc) * (1.0 - w) + odd.eval::<V>(tc) * w
     }
 }
 
@@ -182,6 +354,9 @@ trait TexValue:
     Copy + std::ops::Mul<Output = Self> + std::ops::Mul<f32, Output = Self> + std::ops::Add<Output = Self>
 {
     fn constant(v: Vec3) -> Self;
+    fn zero() -> Self {
+        Self::constant(Vec3::ZERO)
+    }
     fn image(img: &ImageTexture, tc: &TexCoord) -> Self;
 }
 
@@ -227,7 +402,7 @@ mod tests {
     use super::*;
 
     fn at(u: f32, v: f32) -> TexCoord {
-        TexCoord::at(Vec2::new(u, v), Vec3::ZERO)
+        TexCoord::at(Vec2::new(u, v), Vec3::ZERO, Vec3::Z)
     }
 
     #[test]
@@ -261,12 +436,7 @@ mod tests {
     #[test]
     fn checkerboard_alternates_and_scale_and_mix_combine() {
         let (black, white) = (Arc::new(Texture::from(Vec3::ZERO)), Arc::new(Texture::from(Vec3::ONE)));
-        let c = Texture::Checkerboard {
-            even: white.clone(),
-            odd: black.clone(),
-            u_scale: 4.0,
-            v_scale: 4.0,
-        };
+        let c = Texture::checkerboard(white.clone(), black.clone(), 4.0, 4.0);
         assert_eq!(c.evaluate(&at(0.1, 0.1)), Vec3::ONE);
         assert_eq!(c.evaluate(&at(0.3, 0.1)), Vec3::ZERO);
         assert_eq!(c.evaluate(&at(0.3, 0.3)), Vec3::ONE);

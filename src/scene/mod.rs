@@ -564,7 +564,8 @@ pub struct Hit {
 
 /// The change of (u, v) for changes `dpdx`, `dpdy` of the point on a surface
 /// with derivatives `dpdu`, `dpdv`: pbrt-v4's least-squares solution
-/// (`SurfaceInteraction::ComputeDifferentials`), zero where it fails.
+/// (`SurfaceInteraction::ComputeDifferentials`), zero where it fails; with
+/// `dpdx` and `dpdy` themselves.
 fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
     let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
     let inv = 1.0 / (a00 * a11 - a01 * a01);
@@ -577,6 +578,8 @@ fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
         dvdx: clamp((a00 * b1x - a01 * b0x) * inv),
         dudy: clamp((a11 * b0y - a01 * b1y) * inv),
         dvdy: clamp((a00 * b1y - a01 * b0y) * inv),
+        dpdx: if dpdx.is_finite() { dpdx } else { Vec3::ZERO },
+        dpdy: if dpdy.is_finite() { dpdy } else { Vec3::ZERO },
     }
 }
 
@@ -1651,10 +1654,12 @@ impl Scene {
     /// pbrt-v4's stochastic alpha test: whether `ray`'s hit at `p` (texture
     /// coordinates `uv`) on a primitive (`prim`: its index and kind, so that
     /// two cut-out surfaces along one ray decide independently) under
-    /// cut-out `alpha` counts.
+    /// cut-out `alpha` counts. The mask is looked up without the surface's
+    /// normal, which the test does not compute (a `directionmix` in it
+    /// shows its second texture).
     #[inline(never)]
     fn solid(&self, alpha: u32, uv: Vec2, p: Vec3, ray: &Ray, prim: [u32; 2]) -> bool {
-        let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord::at(uv, p));
+        let a = self.alphas[alpha as usize].evaluate_scalar(&TexCoord::at(uv, p, Vec3::ZERO));
         if a >= 1.0 {
             return true;
         }
@@ -2260,8 +2265,15 @@ mod shading_tests {
         // ...a change along the normal adds nothing, and a degenerate
         // parametrisation gives no footprint.
         let n = dpdu.cross(dpdv);
-        assert_eq!(uv_footprint(dpdu, dpdv, n, n), Footprint::NONE);
-        assert_eq!(uv_footprint(dpdu, dpdu, dpdu, dpdu), Footprint::NONE);
+        let uv_only = |f: Footprint| Footprint {
+            dpdx: Vec3::ZERO,
+            dpdy: Vec3::ZERO,
+            ..f
+        };
+        assert_eq!(uv_only(uv_footprint(dpdu, dpdv, n, n)), Footprint::NONE);
+        assert_eq!(uv_only(uv_footprint(dpdu, dpdu, dpdu, dpdu)), Footprint::NONE);
+        // The point's own change is kept, for textures of space.
+        assert_eq!(uv_footprint(dpdu, dpdv, n, -n).dpdy, -n);
     }
 
     /// A scene of big z-facing squares at the given depths (material 0 is
@@ -2585,12 +2597,12 @@ mod cutout_tests {
     }
 
     fn checker(u_scale: f32, v_scale: f32) -> Texture {
-        Texture::Checkerboard {
-            even: Arc::new(Texture::from(Vec3::ONE)),
-            odd: Arc::new(Texture::from(Vec3::ZERO)),
+        Texture::checkerboard(
+            Arc::new(Texture::from(Vec3::ONE)),
+            Arc::new(Texture::from(Vec3::ZERO)),
             u_scale,
             v_scale,
-        }
+        )
     }
 
     #[test]

@@ -1068,9 +1068,8 @@ mod tests {
     fn footprint(d: f32) -> Footprint {
         Footprint {
             dudx: d,
-            dvdx: 0.0,
-            dudy: 0.0,
             dvdy: d,
+            ..Footprint::NONE
         }
     }
 

@@ -65,7 +65,7 @@ fn a_checkerboard_floor_is_bright_and_dark_where_its_squares_are() {
         let Material::Diffuse { reflectance } = scene.material(hit.material) else {
             panic!("not diffuse");
         };
-        let r = reflectance.evaluate(&TexCoord::at(hit.uv, hit.p));
+        let r = reflectance.evaluate(&TexCoord::at(hit.uv, hit.p, hit.ng));
         assert_eq!(r, Vec3::splat(want), "({x}, {z})");
     }
     // The render: image x grows with world x, image y with -z. The light
@@ -131,7 +131,7 @@ fn image_textures_load_beside_the_scene_and_are_shared() {
         panic!("not images");
     };
     assert!(Arc::ptr_eq(&a.image, &b.image), "one file, one decoded image");
-    let left = TexCoord::at(Vec2::new(0.0, 0.5), Vec3::ZERO);
+    let left = TexCoord::at(Vec2::new(0.0, 0.5), Vec3::ZERO, Vec3::Z);
     assert!((a.evaluate(left.uv).x - 0.2158605).abs() < 1e-5);
     let Material::Diffuse { reflectance: lin } = get("y") else {
         panic!()

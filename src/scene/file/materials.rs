@@ -210,12 +210,12 @@ impl Resolver<'_> {
             }
             "checkerboard" => {
                 k.only(kind, &["tex1", "tex2", "uscale", "vscale"])?;
-                Texture::Checkerboard {
-                    even: Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(one)),
-                    odd: Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(zero)),
-                    u_scale: k.num("uscale")?.unwrap_or(1.0),
-                    v_scale: k.num("vscale")?.unwrap_or(1.0),
-                }
+                Texture::checkerboard(
+                    Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(one)),
+                    Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(zero)),
+                    k.num("uscale")?.unwrap_or(1.0),
+                    k.num("vscale")?.unwrap_or(1.0),
+                )
             }
             "scale" => {
                 k.only(kind, &["tex", "scale"])?;

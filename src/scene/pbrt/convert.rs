@@ -2666,7 +2666,8 @@ fn texture(
     at: &Loc,
     depth: usize,
 ) -> Result<std::result::Result<Texture, String>> {
-    use crate::texture::{Encoding, ImageOptions, MipFilter, UvMapping, WrapMode};
+    use crate::texture::{Encoding, ImageOptions, Mapping2D, MipFilter, NoiseTexture, Pattern, UvMapping, WrapMode};
+    use glam::Affine3A;
     let kind_name = match kind {
         TextureKind::Float => "float",
         TextureKind::Spectrum => "spectrum",
@@ -2678,12 +2679,6 @@ fn texture(
         return Err(located(&t.loc, format!("texture \"{name}\": textures nested too deep")));
     }
     let p = &t.params;
-    let mapping = p.get_string_or("mapping", "uv")?;
-    if mapping != "uv" && t.class != "constant" && t.class != "scale" && t.class != "mix" {
-        return Ok(Err(format!(
-            "texture \"{name}\": mapping \"{mapping}\" is not supported"
-        )));
-    }
     let uv = |p: &Params| -> Result<UvMapping> {
         Ok(UvMapping {
             su: p.get_float("uscale", 1.0)?,
@@ -2692,7 +2687,82 @@ fn texture(
             dv: p.get_float("vdelta", 0.0)?,
         })
     };
+    // From the world to the texture's space: the inverse of the
+    // transformation in force where the texture was defined.
+    let to_texture = || -> Result<Affine3A> {
+        let m = t.world_from_texture.inverse();
+        if !m.is_finite() || t.world_from_texture.determinant() == 0.0 {
+            return Err(located(
+                &t.loc,
+                format!("texture \"{name}\": its transformation is singular"),
+            ));
+        }
+        Ok(Affine3A::from_mat4(m))
+    };
+    // The 2D mapping of an imagemap, checkerboard, dots or bilerp texture.
+    let mapping = || -> Result<Mapping2D> {
+        let kind = p.get_string_or("mapping", "uv")?;
+        Ok(match kind.as_str() {
+            "uv" => Mapping2D::Uv(uv(p)?),
+            "spherical" => Mapping2D::Spherical(to_texture()?),
+            "cylindrical" => Mapping2D::Cylindrical(to_texture()?),
+            "planar" => Mapping2D::Planar {
+                to_texture: to_texture()?,
+                vs: p.get_vector3("v1", Vec3::X)?,
+                vt: p.get_vector3("v2", Vec3::Y)?,
+                ds: p.get_float("udelta", 0.0)?,
+                dt: p.get_float("vdelta", 0.0)?,
+            },
+            other => {
+                return Err(located(
+                    place(p, "mapping", &t.loc),
+                    format!(
+                        "texture \"{name}\": unknown mapping \"{other}\" (\"uv\", \"spherical\", \"cylindrical\" or \"planar\")"
+                    ),
+                ))
+            }
+        })
+    };
+    // The octaves of a noise texture: pbrt-v4's default 8; beyond 32 the
+    // octaves are finer than a float can place.
+    let octaves = || -> Result<u32> {
+        let n = p.get_int("octaves", 8)?;
+        u32::try_from(n).ok().filter(|&n| n <= 32).ok_or_else(|| {
+            located(
+                place(p, "octaves", &t.loc),
+                format!("texture \"{name}\": \"octaves\" {n} is not within 0..=32"),
+            )
+        })
+    };
+    let float_only = |class: &str| -> Result<()> {
+        match kind {
+            TextureKind::Float => Ok(()),
+            TextureKind::Spectrum => Err(located(
+                &t.loc,
+                format!("texture \"{name}\": \"{class}\" is a float texture only (as in pbrt-v4)"),
+            )),
+        }
+    };
     let arc = |t: Texture| Arc::new(t);
+    // Two operands, or why one is not supported.
+    type Pair = (Arc<Texture>, Arc<Texture>);
+    let pair = |a: (&str, f32), b: (&str, f32)| -> Result<std::result::Result<Pair, String>> {
+        let first = match operand(scene, t, a.0, kind, a.1, depth)? {
+            Ok(x) => x,
+            Err(why) => return Ok(Err(why)),
+        };
+        let second = match operand(scene, t, b.0, kind, b.1, depth)? {
+            Ok(x) => x,
+            Err(why) => return Ok(Err(why)),
+        };
+        Ok(Ok((arc(first), arc(second))))
+    };
+    let noise = |pattern: Pattern| -> Result<std::result::Result<Texture, String>> {
+        Ok(Ok(Texture::Noise(Arc::new(NoiseTexture {
+            to_texture: to_texture()?,
+            pattern,
+        }))))
+    };
     match t.class.as_str() {
         "constant" => operand(scene, t, "value", kind, 1.0, depth),
         "scale" => {
@@ -2726,33 +2796,107 @@ fn texture(
             let a = v.pop().expect("three");
             Ok(Ok(Texture::Mix { a, b, amount }))
         }
+        "directionmix" => {
+            let dir = t
+                .world_from_texture
+                .transform_vector3(p.get_vector3("dir", Vec3::Y)?)
+                .normalize_or_zero();
+            if dir == Vec3::ZERO || !dir.is_finite() {
+                return Err(located(
+                    place(p, "dir", &t.loc),
+                    format!("texture \"{name}\": \"dir\" is not a direction"),
+                ));
+            }
+            let (a, b) = match pair(("tex1", 0.0), ("tex2", 1.0))? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::DirectionMix {
+                a,
+                b,
+                dir: Arc::new(dir),
+            }))
+        }
         "checkerboard" => {
             let dimension = p.get_int("dimension", 2)?;
-            if dimension != 2 {
-                return Ok(Err(format!(
-                    "texture \"{name}\": a {dimension}D checkerboard is not supported"
-                )));
+            if dimension != 2 && dimension != 3 {
+                return Err(located(
+                    place(p, "dimension", &t.loc),
+                    format!("texture \"{name}\": a checkerboard of dimension {dimension} (2 or 3)"),
+                ));
             }
-            let m = uv(p)?;
-            if m.du != 0.0 || m.dv != 0.0 {
-                return Ok(Err(format!(
-                    "texture \"{name}\": a checkerboard with udelta/vdelta is not supported"
-                )));
-            }
-            let even = match operand(scene, t, "tex1", kind, 1.0, depth)? {
+            let (even, odd) = match pair(("tex1", 1.0), ("tex2", 0.0))? {
                 Ok(x) => x,
                 Err(why) => return Ok(Err(why)),
             };
-            let odd = match operand(scene, t, "tex2", kind, 0.0, depth)? {
-                Ok(x) => x,
-                Err(why) => return Ok(Err(why)),
-            };
-            Ok(Ok(Texture::Checkerboard {
-                even: arc(even),
-                odd: arc(odd),
-                u_scale: m.su,
-                v_scale: m.sv,
+            Ok(Ok(if dimension == 2 {
+                Texture::Checkerboard {
+                    even,
+                    odd,
+                    mapping: Arc::new(mapping()?),
+                }
+            } else {
+                Texture::Checkerboard3D {
+                    even,
+                    odd,
+                    to_texture: Arc::new(to_texture()?),
+                }
             }))
+        }
+        "dots" => {
+            let (inside, outside) = match pair(("inside", 1.0), ("outside", 0.0))? {
+                Ok(x) => x,
+                Err(why) => return Ok(Err(why)),
+            };
+            Ok(Ok(Texture::Dots {
+                inside,
+                outside,
+                mapping: Arc::new(mapping()?),
+            }))
+        }
+        "bilerp" => {
+            let mut corners = [Vec3::ZERO; 4];
+            for (c, (n, d)) in corners
+                .iter_mut()
+                .zip([("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0)])
+            {
+                *c = match kind {
+                    TextureKind::Float => Vec3::splat(p.get_float(n, d)?),
+                    TextureKind::Spectrum if p.get(n).is_none() => Vec3::splat(d),
+                    TextureKind::Spectrum => match colour(p, n, &t.loc)? {
+                        Ok(v) => v,
+                        Err(why) => return Ok(Err(why)),
+                    },
+                };
+            }
+            Ok(Ok(Texture::Bilerp(Arc::new((corners, mapping()?)))))
+        }
+        "fbm" | "wrinkled" => {
+            float_only(&t.class)?;
+            let (octaves, omega) = (octaves()?, p.get_float("roughness", 0.5)?);
+            noise(if t.class == "fbm" {
+                Pattern::Fbm { octaves, omega }
+            } else {
+                Pattern::Wrinkled { octaves, omega }
+            })
+        }
+        "windy" => {
+            float_only("windy")?;
+            noise(Pattern::Windy)
+        }
+        "marble" => {
+            if kind == TextureKind::Float {
+                return Err(located(
+                    &t.loc,
+                    format!("texture \"{name}\": \"marble\" is a spectrum texture only (as in pbrt-v4)"),
+                ));
+            }
+            noise(Pattern::Marble {
+                octaves: octaves()?,
+                omega: p.get_float("roughness", 0.5)?,
+                scale: p.get_float("scale", 1.0)?,
+                variation: p.get_float("variation", 0.2)?,
+            })
         }
         "imagemap" => {
             let Some(file) = p.get_string("filename")? else {
@@ -2788,17 +2932,29 @@ fn texture(
                     format!("imagemap \"{name}\": unknown filter \"{filter_name}\""),
                 ));
             };
+            // A mapping other than (u, v) is applied before the image is
+            // looked up, which then takes (s, t) as they are.
+            let mapped = match mapping()? {
+                Mapping2D::Uv(m) => Err(m),
+                other => Ok(other),
+            };
             let opts = ImageOptions {
                 wrap,
                 encoding,
                 scale: p.get_float("scale", 1.0)?,
                 invert: p.get_bool("invert", false)?,
-                mapping: uv(p)?,
+                mapping: mapped.clone().err().unwrap_or_default(),
                 filter,
             };
             let tex =
                 Texture::image(&path, &opts).map_err(|e| located(&file_at, format!("imagemap \"{name}\": {e}")))?;
-            Ok(Ok(tex))
+            Ok(Ok(match mapped {
+                Ok(mapping) => Texture::Mapped {
+                    mapping: Arc::new(mapping),
+                    tex: Arc::new(tex),
+                },
+                Err(_) => tex,
+            }))
         }
         other => Ok(Err(format!("texture \"{name}\" of class \"{other}\" is not supported"))),
     }
@@ -3115,8 +3271,18 @@ fn reflect(desc: &mut SceneDesc) {
             t.uvs = Some([a, c, b]);
         }
     }
+    let r = Mat4::from_cols(
+        vector(Vec3::X).extend(0.0),
+        vector(Vec3::Y).extend(0.0),
+        vector(Vec3::Z).extend(0.0),
+        point(Vec3::ZERO).extend(1.0),
+    );
+    let affine = glam::Affine3A::from_mat4(r);
     for (_, m) in &mut desc.materials {
-        m.reflect();
+        m.reflect(&affine);
+    }
+    for c in &mut desc.cutouts {
+        c.alpha = c.alpha.reflected(&affine);
     }
     for s in &mut desc.spheres {
         s.sphere.centre = point(s.sphere.centre);
@@ -3135,12 +3301,6 @@ fn reflect(desc: &mut SceneDesc) {
     for c in &mut desc.curves {
         c.curve.cp = c.curve.cp.map(point);
     }
-    let r = Mat4::from_cols(
-        vector(Vec3::X).extend(0.0),
-        vector(Vec3::Y).extend(0.0),
-        vector(Vec3::Z).extend(0.0),
-        point(Vec3::ZERO).extend(1.0),
-    );
     for m in &mut desc.moving {
         m.motion = m.motion.mirrored(r);
     }
@@ -3773,6 +3933,121 @@ mod tests {
     }
 
     #[test]
+    fn procedural_textures_and_mappings_are_read_in_their_own_space() {
+        // fBm in a texture space moved 10 along x, the amount of a mix of
+        // black and white on a quad: the quad's colour at a point is the fBm
+        // at the point moved back (the transformation's inverse), for the
+        // octaves and roughness given. This camera's picture is pbrt's
+        // mirror image, so the scene is reflected across x = 0: the point
+        // in pbrt's world is the hit's with x negated.
+        let head = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\nWorldBegin\n";
+        let quad = "Shape \"trianglemesh\" \"point3 P\" [ -1 -0.5 0  1 -0.5 0  1 0.5 0  -1 0.5 0 ] \
+                    \"point2 uv\" [ 0 0  1 0  1 1  0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n";
+        let scene_with = |textures: &str| {
+            format!(
+                "{head}AttributeBegin\nTranslate 10 0 0\n{textures}\nAttributeEnd\n\
+                 Texture \"m\" \"spectrum\" \"mix\" \"texture amount\" \"n\" \"rgb tex1\" [ 0 0 0 ] \"rgb tex2\" [ 1 1 1 ]\n\
+                 Material \"diffuse\" \"texture reflectance\" \"m\"\n{quad}"
+            )
+        };
+        let look = |c: &Converted, x: f32| {
+            let scene = Scene::build(c.desc.clone()).unwrap();
+            let ray = crate::math::Ray::new(Vec3::new(x, 0.1, -5.0), Vec3::Z);
+            let hit = scene.intersect(&ray, 1e-4, f32::INFINITY).expect("the quad");
+            let Material::Diffuse { reflectance } = &scene.materials[hit.material as usize] else {
+                panic!()
+            };
+            (
+                reflectance.evaluate(&crate::texture::TexCoord::at(hit.uv, hit.p, hit.ng)),
+                hit,
+            )
+        };
+        let c = ok(&scene_with(
+            "Texture \"n\" \"float\" \"fbm\" \"integer octaves\" [ 4 ] \"float roughness\" [ 0.6 ]",
+        ));
+        assert!(c.mirrored);
+        for x in [-0.7f32, 0.2, 0.65] {
+            let (v, hit) = look(&c, x);
+            let in_pbrt = hit.p * Vec3::new(-1.0, 1.0, 1.0);
+            let want = crate::texture::noise::fbm(in_pbrt - Vec3::new(10.0, 0.0, 0.0), Vec3::ZERO, Vec3::ZERO, 0.6, 4);
+            assert!((v - Vec3::splat(want)).abs().max_element() < 1e-6, "{x}: {v} vs {want}");
+        }
+        // Every class and mapping reads; what each holds is checked against
+        // pbrt-v4's own values in `texture::procedural`.
+        for (texture, holds) in [
+            ("Texture \"n\" \"float\" \"wrinkled\"", "Noise"),
+            ("Texture \"n\" \"float\" \"windy\"", "Noise"),
+            (
+                "Texture \"n\" \"float\" \"dots\" \"string mapping\" \"spherical\"",
+                "Dots",
+            ),
+            ("Texture \"n\" \"float\" \"bilerp\" \"float v11\" [ 0.5 ]", "Bilerp"),
+            (
+                "Texture \"n\" \"float\" \"checkerboard\" \"integer dimension\" [ 3 ]",
+                "Checkerboard3D",
+            ),
+            (
+                "Texture \"n\" \"float\" \"checkerboard\" \"string mapping\" \"planar\" \"vector3 v1\" [ 0 0 1 ]",
+                "Checkerboard",
+            ),
+            (
+                "Texture \"n\" \"float\" \"directionmix\" \"vector3 dir\" [ 0 0 1 ]",
+                "DirectionMix",
+            ),
+        ] {
+            let c = ok(&scene_with(texture));
+            let m = format!("{:?}", c.desc.materials[0].1);
+            assert!(m.contains(&format!("amount: {holds}")), "{texture}: {m}");
+        }
+        // marble is a colour.
+        let marble = format!(
+            "{head}Texture \"k\" \"spectrum\" \"marble\" \"float scale\" [ 2 ]\n\
+             Material \"diffuse\" \"texture reflectance\" \"k\"\n{quad}"
+        );
+        let (v, _) = look(&ok(&marble), 0.3);
+        assert!(v.x > 0.0 && v.z >= v.x, "{v}");
+        // A direction mix looks along the surface's normal: the quad faces z.
+        let c = ok(&scene_with(
+            "Texture \"n\" \"float\" \"directionmix\" \"vector3 dir\" [ 0 0 1 ] \"float tex1\" [ 0.25 ] \"float tex2\" [ 0.75 ]",
+        ));
+        assert!((look(&c, 0.0).0 - Vec3::splat(0.25)).abs().max_element() < 1e-6);
+        // What pbrt-v4 refuses, or cannot mean: one line naming the place.
+        for (texture, want) in [
+            (
+                "Texture \"n\" \"float\" \"marble\"",
+                "dir/main.pbrt:6: texture \"n\": \"marble\" is a spectrum texture only",
+            ),
+            (
+                "Texture \"n\" \"float\" \"fbm\" \"integer octaves\" [ 40 ]",
+                "dir/main.pbrt:6: texture \"n\": \"octaves\" 40 is not within 0..=32",
+            ),
+            (
+                "Texture \"n\" \"float\" \"dots\" \"string mapping\" \"cubic\"",
+                "dir/main.pbrt:6: texture \"n\": unknown mapping \"cubic\"",
+            ),
+            (
+                "Texture \"n\" \"float\" \"checkerboard\" \"integer dimension\" [ 4 ]",
+                "dir/main.pbrt:6: texture \"n\": a checkerboard of dimension 4",
+            ),
+            (
+                "Scale 0 1 1\nTexture \"n\" \"float\" \"fbm\"",
+                "dir/main.pbrt:7: texture \"n\": its transformation is singular",
+            ),
+        ] {
+            let e = convert_text(&scene_with(texture), false).unwrap_err().to_string();
+            assert!(e.starts_with(want), "{texture}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+        let e = convert_text(
+            &scene_with("Texture \"n\" \"float\" \"fbm\"").replace("\"spectrum\" \"mix\"", "\"spectrum\" \"fbm\""),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("\"fbm\" is a float texture only"), "{e}");
+    }
+
+    #[test]
     fn checkerboard_quad_gives_two_reflectances() {
         let text = "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
              Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
@@ -3791,7 +4066,7 @@ mod tests {
             let Material::Diffuse { reflectance } = &scene.materials[hit.material as usize] else {
                 panic!()
             };
-            reflectance.evaluate(&crate::texture::TexCoord::at(hit.uv, hit.p))
+            reflectance.evaluate(&crate::texture::TexCoord::at(hit.uv, hit.p, hit.ng))
         };
         let (a, b) = (albedo(-0.5), albedo(0.5));
         assert!(a != b, "{a} {b}");
@@ -3931,11 +4206,11 @@ mod tests {
             assert!(!e.contains('\n'), "{e}");
         }
         // A texture class we lack is an unsupported material.
-        let e = convert_text(&text.replace("\"checkerboard\"", "\"fbm\""), false)
+        let e = convert_text(&text.replace("\"checkerboard\"", "\"ptex\""), false)
             .unwrap_err()
             .to_string();
         assert!(
-            e.starts_with("dir/main.pbrt:6: material (texture \"check\" of class \"fbm\""),
+            e.starts_with("dir/main.pbrt:6: material (texture \"check\" of class \"ptex\""),
             "{e}"
         );
     }
