@@ -12,7 +12,11 @@
 # (the rest of the picture being the same); then pbrt-v4 against itself
 # with another seed, the noise of both figures.
 #
-# Usage: PBRT=path/to/pbrt bench/textures.sh [WIDTH HEIGHT SPP]   (400 400 256)
+# PNG_OUT=file.png writes ours (the file as it is) and pbrt-v4's side by side.
+#
+# Usage: PBRT=path/to/pbrt [PNG_OUT=docs/textures.png] bench/textures.sh [WIDTH HEIGHT SPP]
+#   (400 400 256; pbrt-v4 built as ../shared/tools/pbrt-v4/ says). Renders
+#   are left in target/textures-bench/.
 set -euo pipefail
 : "${PBRT:?set PBRT to a pbrt-v4 binary}"
 w=${1:-400} h=${2:-400} spp=${3:-256}
@@ -33,14 +37,26 @@ sed -e "s/\"integer xresolution\" \[ [0-9]* \]/\"integer xresolution\" [ $w ]/" 
 sed -e 's/"texture inside"/"texture OUTSIDE"/; s/"texture outside"/"texture inside"/; s/"texture OUTSIDE"/"texture outside"/' \
     "$copy" >"$swapped"
 start=$(date +%s.%N)
-"$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --outfile "$out/pbrt.exr" "$copy"
+"$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --outfile "$out/pbrt.pfm" "$copy"
 mid=$(date +%s.%N)
-"$bin" -q --scene "$copy" -o "$out/ours.exr"
+"$bin" -q --scene "$copy" -o "$out/ours.pfm"
 end=$(date +%s.%N)
-"$bin" -q --scene "$swapped" -o "$out/ours-dots-swapped.exr"
+"$bin" -q --scene "$swapped" -o "$out/ours-dots-swapped.pfm"
 awk -v a="$start" -v b="$mid" -v c="$end" 'BEGIN { printf "pbrt-v4 %.1f s, ours %.1f s\n", b - a, c - b }'
-echo "ours against pbrt-v4: $("$bin" compare "$out/ours.exr" "$out/pbrt.exr" --max-luminance 4)"
-echo "ours, dots exchanged, against pbrt-v4: $("$bin" compare "$out/ours-dots-swapped.exr" "$out/pbrt.exr" --max-luminance 4)"
+echo "ours against pbrt-v4: $("$bin" compare "$out/ours.pfm" "$out/pbrt.pfm" --max-luminance 4)"
+echo "ours, dots exchanged, against pbrt-v4: $("$bin" compare "$out/ours-dots-swapped.pfm" "$out/pbrt.pfm" --max-luminance 4)"
 # The noise of the figures: pbrt-v4 against itself with another seed.
-"$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --seed 1 --outfile "$out/pbrt-seed1.exr" "$copy"
-echo "pbrt-v4, seed 1, against pbrt-v4: $("$bin" compare "$out/pbrt-seed1.exr" "$out/pbrt.exr" --max-luminance 4)"
+"$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --seed 1 --outfile "$out/pbrt-seed1.pfm" "$copy"
+echo "pbrt-v4, seed 1, against pbrt-v4: $("$bin" compare "$out/pbrt-seed1.pfm" "$out/pbrt.pfm" --max-luminance 4)"
+if [ -n "${PNG_OUT:-}" ]; then
+    python3 - "$out" "$PNG_OUT" "$root/bench" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[3])
+from pfm import load, write_png
+out, png = sys.argv[1], sys.argv[2]
+w, h, ours = load(f"{out}/ours.pfm")
+_, _, pbrt = load(f"{out}/pbrt.pfm")
+write_png(png, w, h, (ours, pbrt))
+print(f"wrote {png}")
+PY
+fi

@@ -414,3 +414,93 @@ AttributeBegin
   Shape "sphere" "float radius" 0.2
 AttributeEnd
 """)
+
+put("scene", "procedural.toml", """name = "procedural"
+[camera]
+position = [0, 0, -3]
+look_at = [0, 0, 0]
+fov_y = 40
+width = 16
+height = 12
+
+[textures.clouds]
+type = "fbm"
+frequency = 4
+octaves = 5
+[textures.sky]
+type = "mix"
+tex1 = [0.2, 0.3, 0.8]
+amount = "clouds"
+[textures.bumps]
+type = "wrinkled"
+roughness = 0.6
+[textures.stone]
+type = "marble"
+variation = 0.5
+[textures.spots]
+type = "dots"
+inside = "stone"
+uscale = 8
+[textures.ramp]
+type = "bilerp"
+v11 = [1, 0, 0]
+[textures.waves]
+type = "windy"
+
+[materials]
+a = { reflectance = "sky", displacement = "bumps" }
+b = { reflectance = "spots" }
+c = { reflectance = "ramp", displacement = "waves" }
+
+[[lights]]
+type = "sphere"
+centre = [0, -1, 0]
+radius = 0.1
+power = 20
+
+[[shapes]]
+type = "quad"
+material = "a"
+vertices = [[-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1]]
+
+[[shapes]]
+type = "sphere"
+material = "b"
+centre = [0.5, 0.5, 0]
+radius = 0.2
+
+[[shapes]]
+type = "box"
+material = "c"
+min = [-0.3, 0.2, -0.3]
+max = [0.3, 0.8, 0.3]
+""")
+
+put("pbrt", "procedural.pbrt", """LookAt 0 0 -5  0 0 0  0 1 0
+Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+Sampler "independent" "integer pixelsamples" [ 2 ]
+WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.5 0.5]
+AttributeBegin
+  Translate 1 0 0
+  Rotate 30 0 1 1
+  Scale 3 3 3
+  Texture "n" "float" "fbm" "integer octaves" [ 4 ] "float roughness" [ 0.6 ]
+  Texture "w" "float" "wrinkled"
+  Texture "v" "float" "windy"
+  Texture "m" "spectrum" "marble" "float scale" [ 2 ] "float variation" [ 0.4 ]
+  Texture "c3" "spectrum" "checkerboard" "integer dimension" [ 3 ] "texture tex1" "m"
+  Texture "sph" "spectrum" "checkerboard" "string mapping" "spherical"
+  Texture "cyl" "float" "dots" "string mapping" "cylindrical" "float inside" [ 0.2 ]
+  Texture "pla" "spectrum" "bilerp" "string mapping" "planar" "vector3 v1" [ 0 0 1 ] "float udelta" [ 0.5 ]
+  Texture "dm" "spectrum" "directionmix" "vector3 dir" [ 1 1 0 ] "texture tex1" "pla" "texture tex2" "sph"
+  Texture "mx" "spectrum" "mix" "texture amount" "n" "texture tex1" "c3" "texture tex2" "dm"
+AttributeEnd
+Material "coateddiffuse" "texture reflectance" "mx" "texture displacement" "w" "texture roughness" "v"
+Shape "sphere" "float radius" 1
+Material "diffusetransmission" "texture reflectance" "m" "texture transmittance" "dm"
+Shape "bilinearmesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0 ]
+Material "conductor" "texture roughness" "cyl"
+Shape "trianglemesh" "integer indices" [ 0 1 2 ] "point3 P" [ -1 -1 1  1 -1 1  0 1 1 ]
+""")

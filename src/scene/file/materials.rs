@@ -8,7 +8,10 @@ use crate::error::Result;
 use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::FileSource;
-use crate::texture::{Encoding, ImageOptions, ImageTexture, MipFilter, Texture, UvMapping, WrapMode};
+use crate::texture::{
+    Encoding, ImageOptions, ImageTexture, Mapping2D, MipFilter, NoiseTexture, Pattern, Texture, UvMapping, WrapMode,
+};
+use glam::Affine3A;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -192,12 +195,7 @@ impl Resolver<'_> {
         };
         let kind = match k.string("type")? {
             Some(t) => t,
-            None => {
-                return Err(k.err(
-                    None,
-                    "missing `type` (image, checkerboard, scale, mix or constant)".into(),
-                ))
-            }
+            None => return Err(k.err(None, format!("missing `type` ({TEXTURE_TYPES})"))),
         };
         let (dir, files) = (self.dir, self.files);
         let mut lookup = |n: &str, s: std::ops::Range<usize>| self.get(n, s);
@@ -235,6 +233,69 @@ impl Resolver<'_> {
                     ),
                 }
             }
+            "fbm" | "wrinkled" | "windy" | "marble" => {
+                let allowed: &[&str] = match kind {
+                    "windy" => &["frequency"],
+                    "marble" => &["frequency", "octaves", "roughness", "scale", "variation"],
+                    _ => &["frequency", "octaves", "roughness"],
+                };
+                k.only(kind, allowed)?;
+                let frequency = k.num("frequency")?.unwrap_or(1.0);
+                if !(frequency.is_finite() && frequency > 0.0) {
+                    return Err(k.err(Some("frequency"), format!("frequency {frequency} must be positive")));
+                }
+                let octaves = match k.num("octaves")? {
+                    None => 8,
+                    Some(n) if n.fract() == 0.0 && (0.0..=32.0).contains(&n) => n as u32,
+                    Some(n) => return Err(k.err(Some("octaves"), format!("octaves {n}: a whole number in 0..=32"))),
+                };
+                let omega = k.num("roughness")?.unwrap_or(0.5);
+                let pattern = match kind {
+                    "fbm" => Pattern::Fbm { octaves, omega },
+                    "wrinkled" => Pattern::Wrinkled { octaves, omega },
+                    "windy" => Pattern::Windy,
+                    _ => Pattern::Marble {
+                        octaves,
+                        omega,
+                        scale: k.num("scale")?.unwrap_or(1.0),
+                        variation: k.num("variation")?.unwrap_or(0.2),
+                    },
+                };
+                Texture::Noise(Arc::new(NoiseTexture {
+                    to_texture: Affine3A::from_scale(Vec3::splat(frequency)),
+                    pattern,
+                }))
+            }
+            "dots" => {
+                k.only(kind, &["inside", "outside", "uscale", "vscale", "udelta", "vdelta"])?;
+                Texture::Dots {
+                    inside: Arc::new(k.param("inside", &mut lookup)?.unwrap_or(one)),
+                    outside: Arc::new(k.param("outside", &mut lookup)?.unwrap_or(zero)),
+                    mapping: Arc::new(Mapping2D::Uv(uv_mapping(&k)?)),
+                }
+            }
+            "bilerp" => {
+                k.only(
+                    kind,
+                    &["v00", "v01", "v10", "v11", "uscale", "vscale", "udelta", "vdelta"],
+                )?;
+                let mut corners = [Vec3::ZERO; 4];
+                for (c, (key, d)) in corners
+                    .iter_mut()
+                    .zip([("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0)])
+                {
+                    *c = match k.param(key, &mut lookup)? {
+                        None => Vec3::splat(d),
+                        Some(t) => t.as_constant().ok_or_else(|| {
+                            k.err(
+                                Some(key),
+                                format!("`{key}` must be a number or a colour, not a texture"),
+                            )
+                        })?,
+                    };
+                }
+                Texture::Bilerp(Arc::new((corners, Mapping2D::Uv(uv_mapping(&k)?))))
+            }
             "image" => {
                 k.only(
                     kind,
@@ -271,12 +332,7 @@ impl Resolver<'_> {
                     encoding,
                     scale: k.num("scale")?.unwrap_or(1.0),
                     invert: k.boolean("invert")?.unwrap_or(false),
-                    mapping: UvMapping {
-                        su: k.num("uscale")?.unwrap_or(1.0),
-                        sv: k.num("vscale")?.unwrap_or(1.0),
-                        du: k.num("udelta")?.unwrap_or(0.0),
-                        dv: k.num("vdelta")?.unwrap_or(0.0),
-                    },
+                    mapping: uv_mapping(&k)?,
                     filter,
                 };
                 let path = dir.join(file);
@@ -288,11 +344,24 @@ impl Resolver<'_> {
             other => {
                 return Err(k.err(
                     Some("type"),
-                    format!("unknown texture type '{other}' (image, checkerboard, scale, mix or constant)"),
+                    format!("unknown texture type '{other}' ({TEXTURE_TYPES})"),
                 ))
             }
         })
     }
+}
+
+/// The texture types a scene file names.
+const TEXTURE_TYPES: &str = "image, checkerboard, scale, mix, constant, fbm, wrinkled, windy, marble, dots or bilerp";
+
+/// (s, t) = (uscale u + udelta, vscale v + vdelta).
+fn uv_mapping(k: &Keys) -> Result<UvMapping> {
+    Ok(UvMapping {
+        su: k.num("uscale")?.unwrap_or(1.0),
+        sv: k.num("vscale")?.unwrap_or(1.0),
+        du: k.num("udelta")?.unwrap_or(0.0),
+        dv: k.num("vdelta")?.unwrap_or(0.0),
+    })
 }
 
 /// The `[textures.NAME]` tables, with image paths relative to `dir`.

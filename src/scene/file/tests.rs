@@ -1217,3 +1217,83 @@ fn subsurface_materials_are_read_and_checked() {
         assert!(e.contains("test.toml:") && e.contains(what), "{bad}: {e}");
     }
 }
+
+#[test]
+fn noise_dots_and_ramps_are_textures_of_their_own_space() {
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [textures.clouds]
+        type = "fbm"
+        frequency = 4
+        octaves = 5
+        roughness = 0.6
+        [textures.sky]
+        type = "mix"
+        tex1 = [0.2, 0.3, 0.8]
+        tex2 = 1
+        amount = "clouds"
+        [textures.stone]
+        type = "marble"
+        variation = 0.5
+        [textures.spots]
+        type = "dots"
+        inside = "stone"
+        outside = [0.9, 0.9, 0.8]
+        uscale = 8
+        vscale = 8
+        [textures.ramp]
+        type = "bilerp"
+        v11 = [1, 0, 0]
+        [materials.a]
+        reflectance = "sky"
+        [materials.b]
+        reflectance = "spots"
+        [materials.c]
+        reflectance = "ramp"
+        displacement = "bumps"
+        [textures.bumps]
+        type = "wrinkled"
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    let reflectance = |n: &str| {
+        let m = d
+            .materials
+            .iter()
+            .find(|(k, _)| k == n)
+            .map(|(_, m)| m.clone())
+            .unwrap();
+        match m {
+            Material::Diffuse { reflectance } => reflectance,
+            Material::Bumped { base, .. } => match *base {
+                Material::Diffuse { reflectance } => reflectance,
+                other => panic!("{other:?}"),
+            },
+            other => panic!("{other:?}"),
+        }
+    };
+    // The fBm is read at the point times the frequency.
+    let p = Vec3::new(0.3, -0.2, 0.7);
+    let tc = crate::texture::TexCoord::at(crate::math::Vec2::new(0.25, 0.5), p, Vec3::Z);
+    let amount = crate::texture::noise::fbm(p * 4.0, Vec3::ZERO, Vec3::ZERO, 0.6, 5);
+    let want = Vec3::new(0.2, 0.3, 0.8) * (1.0 - amount) + Vec3::ONE * amount;
+    assert!((reflectance("a").evaluate(&tc) - want).abs().max_element() < 1e-6);
+    assert!(matches!(reflectance("b"), crate::texture::Texture::Dots { .. }));
+    // The ramp: v00 = v10 = 0, v01 = 1, v11 red, at (u, v) = (0.25, 0.5).
+    let ramp = reflectance("c").evaluate(&tc);
+    let want = Vec3::ONE * (0.75 * 0.5) + Vec3::X * (0.25 * 0.5);
+    assert!((ramp - want).abs().max_element() < 1e-6, "{ramp}");
+    // Refusals at their key's line.
+    for (from, to, what) in [
+        ("octaves = 5", "octaves = 40", "octaves 40: a whole number in 0..=32"),
+        ("frequency = 4", "frequency = 0", "frequency 0 must be positive"),
+        ("v11 = [1, 0, 0]", "v11 = \"sky\"", "`v11` must be a number or a colour"),
+        ("variation = 0.5", "variation = 0.5\nwidth = 1", "width"),
+        ("type = \"dots\"", "type = \"ptex\"", "unknown texture type 'ptex'"),
+    ] {
+        let e = parse_str(&text.replace(from, to)).unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:") && e.contains(what), "{to}: {e}");
+    }
+}
