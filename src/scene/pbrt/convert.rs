@@ -426,8 +426,10 @@ impl<'a> Conv<'a> {
         let mut seen = HashSet::new();
         let mut groups: BTreeMap<(String, String), (Loc, usize)> = BTreeMap::new();
         let mut order = vec![];
-        for params in &self.read {
-            if !seen.insert(*params as *const Params) {
+        // Textures are converted where they are named.
+        let textures = self.scene.textures.iter().map(|t| &t.params).filter(|p| p.touched());
+        for params in self.read.iter().copied().chain(textures) {
+            if !seen.insert(params as *const Params) {
                 continue;
             }
             for p in params.unused() {
@@ -2679,6 +2681,7 @@ fn texture(
         return Err(located(&t.loc, format!("texture \"{name}\": textures nested too deep")));
     }
     let p = &t.params;
+    p.touch();
     let uv = |p: &Params| -> Result<UvMapping> {
         Ok(UvMapping {
             su: p.get_float("uscale", 1.0)?,
@@ -3999,6 +4002,22 @@ mod tests {
             let m = format!("{:?}", c.desc.materials[0].1);
             assert!(m.contains(&format!("amount: {holds}")), "{texture}: {m}");
         }
+        // A parameter of the wrong type, or one the mapping does not take,
+        // stays unread and is reported, as pbrt-v4 reports it.
+        let c = ok(&scene_with(
+            "Texture \"n\" \"float\" \"dots\" \"string mapping\" \"cylindrical\" \"float uscale\" [ 2 ]",
+        ));
+        assert!(
+            c.warnings.iter().any(|w| w.contains("\"float uscale\" is not used")),
+            "{:?}",
+            c.warnings
+        );
+        let c = ok(&scene_with("Texture \"n\" \"float\" \"fbm\" \"float octaves\" [ 3 ]"));
+        assert!(
+            c.warnings.iter().any(|w| w.contains("\"float octaves\" is not used")),
+            "{:?}",
+            c.warnings
+        );
         // marble is a colour.
         let marble = format!(
             "{head}Texture \"k\" \"spectrum\" \"marble\" \"float scale\" [ 2 ]\n\

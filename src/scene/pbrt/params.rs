@@ -238,13 +238,33 @@ pub struct Params {
     own: Vec<Param>,
     /// The `Attribute` parameters in force, in the order they were given.
     attributes: Vec<Param>,
+    /// Whether the directive was taken up at all (a texture is converted
+    /// only where something names it).
+    touched: Touched,
+}
+
+/// A flag set through a shared reference, which does not take part in
+/// comparisons.
+#[derive(Debug, Default)]
+struct Touched(AtomicBool);
+
+impl Clone for Touched {
+    fn clone(&self) -> Self {
+        Touched(AtomicBool::new(self.0.load(Ordering::Relaxed)))
+    }
+}
+
+impl PartialEq for Touched {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl Params {
     pub fn new(own: Vec<Param>) -> Params {
         Params {
             own,
-            attributes: vec![],
+            ..Params::default()
         }
     }
 
@@ -252,7 +272,20 @@ impl Params {
         Params {
             own,
             attributes: attributes.to_vec(),
+            ..Params::default()
         }
+    }
+
+    /// Marks the directive as taken up: its unread parameters are then
+    /// reported (see `touched`).
+    pub fn touch(&self) {
+        self.touched.0.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether the directive was taken up ([`Params::touch`]) or any of its
+    /// own parameters read.
+    pub fn touched(&self) -> bool {
+        self.touched.0.load(Ordering::Relaxed) || self.own.iter().any(Param::used)
     }
 
     /// Every parameter in look-up order: own ones last-given first, then attributes.
