@@ -274,9 +274,9 @@ pub struct ShadingGeometry {
 }
 
 /// A reflectance or transmittance looked up at `tc`, kept within [0, 1] as
-/// pbrt-v4's diffuse, coated diffuse and diffuse transmission materials keep
-/// theirs: a texture may leave that range (a scaled image, a noise pattern
-/// below zero) where a surface cannot.
+/// pbrt-v4's diffuse, coated diffuse, diffuse transmission and conductor
+/// materials keep theirs: a texture may leave that range (a scaled image, a
+/// noise pattern below zero) where a surface cannot.
 #[inline]
 fn albedo(t: &Texture, tc: &TexCoord) -> Vec3 {
     t.evaluate(tc).clamp(Vec3::ZERO, Vec3::ONE)
@@ -602,7 +602,7 @@ impl Material {
                 let d = roughness.distribution(&tc);
                 match fresnel {
                     ConductorFresnel::Ior { eta, k } => Bxdf::conductor(d, *eta, *k),
-                    ConductorFresnel::Reflectance(r) => Bxdf::conductor_from_reflectance(d, r.evaluate(&tc)),
+                    ConductorFresnel::Reflectance(r) => Bxdf::conductor_from_reflectance(d, albedo(r, &tc)),
                 }
             }
             Material::Dielectric { eta, roughness } => {
@@ -635,7 +635,7 @@ impl Material {
                 let d = conductor_roughness.distribution(&tc);
                 let metal = match conductor {
                     ConductorFresnel::Ior { eta, k } => ConductorBxdf::new(d, *eta, *k),
-                    ConductorFresnel::Reflectance(r) => ConductorBxdf::from_reflectance(d, r.evaluate(&tc)),
+                    ConductorFresnel::Reflectance(r) => ConductorBxdf::from_reflectance(d, albedo(r, &tc)),
                 };
                 Bxdf::coated_conductor(coat, metal, *thickness, *max_depth, *samples)
             }

@@ -2311,7 +2311,7 @@ fn convert_surface(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            let fresnel = match conductor_fresnel(p, loc, "conductor", "")? {
+            let fresnel = match conductor_fresnel(scene, p, loc, "conductor", "")? {
                 Ok(f) => f,
                 Err(why) => return Ok(Err(why)),
             };
@@ -2365,7 +2365,7 @@ fn convert_surface(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
-            let conductor = match conductor_fresnel(p, loc, "coatedconductor", "conductor.")? {
+            let conductor = match conductor_fresnel(scene, p, loc, "coatedconductor", "conductor.")? {
                 Ok(f) => f,
                 Err(why) => return Ok(Err(why)),
             };
@@ -3056,9 +3056,11 @@ fn constant_eta(
     })
 }
 
-/// A metal's Fresnel terms: `reflectance`, or `prefix` + `eta` and `k`
-/// (copper by default, as pbrt-v4's); both at once is an error, as there.
+/// A metal's Fresnel terms: `reflectance` (a colour or a texture), or
+/// `prefix` + `eta` and `k` (copper by default, as pbrt-v4's); both at once
+/// is an error, as there.
 fn conductor_fresnel(
+    scene: &PbrtScene,
     p: &Params,
     loc: &Loc,
     ty: &str,
@@ -3072,8 +3074,9 @@ fn conductor_fresnel(
         ));
     }
     if p.has("reflectance") {
-        return Ok(colour(p, "reflectance", loc)?
-            .map(|r| ConductorFresnel::Reflectance(Texture::from(r.clamp(Vec3::ZERO, Vec3::ONE)))));
+        return Ok(
+            spectrum_texture(scene, p, "reflectance", 1.0, loc)?.map(|r| ConductorFresnel::Reflectance(clamped(r)))
+        );
     }
     let (cu_eta, cu_k) = crate::bsdf::named_metal("Cu").unwrap_or((Vec3::ONE, Vec3::ZERO));
     let read = |name: &str, default: Vec3| -> Result<std::result::Result<Vec3, String>> {
@@ -4064,6 +4067,61 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("\"fbm\" is a float texture only"), "{e}");
+    }
+
+    #[test]
+    fn a_conductors_reflectance_may_be_a_texture() {
+        let text = |material: &str| {
+            format!(
+                "WorldBegin\nTexture \"check\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [ 0.9 0.6 0.2 ] \"rgb tex2\" [ 2 2 2 ] \"float uscale\" [ 2 ]\n\
+                 Material \"{material}\" \"texture reflectance\" \"check\"\n{}",
+                quad(0.0)
+            )
+        };
+        for material in ["conductor", "coatedconductor"] {
+            let c = ok(&text(material));
+            let fresnel = match &c.desc.materials[0].1 {
+                Material::Conductor { fresnel, .. } => fresnel,
+                Material::CoatedConductor { conductor, .. } => conductor,
+                m => panic!("{m:?}"),
+            };
+            let ConductorFresnel::Reflectance(Texture::Checkerboard { .. }) = fresnel else {
+                panic!("{fresnel:?}")
+            };
+        }
+        // Looked up per point and kept within [0, 1], as pbrt-v4 keeps it: a
+        // white metal's BSDF at normal incidence reflects all of a texel of 2.
+        let c = ok(&text("conductor"));
+        let m = &c.desc.materials[0].1;
+        let sp = |u: f32| crate::material::SurfacePoint {
+            p: Vec3::ZERO,
+            uv: crate::math::Vec2::new(u, 0.5),
+            ng: Vec3::Z,
+            ns: Vec3::Z,
+            dpdu: Vec3::X,
+            shading: None,
+            footprint: crate::texture::Footprint::NONE,
+        };
+        let w = Vec3::new(0.3, 0.0, 1.0).normalize();
+        let mirror = Vec3::new(-w.x, -w.y, w.z);
+        let f = |u: f32| {
+            let bsdf = m.bsdf(&sp(u), w);
+            bsdf.sample_f(
+                w,
+                0.5,
+                crate::math::Vec2::new(0.5, 0.5),
+                crate::bsdf::TransportMode::Radiance,
+            )
+            .map(|s| (s.f * s.wi.z.abs() / s.pdf, s.wi))
+        };
+        let (bright, wi) = f(0.75).expect("a reflection");
+        assert!((wi - mirror).length() < 1e-4, "{wi}");
+        assert!((bright - Vec3::ONE).abs().max_element() < 1e-3, "{bright}");
+        let (copper, _) = f(0.25).expect("a reflection");
+        assert!(
+            (copper - Vec3::new(0.9, 0.6, 0.2)).abs().max_element() < 1e-3,
+            "{copper}"
+        );
     }
 
     #[test]
