@@ -311,6 +311,19 @@ mod tests {
         }
     }
 
+    /// A lookup at `p` with the narrow footprint of the cases below: (u, v)
+    /// (0.25, 0.75), the (u, v) derivatives (0.1, 0.2, 0.3, 0.4), dpdx
+    /// (0.01, 0.02, 0) and dpdy (0, -0.01, 0.03).
+    fn narrow(p: Vec3) -> TexCoord {
+        lookup(
+            p,
+            Vec2::new(0.25, 0.75),
+            [0.1, 0.2, 0.3, 0.4],
+            Vec3::new(0.01, 0.02, 0.0),
+            Vec3::new(0.0, -0.01, 0.03),
+        )
+    }
+
     const POINTS: [Vec3; 4] = [
         Vec3::new(0.3, 0.7, 0.1),
         Vec3::new(1.5, -2.25, 3.75),
@@ -444,13 +457,7 @@ mod tests {
             },
         ];
         for (p, want) in POINTS.into_iter().zip(want) {
-            let tc = lookup(
-                p,
-                Vec2::new(0.25, 0.75),
-                [0.1, 0.2, 0.3, 0.4],
-                Vec3::new(0.01, 0.02, 0.0),
-                Vec3::new(0.0, -0.01, 0.03),
-            );
+            let tc = narrow(p);
             for (m, w) in mappings.iter().zip(want) {
                 let st = m.map(&tc);
                 let f = st.footprint;
@@ -484,13 +491,7 @@ mod tests {
         });
         let t = to_texture();
         for (p, want) in POINTS.into_iter().zip(want) {
-            let narrow = lookup(
-                p,
-                Vec2::new(0.25, 0.75),
-                [0.1, 0.2, 0.3, 0.4],
-                Vec3::new(0.01, 0.02, 0.0),
-                Vec3::new(0.0, -0.01, 0.03),
-            );
+            let narrow = narrow(p);
             let wide = lookup(
                 p,
                 Vec2::new(0.25, 0.77),
