@@ -30,8 +30,9 @@ const MAGIC: [u8; 8] = *b"RTPHOTON";
 /// Layout version of the file.
 const VERSION: u32 = 1;
 /// Bump when photon tracing changes what it stores for the same inputs, so
-/// that maps traced by an older build are refused.
-const TRACER_VERSION: u32 = 2;
+/// that maps traced by an older build are refused (3: a textured
+/// reflectance is kept within [0, 1]).
+const TRACER_VERSION: u32 = 3;
 /// Most maps a file may list.
 const MAX_MAPS: u32 = 16;
 const RECORD: usize = 32;
