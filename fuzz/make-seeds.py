@@ -446,11 +446,32 @@ type = "bilerp"
 v11 = [1, 0, 0]
 [textures.waves]
 type = "windy"
+[textures.planks]
+type = "checkerboard"
+mapping = "planar"
+v1 = [4, 0, 0]
+v2 = [0, 0, 4]
+udelta = 0.5
+[textures.globe]
+type = "dots"
+mapping = "spherical"
+centre = [0.5, 0.5, 0]
+axis = [0, -1, 0]
+[textures.barrel]
+type = "bilerp"
+mapping = "cylindrical"
+v11 = [1, 0, 0]
+[textures.cubes]
+type = "checkerboard"
+dimension = 3
+frequency = 4
+tex1 = "globe"
 
 [materials]
 a = { reflectance = "sky", displacement = "bumps" }
 b = { reflectance = "spots" }
 c = { reflectance = "ramp", displacement = "waves" }
+d = { reflectance = "cubes", displacement = "barrel" }
 
 [[lights]]
 type = "sphere"
@@ -474,6 +495,11 @@ type = "box"
 material = "c"
 min = [-0.3, 0.2, -0.3]
 max = [0.3, 0.8, 0.3]
+
+[[shapes]]
+type = "triangle"
+material = "d"
+vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
 """)
 
 put("pbrt", "procedural.pbrt", """LookAt 0 0 -5  0 0 0  0 1 0

@@ -124,6 +124,15 @@ impl Keys<'_> {
         }
     }
 
+    /// A point or direction: `[x, y, z]`.
+    fn vector(&self, key: &str) -> Result<Option<Vec3>> {
+        match self.table.get(key).map(|v| v.get_ref()) {
+            None => Ok(None),
+            Some(toml::Value::Array(a)) if a.len() == 3 => self.rgb(key),
+            Some(_) => Err(self.err(Some(key), format!("`{key}` must be [x, y, z]"))),
+        }
+    }
+
     /// A colour parameter: a number, `[r, g, b]` or the name of a texture,
     /// found by `lookup` (which reports unknown names and cycles).
     fn param(&self, key: &str, lookup: &mut Lookup) -> Result<Option<Texture>> {
@@ -207,13 +216,31 @@ impl Resolver<'_> {
                 k.param("value", &mut lookup)?.unwrap_or(one)
             }
             "checkerboard" => {
-                k.only(kind, &["tex1", "tex2", "uscale", "vscale"])?;
-                Texture::checkerboard(
-                    Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(one)),
-                    Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(zero)),
-                    k.num("uscale")?.unwrap_or(1.0),
-                    k.num("vscale")?.unwrap_or(1.0),
-                )
+                let three = match k.num("dimension")? {
+                    None => false,
+                    Some(d) if d == 2.0 || d == 3.0 => d == 3.0,
+                    Some(d) => return Err(k.err(Some("dimension"), format!("dimension {d}: use 2 or 3"))),
+                };
+                if three {
+                    k.only(kind, &["tex1", "tex2", "dimension", "frequency"])?;
+                } else {
+                    k.only(kind, &with_mapping(&["tex1", "tex2", "dimension"]))?;
+                }
+                let even = Arc::new(k.param("tex1", &mut lookup)?.unwrap_or(one));
+                let odd = Arc::new(k.param("tex2", &mut lookup)?.unwrap_or(zero));
+                if three {
+                    Texture::Checkerboard3D {
+                        even,
+                        odd,
+                        to_texture: Arc::new(Affine3A::from_scale(Vec3::splat(frequency(&k)?))),
+                    }
+                } else {
+                    Texture::Checkerboard {
+                        even,
+                        odd,
+                        mapping: Arc::new(mapping_2d(&k)?),
+                    }
+                }
             }
             "scale" => {
                 k.only(kind, &["tex", "scale"])?;
@@ -240,10 +267,7 @@ impl Resolver<'_> {
                     _ => &["frequency", "octaves", "roughness"],
                 };
                 k.only(kind, allowed)?;
-                let frequency = k.num("frequency")?.unwrap_or(1.0);
-                if !(frequency.is_finite() && frequency > 0.0) {
-                    return Err(k.err(Some("frequency"), format!("frequency {frequency} must be positive")));
-                }
+                let frequency = frequency(&k)?;
                 let octaves = match k.num("octaves")? {
                     None => 8,
                     Some(n) if n.fract() == 0.0 && (0.0..=32.0).contains(&n) => n as u32,
@@ -267,18 +291,15 @@ impl Resolver<'_> {
                 }))
             }
             "dots" => {
-                k.only(kind, &["inside", "outside", "uscale", "vscale", "udelta", "vdelta"])?;
+                k.only(kind, &with_mapping(&["inside", "outside"]))?;
                 Texture::Dots {
                     inside: Arc::new(k.param("inside", &mut lookup)?.unwrap_or(one)),
                     outside: Arc::new(k.param("outside", &mut lookup)?.unwrap_or(zero)),
-                    mapping: Arc::new(Mapping2D::Uv(uv_mapping(&k)?)),
+                    mapping: Arc::new(mapping_2d(&k)?),
                 }
             }
             "bilerp" => {
-                k.only(
-                    kind,
-                    &["v00", "v01", "v10", "v11", "uscale", "vscale", "udelta", "vdelta"],
-                )?;
+                k.only(kind, &with_mapping(&["v00", "v01", "v10", "v11"]))?;
                 let mut corners = [Vec3::ZERO; 4];
                 for (c, (key, d)) in corners
                     .iter_mut()
@@ -294,15 +315,14 @@ impl Resolver<'_> {
                         })?,
                     };
                 }
-                Texture::Bilerp(Arc::new((corners, Mapping2D::Uv(uv_mapping(&k)?))))
+                Texture::Bilerp(Arc::new((corners, mapping_2d(&k)?)))
             }
             "image" => {
                 k.only(
                     kind,
-                    &[
-                        "file", "wrap", "encoding", "scale", "invert", "uscale", "vscale", "udelta", "vdelta", "filter",
-                    ],
+                    &with_mapping(&["file", "wrap", "encoding", "scale", "invert", "filter"]),
                 )?;
+                let mapping = mapping_2d(&k)?;
                 let file = k.string("file")?.ok_or_else(|| k.err(None, "missing `file`".into()))?;
                 let wrap = match k.string("wrap")? {
                     None => WrapMode::Repeat,
@@ -332,14 +352,26 @@ impl Resolver<'_> {
                     encoding,
                     scale: k.num("scale")?.unwrap_or(1.0),
                     invert: k.boolean("invert")?.unwrap_or(false),
-                    mapping: uv_mapping(&k)?,
+                    // Any mapping but (u, v) is applied before the image
+                    // is looked up, which then takes (s, t) as they are.
+                    mapping: match &mapping {
+                        Mapping2D::Uv(m) => *m,
+                        _ => UvMapping::default(),
+                    },
                     filter,
                 };
                 let path = dir.join(file);
                 let image = files
                     .read_image(&path, encoding)
                     .map_err(|e| image_error(&k, "file", e))?;
-                Texture::Image(Arc::new(ImageTexture::new(image, &opts)))
+                let image = Texture::Image(Arc::new(ImageTexture::new(image, &opts)));
+                match mapping {
+                    Mapping2D::Uv(_) => image,
+                    mapping => Texture::Mapped {
+                        mapping: Arc::new(mapping),
+                        tex: Arc::new(image),
+                    },
+                }
             }
             other => {
                 return Err(k.err(
@@ -361,6 +393,81 @@ fn uv_mapping(k: &Keys) -> Result<UvMapping> {
         sv: k.num("vscale")?.unwrap_or(1.0),
         du: k.num("udelta")?.unwrap_or(0.0),
         dv: k.num("vdelta")?.unwrap_or(0.0),
+    })
+}
+
+/// The keys that place a 2D texture on a surface, besides `mapping`.
+const MAPPING_KEYS: [&str; 8] = ["uscale", "vscale", "udelta", "vdelta", "centre", "axis", "v1", "v2"];
+
+/// `keys` and the keys of the 2D mappings.
+fn with_mapping(keys: &[&'static str]) -> Vec<&'static str> {
+    let mut all = keys.to_vec();
+    all.push("mapping");
+    all.extend(MAPPING_KEYS);
+    all
+}
+
+/// A 3D texture's `frequency`: its pattern is read at the point times it.
+fn frequency(k: &Keys) -> Result<f32> {
+    let f = k.num("frequency")?.unwrap_or(1.0);
+    if !(f.is_finite() && f > 0.0) {
+        return Err(k.err(Some("frequency"), format!("frequency {f} must be positive")));
+    }
+    Ok(f)
+}
+
+/// Where a 2D texture's (s, t) come from (`mapping`): the surface's (u, v)
+/// scaled and offset (`uv`, the default); the direction from `centre`
+/// (`spherical`: s from `axis`, t about it) or the angle about the line
+/// through `centre` along `axis` and the height along it (`cylindrical`);
+/// the point's components along `v1` and `v2`, offset (`planar`). Keys of
+/// another mapping are refused.
+fn mapping_2d(k: &Keys) -> Result<Mapping2D> {
+    let kind = k.string("mapping")?.unwrap_or("uv");
+    let takes: &[&str] = match kind {
+        "uv" => &["uscale", "vscale", "udelta", "vdelta"],
+        "spherical" | "cylindrical" => &["centre", "axis"],
+        "planar" => &["v1", "v2", "udelta", "vdelta"],
+        other => {
+            return Err(k.err(
+                Some("mapping"),
+                format!("mapping '{other}': use uv, spherical, cylindrical or planar"),
+            ))
+        }
+    };
+    if let Some(key) = MAPPING_KEYS.iter().find(|key| k.has(key) && !takes.contains(key)) {
+        return Err(k.err(
+            Some(key),
+            format!(
+                "`{key}` does not apply to mapping '{kind}' (it takes: {})",
+                takes.join(", ")
+            ),
+        ));
+    }
+    Ok(match kind {
+        "uv" => Mapping2D::Uv(uv_mapping(k)?),
+        "planar" => Mapping2D::Planar {
+            to_texture: Affine3A::IDENTITY,
+            vs: k.vector("v1")?.unwrap_or(Vec3::X),
+            vt: k.vector("v2")?.unwrap_or(Vec3::Y),
+            ds: k.num("udelta")?.unwrap_or(0.0),
+            dt: k.num("vdelta")?.unwrap_or(0.0),
+        },
+        _ => {
+            let centre = k.vector("centre")?.unwrap_or(Vec3::ZERO);
+            let axis = k.vector("axis")?.unwrap_or(Vec3::Z).normalize_or_zero();
+            if axis == Vec3::ZERO {
+                return Err(k.err(Some("axis"), "`axis` must not be zero".into()));
+            }
+            // Texture space: `centre` at the origin, `axis` along z.
+            let to =
+                Affine3A::from_quat(glam::Quat::from_rotation_arc(axis, Vec3::Z)) * Affine3A::from_translation(-centre);
+            if kind == "spherical" {
+                Mapping2D::Spherical(to)
+            } else {
+                Mapping2D::Cylindrical(to)
+            }
+        }
     })
 }
 

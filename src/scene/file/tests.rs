@@ -1297,3 +1297,106 @@ fn noise_dots_and_ramps_are_textures_of_their_own_space() {
         assert!(e.starts_with("test.toml:") && e.contains(what), "{to}: {e}");
     }
 }
+
+#[test]
+fn textures_may_be_placed_by_the_point_rather_than_by_uv() {
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [textures.planks]
+        type = "checkerboard"
+        mapping = "planar"
+        v1 = [2, 0, 0]
+        v2 = [0, 0, 2]
+        udelta = 0.5
+        [textures.globe]
+        type = "bilerp"
+        mapping = "spherical"
+        centre = [1, 2, 3]
+        axis = [0, -1, 0]
+        v01 = 0
+        v10 = 1
+        v11 = 1
+        [textures.barrel]
+        type = "bilerp"
+        mapping = "cylindrical"
+        centre = [1, 2, 3]
+        axis = [0, -1, 0]
+        v01 = 0
+        v11 = 0
+        v10 = 1
+        [textures.cubes]
+        type = "checkerboard"
+        dimension = 3
+        frequency = 2
+        [materials.a]
+        reflectance = "planks"
+        [materials.b]
+        reflectance = "globe"
+        [materials.c]
+        reflectance = "barrel"
+        [materials.d]
+        reflectance = "cubes"
+    "#;
+    let d = parse_str(text).unwrap().desc;
+    let reflectance = |n: &str| match d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m.clone()) {
+        Some(Material::Diffuse { reflectance }) => reflectance,
+        other => panic!("{other:?}"),
+    };
+    // (u, v) is the same everywhere: only the point places these.
+    let at = |p: Vec3| crate::texture::TexCoord::at(crate::math::Vec2::new(0.5, 0.5), p, Vec3::Z);
+    // Planar: s = 0.5 + 2 x, t = 2 z; white where floor(s) + floor(t) is even.
+    let planks = reflectance("a");
+    assert_eq!(planks.evaluate(&at(Vec3::new(0.1, 5.0, 0.1))), Vec3::ONE);
+    assert_eq!(planks.evaluate(&at(Vec3::new(0.3, 5.0, 0.1))), Vec3::ZERO);
+    assert_eq!(planks.evaluate(&at(Vec3::new(0.3, -5.0, 0.6))), Vec3::ONE);
+    // Spherical about (1, 2, 3) with its pole along -y: s = theta / pi is 0
+    // at the pole and 1 at the other; the ramp is s alone (v10 = v11 = 1).
+    let globe = reflectance("b");
+    let centre = Vec3::new(1.0, 2.0, 3.0);
+    for (p, s) in [
+        (centre - Vec3::Y, 0.0),
+        (centre + Vec3::Y * 5.0, 1.0),
+        (centre + Vec3::X, 0.5),
+    ] {
+        assert!(
+            (globe.evaluate(&at(p)) - Vec3::splat(s)).abs().max_element() < 1e-5,
+            "{p}"
+        );
+    }
+    // Cylindrical: t is the height along the axis, the ramp (1 - t) s, so
+    // zero a unit up the axis and s (half a turn round: 0.5 or so) on it.
+    let barrel = reflectance("c");
+    assert!(barrel.evaluate(&at(centre - Vec3::Y + Vec3::X)).max_element().abs() < 1e-5);
+    let side = barrel.evaluate(&at(centre + Vec3::X)).x;
+    assert!(side > 0.0 && side < 1.0, "{side}");
+    // A checkerboard of space: cubes half a unit wide.
+    let cubes = reflectance("d");
+    assert_eq!(cubes.evaluate(&at(Vec3::new(0.25, 0.25, 0.25))), Vec3::ONE);
+    assert_eq!(cubes.evaluate(&at(Vec3::new(0.75, 0.25, 0.25))), Vec3::ZERO);
+    // Keys of another mapping, an unknown mapping or dimension, no axis.
+    for (from, to, what) in [
+        (
+            "udelta = 0.5",
+            "uscale = 2",
+            "`uscale` does not apply to mapping 'planar'",
+        ),
+        ("mapping = \"planar\"", "mapping = \"cubic\"", "mapping 'cubic'"),
+        ("dimension = 3", "dimension = 4", "dimension 4: use 2 or 3"),
+        (
+            "axis = [0, -1, 0]\n        v01",
+            "axis = [0, 0, 0]\n        v01",
+            "`axis` must not be zero",
+        ),
+        (
+            "frequency = 2",
+            "frequency = 2\n        uscale = 1",
+            "`uscale` does not apply",
+        ),
+    ] {
+        let e = parse_str(&text.replacen(from, to, 1)).unwrap_err().to_string();
+        assert!(e.starts_with("test.toml:") && e.contains(what), "{to}: {e}");
+    }
+}
