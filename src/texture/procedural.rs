@@ -88,30 +88,16 @@ impl Mapping2D {
             ..*tc
         }
     }
-}
 
-impl Mapping2D {
     /// The mapping of a scene reflected by `r` (its own inverse): the point
     /// is carried back before it is mapped.
     pub fn reflected(&self, r: &Affine3A) -> Mapping2D {
-        match self {
-            Mapping2D::Uv(m) => Mapping2D::Uv(*m),
-            Mapping2D::Spherical(t) => Mapping2D::Spherical(*t * *r),
-            Mapping2D::Cylindrical(t) => Mapping2D::Cylindrical(*t * *r),
-            Mapping2D::Planar {
-                to_texture,
-                vs,
-                vt,
-                ds,
-                dt,
-            } => Mapping2D::Planar {
-                to_texture: *to_texture * *r,
-                vs: *vs,
-                vt: *vt,
-                ds: *ds,
-                dt: *dt,
-            },
+        let mut m = self.clone();
+        match &mut m {
+            Mapping2D::Uv(_) => {}
+            Mapping2D::Spherical(t) | Mapping2D::Cylindrical(t) | Mapping2D::Planar { to_texture: t, .. } => *t *= *r,
         }
+        m
     }
 }
 
@@ -467,6 +453,15 @@ mod tests {
                 }
                 // The point's own footprint stays for what the texture holds.
                 assert_eq!((f.dpdx, f.dpdy), (tc.footprint.dpdx, tc.footprint.dpdy));
+                // In a scene reflected across x = 0 the mapping reads the
+                // point carried back: the same (s, t) at the reflected point.
+                let r = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+                let mirrored = TexCoord {
+                    p: r.transform_point3(p),
+                    ..tc
+                };
+                let back = m.reflected(&r).map(&mirrored).uv;
+                assert!((back - st.uv).abs().max_element() < 1e-5, "{m:?}: {back} vs {}", st.uv);
             }
         }
     }
