@@ -197,6 +197,7 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 radiance,
                 ref map,
                 to_world,
+                ref portal,
                 ..
             } => {
                 h.u32(5);
@@ -210,6 +211,11 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                         m.texels().iter().for_each(|&t| h.vec3(t));
                     }
                     None => h.u32(0),
+                }
+                // Portals came later: hashed only where there is one.
+                if let Some(p) = portal {
+                    h.bytes(b"portal");
+                    p.corners().iter().for_each(|&c| h.vec3(c));
                 }
             }
         }

@@ -36,7 +36,7 @@
 //!
 //! Emissive materials that are not lights count where a camera subpath
 //! finds them (no other strategy samples them), as in the path tracer.
-//! Scenes with participating media are refused (`check_media`).
+//! Scenes with participating media or a portal light are refused (`check_scene`).
 
 use super::direct::{scatters_towards, unoccluded_light_sample};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
@@ -622,10 +622,11 @@ impl Bdpt {
                     pt.beta * scene.lights[li].le(w)
                 }
                 Kind::Infinity(_) => {
+                    let from = cameras[t - 2].p;
                     let le: Vec3 = scene
                         .infinite_lights()
                         .iter()
-                        .map(|&i| scene.lights[i as usize].le_escaped(pt.wo))
+                        .map(|&i| scene.lights[i as usize].le_escaped(from, pt.wo))
                         .sum();
                     pt.beta * le
                 }

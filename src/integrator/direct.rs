@@ -152,7 +152,7 @@ pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(Vec3, f32)>) -> 
     let mut l = Vec3::ZERO;
     for &i in scene.infinite_lights() {
         let light = &scene.lights[i as usize];
-        let le = light.le_escaped(ray.d);
+        let le = light.le_escaped(ray.o, ray.d);
         let w = match from {
             None => 1.0,
             Some((p, pdf)) => power_heuristic(pdf, scene.light_pmf(i as usize) * light.pdf_li_escaped(p, ray.d)),

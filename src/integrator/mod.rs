@@ -200,7 +200,7 @@ pub fn render_observed(
     on_pass: &(dyn Fn(u32, &Film) -> Result<()> + Sync),
 ) -> Result<RenderOutput> {
     settings.validate()?;
-    check_media(scene, settings.integrator)?;
+    check_scene(scene, settings.integrator)?;
     let window = frame_window(scene, settings)?;
     let start = std::time::Instant::now();
     let tiles_total = tile_count(window.rect.width(), window.rect.height());
@@ -254,14 +254,23 @@ pub fn render_observed(
     })
 }
 
-/// Participating media are rendered by the path tracer alone (photons do
-/// not yet travel through them): other integrators refuse such scenes.
-pub fn check_media(scene: &Scene, integrator: IntegratorKind) -> Result<()> {
+/// What an integrator cannot render, refused up front: participating media
+/// are rendered by the path tracer alone (photons do not yet travel through
+/// them), and the bidirectional path tracer does not weigh particles that
+/// enter through a portal (its lights at infinity emit from a disk across
+/// the scene).
+pub fn check_scene(scene: &Scene, integrator: IntegratorKind) -> Result<()> {
     if scene.has_media() && integrator != IntegratorKind::Path {
         return Err(crate::Error::InvalidSetting(format!(
             "integrator \"{}\": the scene has participating media, which only the path tracer renders (--integrator path)",
             integrator.name()
         )));
+    }
+    let portal = |l: &crate::light::Light| matches!(l, crate::light::Light::Infinite { portal: Some(_), .. });
+    if integrator == IntegratorKind::Bdpt && scene.lights.iter().any(portal) {
+        return Err(crate::Error::InvalidSetting(
+            "integrator \"bdpt\": the scene has an infinite light with a portal, which bdpt does not render (--integrator path, photon or sppm)".into(),
+        ));
     }
     Ok(())
 }

@@ -276,7 +276,7 @@ const CAUSTIC: &str = "caustic";
 /// The photon maps: read from `--load-photons`, or traced (and written to
 /// `--save-photons` if asked).
 pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<PhotonMaps> {
-    super::check_media(scene, super::IntegratorKind::Photon)?;
+    super::check_scene(scene, super::IntegratorKind::Photon)?;
     let ps = map_settings(settings);
     let header = file::header(scene, file::key(&ps, settings.seed));
     if let Some(path) = &settings.files.load_photons {

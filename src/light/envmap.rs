@@ -166,6 +166,46 @@ impl EnvMap {
         }
     }
 
+    /// Radiance at image coordinates `uv` of an octahedral map, bilinearly
+    /// interpolated between the four nearest texel centres; a neighbour
+    /// beyond an edge is the texel the equal-area map folds it onto (pbrt-v4's
+    /// `OctahedralSphere` wrap). A lat-long map is read at the nearest texel.
+    pub fn bilerp_octahedral(&self, uv: Vec2) -> Vec3 {
+        if self.mapping != EnvMapping::Octahedral {
+            return self.texel(uv);
+        }
+        let (w, h) = (self.width as i64, self.height as i64);
+        let fetch = |mut x: i64, mut y: i64| {
+            // Across a vertical edge the square folds over its horizontal
+            // centre line, across a horizontal one over its vertical one.
+            if x < 0 {
+                x = -x;
+                y = h - 1 - y;
+            } else if x >= w {
+                x = 2 * w - 1 - x;
+                y = h - 1 - y;
+            }
+            if y < 0 {
+                x = w - 1 - x;
+                y = -y;
+            } else if y >= h {
+                x = w - 1 - x;
+                y = 2 * h - 1 - y;
+            }
+            let (x, y) = (x.clamp(0, w - 1), y.clamp(0, h - 1));
+            self.texels[(y * w + x) as usize]
+        };
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (dx, dy) = (x - x0, y - y0);
+        let (xi, yi) = (x0 as i64, y0 as i64);
+        fetch(xi, yi) * ((1.0 - dx) * (1.0 - dy))
+            + fetch(xi + 1, yi) * (dx * (1.0 - dy))
+            + fetch(xi, yi + 1) * ((1.0 - dx) * dy)
+            + fetch(xi + 1, yi + 1) * (dx * dy)
+    }
+
     /// Radiance from direction `w` (unit, in the light's frame).
     pub fn le(&self, w: Vec3) -> Vec3 {
         self.texel(self.uv(w))

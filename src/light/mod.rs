@@ -19,8 +19,10 @@
 //! that sphere's radius facing the light, as in pbrt-v4.
 
 mod envmap;
+mod portal;
 
 pub use envmap::{EnvMap, EnvMapping};
+pub use portal::Portal;
 
 use crate::geometry::{Disk, Sphere};
 use crate::math::{orthonormal_basis, to_world, Ray, Vec2, Vec3};
@@ -73,12 +75,15 @@ pub enum Light {
     /// Radiance arriving from every direction: `radiance` where there is no
     /// map, otherwise the map's texel times `radiance` (the map's scale per
     /// channel). `to_world` turns the map's frame into the world's (an
-    /// orthogonal matrix); `world` is the scene's bounding sphere.
+    /// orthogonal matrix); `world` is the scene's bounding sphere. With a
+    /// `portal` the light arrives only through it (pbrt-v4's
+    /// `PortalImageInfiniteLight`), from the map resampled over the portal.
     Infinite {
         radiance: Vec3,
         map: Option<Arc<EnvMap>>,
         to_world: Mat3,
         world: Sphere,
+        portal: Option<Arc<Portal>>,
     },
 }
 
@@ -156,6 +161,19 @@ impl Light {
             map,
             to_world,
             world: NO_WORLD,
+            portal: None,
+        }
+    }
+
+    /// An infinite light whose light enters only through `portal` (built
+    /// from the same map and turn).
+    pub fn infinite_through(radiance: Vec3, map: Option<Arc<EnvMap>>, to_world: Mat3, portal: Portal) -> Light {
+        Light::Infinite {
+            radiance,
+            map,
+            to_world,
+            world: NO_WORLD,
+            portal: Some(Arc::new(portal)),
         }
     }
 
@@ -189,6 +207,11 @@ impl Light {
             } => *intensity * (2.0 * PI * ((1.0 - cs) + (cs - ce) / 2.0)),
             Light::Distant { radiance, world, .. } => *radiance * (PI * world.radius * world.radius),
             Light::Infinite {
+                radiance,
+                portal: Some(p),
+                ..
+            } => *radiance * p.flux(),
+            Light::Infinite {
                 radiance, map, world, ..
             } => {
                 let integral = map.as_ref().map_or(Vec3::splat(4.0 * PI), |m| m.integral());
@@ -219,10 +242,16 @@ impl Light {
         matches!(self, Light::Infinite { .. } | Light::Distant { .. })
     }
 
-    /// Radiance reaching a ray that leaves the scene in direction `dir`
-    /// (unit): non-zero only for infinite lights.
-    pub fn le_escaped(&self, dir: Vec3) -> Vec3 {
+    /// Radiance reaching a ray from `o` that leaves the scene in direction
+    /// `dir` (unit): non-zero only for infinite lights (and for one with a
+    /// portal, only through the portal).
+    pub fn le_escaped(&self, o: Vec3, dir: Vec3) -> Vec3 {
         match self {
+            Light::Infinite {
+                radiance,
+                portal: Some(p),
+                ..
+            } => *radiance * p.le(o, dir),
             Light::Infinite {
                 radiance,
                 map: Some(m),
@@ -238,8 +267,9 @@ impl Light {
     /// (unit) for a light at infinity: the weight of an escaped ray in
     /// multiple importance sampling. Zero for every other light (and for a
     /// distant light, a delta).
-    pub fn pdf_li_escaped(&self, _p: Vec3, dir: Vec3) -> f32 {
+    pub fn pdf_li_escaped(&self, p: Vec3, dir: Vec3) -> f32 {
         match self {
+            Light::Infinite { portal: Some(q), .. } => q.pdf_li(p, dir),
             Light::Infinite {
                 map: Some(m), to_world, ..
             } => m.pdf((to_world.transpose() * dir).normalize()),
@@ -414,6 +444,20 @@ impl Light {
                 weight: *radiance,
                 pdf: 0.0,
             }),
+            Light::Infinite {
+                radiance,
+                portal: Some(q),
+                ..
+            } => {
+                let (wi, le, pdf) = q.sample_li(p, u)?;
+                let weight = *radiance * le / pdf;
+                (weight != Vec3::ZERO && weight.is_finite()).then_some(LightSample {
+                    wi,
+                    dist: f32::INFINITY,
+                    weight,
+                    pdf,
+                })
+            }
             Light::Infinite {
                 radiance, map: None, ..
             } => Some(LightSample {
@@ -662,6 +706,12 @@ impl Light {
                 (Ray::new(disk_point(world, d, u1) - d * world.radius, d), d)
             }
             Light::Infinite {
+                portal: Some(p), world, ..
+            } => match p.sample_le(u1, u2, behind_portal(p, world)) {
+                Some((ray, _)) => (ray, ray.d),
+                None => (Ray::new(world.centre, Vec3::Z), Vec3::Z),
+            },
+            Light::Infinite {
                 map, to_world, world, ..
             } => {
                 // wi points towards the light; the photon travels along -wi.
@@ -691,6 +741,26 @@ impl Light {
     /// `sample_le` with the particle's flux (see `LeSample::flux`): photon
     /// tracing that starts N particles from this light gives each flux / N.
     pub fn sample_le_flux(&self, u1: Vec2, u2: Vec2) -> LeSample {
+        if let Light::Infinite {
+            radiance,
+            portal: Some(p),
+            world,
+            ..
+        } = self
+        {
+            return match p.sample_le(u1, u2, behind_portal(p, world)) {
+                Some((ray, flux)) => LeSample {
+                    ray,
+                    n: ray.d,
+                    flux: *radiance * flux,
+                },
+                None => LeSample {
+                    ray: Ray::new(world.centre, Vec3::Z),
+                    n: Vec3::Z,
+                    flux: Vec3::ZERO,
+                },
+            };
+        }
         let (ray, n) = self.sample_le(u1, u2);
         let flux = match self {
             Light::Infinite {
@@ -698,6 +768,7 @@ impl Light {
                 map: Some(m),
                 to_world,
                 world,
+                ..
             } => {
                 let wl = (to_world.transpose() * -ray.d).normalize();
                 let pdf = m.pdf(wl);
@@ -765,9 +836,21 @@ impl Light {
                 (0.0, pdf)
             }
             Light::Distant { world, .. } => (disk(world), 0.0),
+            Light::Infinite { portal: Some(p), .. } => p.pdf_le(ray),
             Light::Infinite { world, .. } => (disk(world), self.pdf_li_escaped(ray.o, -ray.d)),
         }
     }
+}
+
+/// How far behind a portal its particles start: outside the scene's
+/// bounding sphere, so that whatever stands outside the window shadows them.
+fn behind_portal(p: &Portal, world: &Sphere) -> f32 {
+    let reach = p
+        .corners()
+        .iter()
+        .map(|c| (*c - world.centre).length())
+        .fold(0.0, f32::max);
+    2.0 * world.radius + reach + 1.0
 }
 
 /// A point uniform on the disk through `world`'s centre, of its radius,

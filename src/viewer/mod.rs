@@ -41,7 +41,7 @@ pub fn display_available() -> bool {
 
 /// Opens the preview window on `scene` and runs it until it is closed.
 pub fn run(scene: Scene, settings: RenderSettings, options: ViewOptions) -> Result<()> {
-    crate::integrator::check_media(&scene, settings.integrator)?;
+    crate::integrator::check_scene(&scene, settings.integrator)?;
     if !display_available() {
         return Err(Error::Window(
             "no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset); render to a file instead".into(),

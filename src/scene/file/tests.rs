@@ -854,16 +854,16 @@ fn environment_maps_are_read_beside_the_scene_file() {
     };
     assert_eq!((m.width(), m.height(), m.mapping()), (8, 4, EnvMapping::LatLong));
     // Turned by 90 degrees about x, the map's +z (its top row) is the world's up, -y.
-    assert_eq!(d.lights[0].le_escaped(-Vec3::Y), Vec3::splat(10.0));
-    assert_eq!(d.lights[0].le_escaped(Vec3::Y), Vec3::splat(0.2));
+    assert_eq!(d.lights[0].le_escaped(Vec3::ZERO, -Vec3::Y), Vec3::splat(10.0));
+    assert_eq!(d.lights[0].le_escaped(Vec3::ZERO, Vec3::Y), Vec3::splat(0.2));
     let Light::Infinite { map: Some(m), .. } = &d.lights[1] else {
         panic!("{:?}", d.lights[1])
     };
     assert_eq!(m.mapping(), EnvMapping::Octahedral);
     // The octahedral map's centre is +z: texel (2, 2) of 4 x 4.
-    assert_eq!(d.lights[1].le_escaped(Vec3::Z), Vec3::new(2.0, 2.0, 1.0));
+    assert_eq!(d.lights[1].le_escaped(Vec3::ZERO, Vec3::Z), Vec3::new(2.0, 2.0, 1.0));
     // The corners are -z.
-    assert_eq!(d.lights[1].le_escaped(-Vec3::Z).z, 1.0);
+    assert_eq!(d.lights[1].le_escaped(Vec3::ZERO, -Vec3::Z).z, 1.0);
 }
 
 #[test]

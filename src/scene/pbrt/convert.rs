@@ -1129,14 +1129,28 @@ impl<'a> Conv<'a> {
         use crate::light::{EnvMap, EnvMapping};
         let p = &l.params;
         let mut scale = p.get_float("scale", 1.0)?;
-        if p.has("portal") {
-            self.problem(
-                Kind::Light,
-                place(p, "portal", &l.loc),
-                "infinite: \"portal\" is not supported",
-            );
-            return Ok(None);
-        }
+        // A portal's corners are in world space, whatever the transformation
+        // (pbrt-v4 takes them so).
+        let portal = match p.has("portal") {
+            false => None,
+            true => {
+                let at = place(p, "portal", &l.loc).clone();
+                let points = p.get_point3s("portal");
+                let Ok(corners) = <[Vec3; 4]>::try_from(points.as_slice()) else {
+                    return Err(located(
+                        &at,
+                        format!("infinite: \"portal\" needs 4 points (12 numbers), not {}", points.len()),
+                    ));
+                };
+                Some((corners, at))
+            }
+        };
+        let through = |map: Option<std::sync::Arc<EnvMap>>, radiance: Vec3, to_world: glam::Mat3| match &portal {
+            None => Ok(Light::infinite(radiance, map, to_world)),
+            Some((corners, at)) => crate::light::Portal::new(*corners, map.as_deref(), to_world)
+                .map(|q| Light::infinite_through(radiance, map, to_world, q))
+                .map_err(|e| located(at, format!("infinite: {e}"))),
+        };
         // Only directions reach a light at infinity, and pbrt-v4 turns them
         // by the upper 3 x 3 of the transformation and of its inverse: its
         // translation and any projective row do nothing, unless together
@@ -1162,7 +1176,7 @@ impl<'a> Conv<'a> {
                 // pbrt-v4: constant radiance 1 gives illuminance pi.
                 scale *= e / PI;
             }
-            return Ok(Some(Light::infinite(radiance * scale, None, to_world)));
+            return through(None, radiance * scale, to_world).map(Some);
         };
         let at = place(p, "filename", &l.loc).clone();
         if p.has("L") {
@@ -1184,11 +1198,7 @@ impl<'a> Conv<'a> {
             crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
         let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
             .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
-        Ok(Some(Light::infinite(
-            Vec3::splat(scale),
-            Some(std::sync::Arc::new(map)),
-            to_world,
-        )))
+        through(Some(std::sync::Arc::new(map)), Vec3::splat(scale), to_world).map(Some)
     }
 
     /// A light's colour parameter as RGB (pbrt's default: the colour space's
@@ -3339,12 +3349,15 @@ fn reflect(desc: &mut SceneDesc) {
                 disk.normal = vector(disk.normal);
                 disk.axes = disk.axes.map(vector);
             }
-            Light::Infinite { to_world, .. } => {
+            Light::Infinite { to_world, portal, .. } => {
                 *to_world = glam::Mat3::from_cols(
                     vector(to_world.x_axis),
                     vector(to_world.y_axis),
                     vector(to_world.z_axis),
-                )
+                );
+                if let Some(q) = portal {
+                    *q = std::sync::Arc::new(q.reflected(point, vector));
+                }
             }
         }
     }
