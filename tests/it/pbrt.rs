@@ -1174,3 +1174,130 @@ fn a_moving_shape_covers_each_pixel_for_the_share_of_the_shutter_it_is_there() {
         }
     }
 }
+
+/// A closed room 4 x 2.5 x 4 whose one window (1.6 x 1 in the wall at
+/// z = 2) lets in a constant sky of radiance 2, the window covered by a
+/// portal (`portal`: its parameter, or empty), and when `slab` a white
+/// slab outside the window. The camera looks at the floor and the window
+/// from inside. Returns the mean luminance and the image.
+fn room_through_window(portal: &str, integrator: &str, slab: bool) -> (f64, Film) {
+    let quad = |p: [[f32; 3]; 4]| {
+        let pts: Vec<String> = p.iter().flatten().map(|v| v.to_string()).collect();
+        format!(
+            "Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \"point3 P\" [ {} ]\n",
+            pts.join(" ")
+        )
+    };
+    let (x0, x1, y1, z0, z1) = (-2.0, 2.0, 2.5, -2.0, 2.0);
+    let (wx0, wx1, wy0, wy1) = (-0.8, 0.8, 0.8, 1.8);
+    let walls = [
+        [[x0, 0.0, z0], [x1, 0.0, z0], [x1, y1, z0], [x0, y1, z0]],
+        [[x0, 0.0, z0], [x0, y1, z0], [x0, y1, z1], [x0, 0.0, z1]],
+        [[x1, 0.0, z0], [x1, y1, z0], [x1, y1, z1], [x1, 0.0, z1]],
+        [[x0, y1, z0], [x1, y1, z0], [x1, y1, z1], [x0, y1, z1]],
+        [[x0, 0.0, z0], [x1, 0.0, z0], [x1, 0.0, z1], [x0, 0.0, z1]],
+        [[x0, 0.0, z1], [x1, 0.0, z1], [x1, wy0, z1], [x0, wy0, z1]],
+        [[x0, wy1, z1], [x1, wy1, z1], [x1, y1, z1], [x0, y1, z1]],
+        [[x0, wy0, z1], [wx0, wy0, z1], [wx0, wy1, z1], [x0, wy1, z1]],
+        [[wx1, wy0, z1], [x1, wy0, z1], [x1, wy1, z1], [wx1, wy1, z1]],
+    ];
+    let mut text = String::from(
+        "LookAt 0 1.2 -1.9  0 0.9 2  0 1 0\nCamera \"perspective\" \"float fov\" [ 60 ]\n\
+         Film \"rgb\" \"integer xresolution\" [ 32 ] \"integer yresolution\" [ 32 ]\nWorldBegin\n",
+    );
+    text += &format!("LightSource \"infinite\" \"rgb L\" [ 2 2 2 ] {portal}\n");
+    text += "Material \"diffuse\" \"rgb reflectance\" [ 0.6 0.6 0.6 ]\n";
+    for w in walls {
+        text += &quad(w);
+    }
+    if slab {
+        // Outside and below the window: the room sees it only through it.
+        text += "Material \"diffuse\" \"rgb reflectance\" [ 0.9 0.9 0.9 ]\n";
+        text += &quad([[-3.0, 0.0, 2.5], [3.0, 0.0, 2.5], [3.0, 0.0, 6.0], [-3.0, 0.0, 6.0]]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("room.pbrt");
+    std::fs::write(&p, text).unwrap();
+    let img = render_to_image(&p, &["--integrator", integrator, "--max-depth", "4", "--spp", "64"]);
+    let mean = img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64;
+    (mean, img)
+}
+
+const WINDOW_PORTAL: &str = "\"point3 portal\" [ -0.8 0.8 2  -0.8 1.8 2  0.8 1.8 2  0.8 0.8 2 ]";
+
+#[test]
+fn a_portal_over_the_only_window_changes_only_what_lies_outside() {
+    let (through, img) = room_through_window(WINDOW_PORTAL, "path", false);
+    let (open, open_img) = room_through_window("", "path", false);
+    // The sky seen through the window (the middle, a little above) is the
+    // sky's radiance either way.
+    let sky = img.get(16, 12);
+    assert!((sky - Vec3::splat(2.0)).abs().max_element() < 1e-4, "{sky}");
+    assert_eq!(open_img.get(16, 12), sky);
+    // The room is lit alike, the light sampled through the window or not.
+    assert!(through > 0.05, "{through}");
+    assert!((open / through - 1.0).abs() < 0.02, "{open} vs {through}");
+    // A slab outside, below the window, hides some of the sky either way;
+    // without the portal it is lit and sends light in, with it it is dark
+    // (pbrt-v4's portal lights only what lies behind it): 5% here.
+    let (through_slab, _) = room_through_window(WINDOW_PORTAL, "path", true);
+    let (open_slab, _) = room_through_window("", "path", true);
+    assert!(through_slab < through * 0.98, "{through_slab} vs {through}");
+    assert!(open_slab > through_slab * 1.03, "{open_slab} vs {through_slab}");
+    // Photons enter through the portal too.
+    let (photons, _) = room_through_window(WINDOW_PORTAL, "photon", false);
+    assert!((photons / through - 1.0).abs() < 0.05, "{photons} vs {through}");
+}
+
+#[test]
+fn a_malformed_portal_is_refused_at_its_line_and_bdpt_refuses_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |name: &str, portal: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(
+            &p,
+            format!(
+                "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" [ 8 ] \"integer yresolution\" [ 8 ]\n\
+                 WorldBegin\nLightSource \"infinite\"\n  {portal}\n\
+                 Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 ] \"point3 P\" [ 0 0 5  1 0 5  0 1 5 ]\n"
+            ),
+        )
+        .unwrap();
+        p
+    };
+    let out = dir.path().join("out.png");
+    for (name, portal, says) in [
+        (
+            "three.pbrt",
+            "\"point3 portal\" [ 0 0 1  1 0 1  1 1 1 ]",
+            "needs 4 points",
+        ),
+        (
+            "skewed.pbrt",
+            "\"point3 portal\" [ 0 0 1  1 0 1  2 1 1  0 1 1 ]",
+            "rectangle",
+        ),
+    ] {
+        let p = scene(name, portal);
+        let run = raytracer(&["--scene", p.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{name}:5")) && err.contains(says), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+    let p = scene("ok.pbrt", WINDOW_PORTAL);
+    let run = raytracer(&[
+        "--scene",
+        p.to_str().unwrap(),
+        "-q",
+        "--integrator",
+        "bdpt",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(err.contains("portal"), "{err}");
+    assert!(!out.exists());
+}

@@ -4637,7 +4637,7 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"measured\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"sphere\" \"float phimax\" 90\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]\n",
+             Shape \"sphere\" \"float phimax\" 90\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"goniometric\"\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
@@ -4659,5 +4659,31 @@ mod tests {
             "{w}"
         );
         assert!(w.contains("--lenient: 3 unsupported lights"), "{w}");
+    }
+
+    #[test]
+    fn an_infinite_lights_portal_is_read_in_world_space_and_reflected_with_the_scene() {
+        // The portal's corners are taken as given, whatever the transformation.
+        let text = "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\nTranslate 5 5 5\n\
+                    LightSource \"infinite\" \"rgb L\" [ 1 2 3 ] \"point3 portal\" [ 0 0 4  0 1 4  1 1 4  1 0 4 ]\n";
+        let c = convert_text(text, false).unwrap();
+        let Light::Infinite { portal: Some(p), .. } = &c.desc.lights[0] else {
+            panic!("{:?}", c.desc.lights);
+        };
+        // pbrt's picture is our mirror image here: the scene is reflected
+        // across the camera's vertical plane (x = 0), the portal with it.
+        assert!(c.mirrored);
+        let expected = [[0.0, 0.0, 4.0], [0.0, 1.0, 4.0], [-1.0, 1.0, 4.0], [-1.0, 0.0, 4.0]];
+        for (got, want) in p.corners().iter().zip(expected) {
+            assert!((*got - Vec3::from(want)).length() < 1e-6, "{:?}", p.corners());
+        }
+        // Light from behind the portal (+z) reaches a point in front of it
+        // through the portal, and not beside it.
+        let l = &c.desc.lights[0];
+        assert_eq!(
+            l.le_escaped(Vec3::new(-0.5, 0.5, 0.0), Vec3::Z),
+            Vec3::new(1.0, 2.0, 3.0)
+        );
+        assert_eq!(l.le_escaped(Vec3::new(0.5, 0.5, 0.0), Vec3::Z), Vec3::ZERO);
     }
 }
