@@ -530,3 +530,35 @@ Shape "bilinearmesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0 ]
 Material "conductor" "texture roughness" "cyl"
 Shape "trianglemesh" "integer indices" [ 0 1 2 ] "point3 P" [ -1 -1 1  1 -1 1  0 1 1 ]
 """)
+
+put("pbrt", "portal.pbrt", """LookAt 0 1 -1.5  0 1 2  0 1 0
+Camera "perspective" "float fov" [ 60 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+Sampler "independent" "integer pixelsamples" [ 2 ]
+Integrator "bdpt" "integer maxdepth" [ 4 ]
+WorldBegin
+AttributeBegin
+  Rotate -90 1 0 0
+  LightSource "infinite" "rgb L" [ 2 2 2 ] "float scale" [ 1.5 ]
+    "point3 portal" [ -0.5 0.5 2  -0.5 1.5 2  0.5 1.5 2  0.5 0.5 2 ]
+AttributeEnd
+Material "diffuse"
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ]
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -2 0 2  2 0 2  2 0.5 2  -2 0.5 2 ]
+""")
+
+put("scene", "portal.toml", camera + """
+[[lights]]
+type = "infinite"
+radiance = [1, 1, 1]
+rotate = [90, 0, 0]
+portal = [[-0.5, -0.5, 2], [-0.5, 0.5, 2], [0.5, 0.5, 2], [0.5, -0.5, 2]]
+
+[materials.d]
+albedo = [0.5, 0.5, 0.5]
+
+[[shapes]]
+type = "quad"
+material = "d"
+vertices = [[-2, -1, -2], [2, -1, -2], [2, -1, 2], [-2, -1, 2]]
+""")

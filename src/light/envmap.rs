@@ -166,14 +166,17 @@ impl EnvMap {
         }
     }
 
-    /// Radiance at image coordinates `uv` of an octahedral map, bilinearly
-    /// interpolated between the four nearest texel centres; a neighbour
-    /// beyond an edge is the texel the equal-area map folds it onto (pbrt-v4's
-    /// `OctahedralSphere` wrap). A lat-long map is read at the nearest texel.
-    pub fn bilerp_octahedral(&self, uv: Vec2) -> Vec3 {
+    /// Radiance from direction `w` (unit, in the light's frame), for an
+    /// octahedral map bilinearly interpolated between the four nearest
+    /// texel centres, a neighbour beyond an edge being the texel the
+    /// equal-area map folds it onto (pbrt-v4's `OctahedralSphere` wrap): how
+    /// pbrt-v4 resamples a map for a portal. A lat-long map is read at the
+    /// nearest texel, as `le` reads it.
+    pub fn le_smooth(&self, w: Vec3) -> Vec3 {
         if self.mapping != EnvMapping::Octahedral {
-            return self.texel(uv);
+            return self.le(w);
         }
+        let uv = equal_area_sphere_to_square(w);
         let (w, h) = (self.width as i64, self.height as i64);
         let fetch = |mut x: i64, mut y: i64| {
             // Across a vertical edge the square folds over its horizontal

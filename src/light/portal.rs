@@ -57,6 +57,7 @@ impl Portal {
         let z = p03.cross(p01).normalize();
         let frame = Mat3::from_cols(p03, p01, z);
         let area = (corners[1] - corners[0]).length() * (corners[3] - corners[0]).length();
+        // As fine as the map across (pbrt-v4 keeps an equal-area map's size).
         let res = map.map_or(1, |m| m.width() as usize);
         let from_world = to_world.transpose();
         let mut image = Vec::with_capacity(res * res);
@@ -68,7 +69,7 @@ impl Portal {
                 let le = match map {
                     Some(m) => {
                         let w = (from_world * (frame * local)).normalize();
-                        m.bilerp_octahedral(crate::sampling::equal_area_sphere_to_square(w))
+                        m.le_smooth(w)
                     }
                     None => Vec3::ONE,
                 }
@@ -346,29 +347,45 @@ impl Windowed {
 
     /// A point of window `b` in proportion to the function, and its density.
     fn sample(&self, u: Vec2, b: &Bounds) -> Option<(Vec2, f32)> {
-        let total = self.integral(b);
+        let (n, m) = (self.n, self.n + 1);
+        let sat = |x: usize, y: usize| self.sat[y * m + x];
+        // Where a coordinate falls: its cell and the fraction across it.
+        let cell = |v: f32| {
+            let f = (v.clamp(0.0, 1.0) * n as f32) as f64;
+            let i = (f as usize).min(n - 1);
+            (i, f - i as f64)
+        };
+        // The integral from x = 0 to edge k between the window's rows, as
+        // the table interpolated at those rows (unnormalised, as the table).
+        let ((j0, d0), (j1, d1)) = (cell(b.min.y), cell(b.max.y));
+        let at_rows = |k: usize, j: usize, d: f64| sat(k, j) * (1.0 - d) + sat(k, j + 1) * d;
+        let band = |k: usize| at_rows(k, j1, d1) - at_rows(k, j0, d0);
+        let band_at = |x: f32| {
+            let (i, d) = cell(x);
+            band(i) * (1.0 - d) + band(i + 1) * d
+        };
+        let start = band_at(b.min.x);
+        let total = band_at(b.max.x) - start;
         if total.is_nan() || total <= 0.0 {
             return None;
         }
-        let (b_min, b_max) = (b.min, b.max);
-        let column = |x: f32| Bounds {
-            min: b_min,
-            max: Vec2::new(x, b_max.y),
+        let x = self.invert(start + u.x as f64 * total, b.min.x, b.max.x, band, band_at)?;
+        // Within the column of cells x is in, the integral from y = 0 to
+        // edge k: exact at the table's entries.
+        let (i, _) = cell(x);
+        let column = |k: usize| sat(i + 1, k) - sat(i, k);
+        let column_at = |y: f32| {
+            let (j, d) = cell(y);
+            column(j) * (1.0 - d) + column(j + 1) * d
         };
-        let x = self.invert(u.x as f64 * total, b_min.x, b_max.x, |x| self.integral(&column(x)))?;
-        let n = self.n as f32;
-        let cell = ((x * n).floor()).min(n - 1.0);
-        let (c0, c1) = (cell / n, (cell + 1.0) / n);
-        let strip = |y: f32| Bounds {
-            min: Vec2::new(c0, b_min.y),
-            max: Vec2::new(c1, y),
-        };
-        let strip_total = self.integral(&strip(b_max.y));
-        if strip_total.is_nan() || strip_total <= 0.0 {
+        let start = column_at(b.min.y);
+        let strip = column_at(b.max.y) - start;
+        if strip.is_nan() || strip <= 0.0 {
             return None;
         }
-        let y = self.invert(u.y as f64 * strip_total, b_min.y, b_max.y, |y| self.integral(&strip(y)))?;
+        let y = self.invert(start + u.y as f64 * strip, b.min.y, b.max.y, column, column_at)?;
         let p = Vec2::new(x, y);
+        let total = total / (n * n) as f64;
         Some((p, (self.value(p) as f64 / total) as f32))
     }
 
@@ -381,30 +398,43 @@ impl Windowed {
         (self.value(p) as f64 / total) as f32
     }
 
-    /// The x in [lo, hi] where the non-decreasing, cell-wise linear `f`
-    /// (zero at lo) reaches `target`: a binary search over the cell edges
-    /// inside, then the linear step within the cell found.
-    fn invert(&self, target: f64, lo: f32, hi: f32, f: impl Fn(f32) -> f64) -> Option<f32> {
+    /// The x in [lo, hi] where the non-decreasing, cell-wise linear
+    /// function reaches `target`, given by its values at cell edges (`edge`,
+    /// k for x = k / n) and anywhere (`at`): a binary search over the edges
+    /// inside the interval, then the linear step within the cell found.
+    fn invert(
+        &self,
+        target: f64,
+        lo: f32,
+        hi: f32,
+        edge: impl Fn(usize) -> f64,
+        at: impl Fn(f32) -> f64,
+    ) -> Option<f32> {
         let n = self.n as f32;
-        // Edges strictly inside (lo, hi): k / n for k in first..=last.
-        let first = (lo * n).floor() as i64 + 1;
-        let last = (hi * n).ceil() as i64 - 1;
-        let (mut a, mut fa) = (lo, 0.0f64);
+        // Edges strictly inside (lo, hi): k for k in first..=last.
+        let first = ((lo * n).floor() as i64 + 1).max(0);
+        let last = ((hi * n).ceil() as i64 - 1).min(self.n as i64);
         let (mut k0, mut k1) = (first, last);
+        let mut found = None;
         // The last edge whose value is at most the target.
         while k0 <= k1 {
             let mid = k0 + (k1 - k0) / 2;
-            let e = mid as f32 / n;
-            let fe = f(e);
-            if fe <= target {
-                (a, fa) = (e, fe);
+            if edge(mid as usize) <= target {
+                found = Some(mid);
                 k0 = mid + 1;
             } else {
                 k1 = mid - 1;
             }
         }
-        let b = ((((a * n).floor() + 1.0) / n).min(hi)).max(a);
-        let fb = f(b);
+        let (a, fa, next) = match found {
+            Some(k) => (k as f32 / n, edge(k as usize), k + 1),
+            None => (lo, at(lo), first),
+        };
+        let (b, fb) = if next <= last {
+            (next as f32 / n, edge(next as usize))
+        } else {
+            (hi, at(hi))
+        };
         let t = if fb > fa {
             ((target - fa) / (fb - fa)) as f32
         } else {

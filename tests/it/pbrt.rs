@@ -1300,4 +1300,19 @@ fn a_malformed_portal_is_refused_at_its_line_and_bdpt_refuses_one() {
     assert_eq!(run.status.code(), Some(2), "{err}");
     assert!(err.contains("portal"), "{err}");
     assert!(!out.exists());
+    // A file that asks for bdpt is rendered by the path tracer, with a word.
+    let text = std::fs::read_to_string(&p).unwrap();
+    std::fs::write(&p, format!("Integrator \"bdpt\"\n{text}")).unwrap();
+    let run = raytracer(&[
+        "--scene",
+        p.to_str().unwrap(),
+        "--spp",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(err.contains("portal, rendered here by the path tracer"), "{err}");
+    assert!(out.exists());
 }

@@ -741,6 +741,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         ("file", l.file.is_some(), l.kind == LightKind::Infinite),
         ("mapping", l.mapping.is_some(), l.kind == LightKind::Infinite),
         ("rotate", l.rotate.is_some(), l.kind == LightKind::Infinite),
+        ("portal", l.portal.is_some(), l.kind == LightKind::Infinite),
     ];
     if let Some((key, ..)) = given.iter().find(|(_, given, applies)| *given && !applies) {
         let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
@@ -913,7 +914,20 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                 }
             };
             let radiance = non_negative("radiance", l.radiance.map_or(Vec3::ONE, |r| r.0))?;
-            Ok(vec![Light::infinite(radiance * colour * scale, map, to_world)])
+            let radiance = radiance * colour * scale;
+            let Some(corners) = &l.portal else {
+                return Ok(vec![Light::infinite(radiance, map, to_world)]);
+            };
+            let corners: Vec<Vec3> = corners.iter().map(|c| c.0).collect();
+            let Ok(corners) = <[Vec3; 4]>::try_from(corners.as_slice()) else {
+                return Err(err(format!(
+                    "infinite light: `portal` needs 4 corners, not {}",
+                    corners.len()
+                )));
+            };
+            let portal = crate::light::Portal::new(corners, map.as_deref(), to_world)
+                .map_err(|e| err(format!("infinite light: {e}")))?;
+            Ok(vec![Light::infinite_through(radiance, map, to_world, portal)])
         }
     }
 }

@@ -867,6 +867,25 @@ fn environment_maps_are_read_beside_the_scene_file() {
 }
 
 #[test]
+fn an_infinite_light_may_enter_through_a_portal() {
+    let text = format!(
+        "{CAMERA}[[lights]]\ntype = \"infinite\"\nradiance = [1, 2, 3]\n\
+         portal = [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    let Light::Infinite { portal: Some(p), .. } = &d.lights[0] else {
+        panic!("{:?}", d.lights[0])
+    };
+    assert_eq!(p.corners()[2], Vec3::new(1.0, 1.0, 1.0));
+    // Seen through the portal from below, and past it.
+    assert_eq!(
+        d.lights[0].le_escaped(Vec3::new(0.5, 0.5, 0.0), Vec3::Z),
+        Vec3::new(1.0, 2.0, 3.0)
+    );
+    assert_eq!(d.lights[0].le_escaped(Vec3::new(1.5, 0.5, 0.0), Vec3::Z), Vec3::ZERO);
+}
+
+#[test]
 fn bad_lights_are_one_line_errors_at_their_line() {
     let dir = tempfile::tempdir().unwrap();
     write_env(&dir.path().join("wide.exr"), 4, 2, |_, _| Vec3::ONE);
@@ -940,6 +959,18 @@ fn bad_lights_are_one_line_errors_at_their_line() {
         (
             "type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 1]\nintensity = [1, 1, 1]\nfile = \"a.exr\"",
             "`file` does not apply",
+        ),
+        (
+            "type = \"infinite\"\nportal = [[0, 0, 1], [1, 0, 1], [1, 1, 1]]",
+            "`portal` needs 4 corners, not 3",
+        ),
+        (
+            "type = \"infinite\"\nportal = [[0, 0, 1], [1, 0, 1], [2, 1, 1], [0, 1, 1]]",
+            "must make a rectangle",
+        ),
+        (
+            "type = \"point\"\nposition = [0, 0, 0]\npower = 1\nportal = [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]",
+            "`portal` does not apply to a point light",
         ),
     ];
     for (i, (light, what)) in cases.iter().enumerate() {

@@ -171,6 +171,9 @@ pub(super) struct LightSpec {
     pub(super) file: Option<String>,
     pub(super) mapping: Option<String>,
     pub(super) rotate: Option<Vec3Spec>,
+    /// Infinite lights: the corners of a rectangle (a window) through which
+    /// alone its light enters.
+    pub(super) portal: Option<Vec<Vec3Spec>>,
     /// Disk lights: the side the disk faces, the radius of its hole.
     pub(super) normal: Option<Vec3Spec>,
     pub(super) inner_radius: Option<Num>,

@@ -241,12 +241,22 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             ),
         );
     }
-    if !desc.media.is_empty() && scene.integrator.ty == "bdpt" {
-        // Our bidirectional path tracer has no media; the path tracer renders them.
+    let portal = desc
+        .lights
+        .iter()
+        .any(|l| matches!(l, Light::Infinite { portal: Some(_), .. }));
+    if (!desc.media.is_empty() || portal) && scene.integrator.ty == "bdpt" {
+        // Our bidirectional path tracer has no media, nor portals; the path
+        // tracer renders them.
         let at = scene.integrator.loc.clone().unwrap_or_else(|| c.default_loc());
+        let what = if portal {
+            "an infinite light with a portal"
+        } else {
+            "participating media"
+        };
         c.warn(
             &at,
-            "Integrator \"bdpt\": the scene has participating media, rendered here by the path tracer",
+            format!("Integrator \"bdpt\": the scene has {what}, rendered here by the path tracer"),
         );
         desc.settings
             .scene_file
