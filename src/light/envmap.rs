@@ -166,6 +166,32 @@ impl EnvMap {
         }
     }
 
+    /// The illuminance the map gives a surface facing its +z (luminance
+    /// times cos over the upper hemisphere), per unit scale: what pbrt-v4's
+    /// `illuminance` parameter sets.
+    pub fn upper_illuminance(&self) -> f32 {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut sum = 0.0f64;
+        for y in 0..h {
+            for x in 0..w {
+                let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                let (dir, omega) = match self.mapping {
+                    EnvMapping::Octahedral => (equal_area_square_to_sphere(uv), 4.0 * PI / (w * h) as f32),
+                    EnvMapping::LatLong => {
+                        let (sin_t, cos_t) = (PI * uv.y).sin_cos();
+                        let (sin_p, cos_p) = (2.0 * PI * uv.x).sin_cos();
+                        let omega = 2.0 * PI * PI * sin_t / (w * h) as f32;
+                        (Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t), omega)
+                    }
+                };
+                if dir.z > 0.0 {
+                    sum += (luminance(self.texels[y * w + x]) * dir.z * omega) as f64;
+                }
+            }
+        }
+        sum as f32
+    }
+
     /// Radiance from direction `w` (unit, in the light's frame), for an
     /// octahedral map bilinearly interpolated between the four nearest
     /// texel centres, a neighbour beyond an edge being the texel the

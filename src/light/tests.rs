@@ -761,3 +761,29 @@ fn the_shared_normal_and_area_are_those_computed_apart() {
         assert_eq!(area.to_bits(), triangle_area(v).to_bits());
     }
 }
+
+#[test]
+fn a_maps_upper_illuminance_is_pi_for_unit_radiance_whatever_the_mapping() {
+    for (mapping, w, h) in [(EnvMapping::Octahedral, 32, 32), (EnvMapping::LatLong, 64, 32)] {
+        let map = EnvMap::new(w, h, vec![Vec3::ONE; (w * h) as usize], mapping, "unit").unwrap();
+        let e = map.upper_illuminance();
+        assert!((e - PI).abs() < 0.01 * PI, "{mapping:?}: {e}");
+        // Light from below the horizon adds nothing.
+        let texels = (0..w * h)
+            .map(|i| {
+                let uv = Vec2::new(((i % w) as f32 + 0.5) / w as f32, ((i / w) as f32 + 0.5) / h as f32);
+                let below = match mapping {
+                    EnvMapping::Octahedral => crate::sampling::equal_area_square_to_sphere(uv).z < 0.0,
+                    EnvMapping::LatLong => uv.y > 0.5,
+                };
+                if below {
+                    Vec3::splat(50.0)
+                } else {
+                    Vec3::ONE
+                }
+            })
+            .collect();
+        let lit_below = EnvMap::new(w, h, texels, mapping, "below").unwrap();
+        assert!((lit_below.upper_illuminance() - e).abs() < 1e-3 * e, "{mapping:?}");
+    }
+}

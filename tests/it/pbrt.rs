@@ -1316,3 +1316,41 @@ fn a_malformed_portal_is_refused_at_its_line_and_bdpt_refuses_one() {
     assert!(err.contains("portal, rendered here by the path tracer"), "{err}");
     assert!(out.exists());
 }
+
+#[test]
+fn an_infinite_lights_illuminance_sets_what_a_surface_facing_up_receives_image_or_not() {
+    // A white floor (albedo 1) facing the map's +z under a sky set to
+    // illuminance pi shows radiance 1: with constant L, and with an image
+    // (pbrt-v4 gives the image twice the illuminance asked for; see
+    // docs/pbrt.md).
+    let dir = tempfile::tempdir().unwrap();
+    let mut sky = Film::new(16, 16);
+    for y in 0..16 {
+        for x in 0..16 {
+            sky.set(x, y, Vec3::new(0.5 + 0.05 * x as f32, 1.0, 2.0 - 0.1 * y as f32));
+        }
+    }
+    raytracer::image_io::write_image(&sky, &dir.path().join("sky.pfm"), 0.0).unwrap();
+    let floor = |light: &str| {
+        let p = dir.path().join("floor.pbrt");
+        std::fs::write(
+            &p,
+            format!(
+                "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 10 ]\n\
+                 Film \"rgb\" \"integer xresolution\" [ 8 ] \"integer yresolution\" [ 8 ]\n\
+                 Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+                 LightSource \"infinite\" {light} \"float illuminance\" [ 3.14159265 ]\n\
+                 Material \"diffuse\" \"rgb reflectance\" [ 1 1 1 ]\n\
+                 Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+                 \"point3 P\" [ -100 -100 0  100 -100 0  100 100 0  -100 100 0 ]\n"
+            ),
+        )
+        .unwrap();
+        let img = render_to_image(&p, &["--spp", "256"]);
+        img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+    };
+    let constant = floor("\"rgb L\" [ 1 1 1 ]");
+    let image = floor("\"string filename\" \"sky.pfm\"");
+    assert!((constant - 1.0).abs() < 0.02, "{constant}");
+    assert!((image - 1.0).abs() < 0.03, "{image}");
+}

@@ -1192,14 +1192,6 @@ impl<'a> Conv<'a> {
         if p.has("L") {
             return Err(located(&at, "infinite: give \"L\" or \"filename\", not both"));
         }
-        if e > 0.0 {
-            self.problem(
-                Kind::Light,
-                place(p, "illuminance", &l.loc),
-                "infinite: \"illuminance\" with an image is not supported",
-            );
-            return Ok(None);
-        }
         let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
             // With the column, as a missing mesh or include is reported.
             return Err(PbrtError::at(&at, format!("infinite: image \"{file}\" not found")).into());
@@ -1208,6 +1200,20 @@ impl<'a> Conv<'a> {
             crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
         let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
             .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        if e > 0.0 {
+            // Scaled so that a surface facing the map's +z receives `e`, as
+            // the format says. pbrt-v4 sums the upper hemisphere's texels
+            // with 2 pi / N for each where each covers 4 pi / N, so its
+            // render gets twice `e`; a constant `L` gets `e` in both.
+            let upper = map.upper_illuminance();
+            if upper <= 0.0 {
+                return Err(located(
+                    place(p, "illuminance", &l.loc),
+                    format!("infinite: \"illuminance\": image \"{file}\" is black above its horizon"),
+                ));
+            }
+            scale *= e / upper;
+        }
         through(Some(std::sync::Arc::new(map)), Vec3::splat(scale), to_world).map(Some)
     }
 
