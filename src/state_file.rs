@@ -186,6 +186,19 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 h.f32(cos_falloff_start);
                 h.f32(cos_falloff_end);
             }
+            Light::Goniometric {
+                position,
+                intensity,
+                to_light,
+                ref map,
+            } => {
+                h.u32(8);
+                h.vec3(position);
+                h.vec3(intensity);
+                to_light.to_cols_array().iter().for_each(|&v| h.f32(v));
+                h.u32(map.width());
+                map.texels().iter().for_each(|&t| h.vec3(t));
+            }
             Light::Distant {
                 direction, radiance, ..
             } => {

@@ -85,6 +85,16 @@ pub enum Light {
         world: Sphere,
         portal: Option<Arc<Portal>>,
     },
+    /// pbrt-v4's `goniometric`: a point light whose intensity towards a
+    /// direction is `intensity` times a grey equal-area image (`map`, an
+    /// octahedral map with equal channels) of directions in the light's
+    /// frame; `to_light` (orthogonal) turns world directions into that frame.
+    Goniometric {
+        position: Vec3,
+        intensity: Vec3,
+        to_light: Mat3,
+        map: Arc<EnvMap>,
+    },
 }
 
 /// The most a light may emit (power, radiance or intensity, per channel):
@@ -206,6 +216,7 @@ impl Light {
                 ..
             } => *intensity * (2.0 * PI * ((1.0 - cs) + (cs - ce) / 2.0)),
             Light::Distant { radiance, world, .. } => *radiance * (PI * world.radius * world.radius),
+            Light::Goniometric { intensity, map, .. } => *intensity * map.integral(),
             Light::Infinite {
                 radiance,
                 portal: Some(p),
@@ -233,7 +244,10 @@ impl Light {
     /// Point, spot and distant lights: a delta distribution in position or
     /// direction, which no BSDF-sampled ray finds (`pdf_li` is 0).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. })
+        matches!(
+            self,
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. }
+        )
     }
 
     /// Infinite and distant lights: at infinity, no surface a ray can hit;
@@ -278,7 +292,8 @@ impl Light {
         }
     }
 
-    /// A spot light's intensity towards `w` (unit); zero for other lights.
+    /// A spot or goniometric light's intensity towards `w` (unit); zero for
+    /// other lights.
     pub fn intensity(&self, w: Vec3) -> Vec3 {
         match self {
             Light::Spot {
@@ -288,6 +303,12 @@ impl Light {
                 cos_falloff_end,
                 ..
             } => *intensity * smoothstep(w.dot(*direction), *cos_falloff_end, *cos_falloff_start),
+            Light::Goniometric {
+                intensity,
+                to_light,
+                map,
+                ..
+            } => *intensity * map.le((*to_light * w).normalize()),
             _ => Vec3::ZERO,
         }
     }
@@ -297,7 +318,9 @@ impl Light {
     pub fn position(&self) -> Vec3 {
         match self {
             Light::Sphere { sphere, .. } => sphere.centre,
-            Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+            Light::Point { position, .. } | Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
+                *position
+            }
             Light::Triangle { vertices: v, .. } => (v[0] + v[1] + v[2]) / 3.0,
             Light::Disk { disk, .. } => disk.centre,
             Light::Distant { world, .. } | Light::Infinite { world, .. } => world.centre,
@@ -310,7 +333,11 @@ impl Light {
         match self {
             Light::Sphere { sphere, power } => *power / (PI * sphere.area()),
             Light::Triangle { radiance, .. } | Light::Disk { radiance, .. } => *radiance,
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => Vec3::ZERO,
+            Light::Point { .. }
+            | Light::Spot { .. }
+            | Light::Distant { .. }
+            | Light::Infinite { .. }
+            | Light::Goniometric { .. } => Vec3::ZERO,
         }
     }
 
@@ -338,6 +365,7 @@ impl Light {
             Light::Triangle { .. } => "triangle",
             Light::Disk { .. } => "disk",
             Light::Spot { .. } => "spot",
+            Light::Goniometric { .. } => "goniometric",
             Light::Distant { .. } => "distant",
             Light::Infinite { .. } => "infinite",
         }
@@ -362,7 +390,7 @@ impl Light {
             | Light::Disk { radiance, .. }
             | Light::Distant { radiance, .. }
             | Light::Infinite { radiance, .. } => vec![("radiance", *radiance)],
-            Light::Spot { intensity, .. } => vec![("intensity", *intensity)],
+            Light::Spot { intensity, .. } | Light::Goniometric { intensity, .. } => vec![("intensity", *intensity)],
         };
         for (what, v) in emission {
             let v = v * k;
@@ -391,7 +419,7 @@ impl Light {
             | Light::Disk { radiance, .. }
             | Light::Distant { radiance, .. }
             | Light::Infinite { radiance, .. } => *radiance *= k,
-            Light::Spot { intensity, .. } => *intensity *= k,
+            Light::Spot { intensity, .. } | Light::Goniometric { intensity, .. } => *intensity *= k,
         }
     }
 
@@ -401,7 +429,9 @@ impl Light {
         let by = to - self.position();
         match self {
             Light::Sphere { sphere, .. } => sphere.centre = to,
-            Light::Point { position, .. } | Light::Spot { position, .. } => *position = to,
+            Light::Point { position, .. } | Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
+                *position = to
+            }
             Light::Triangle { vertices, .. } => vertices.iter_mut().for_each(|v| *v += by),
             Light::Disk { disk, .. } => disk.centre = to,
             Light::Distant { .. } | Light::Infinite { .. } => {}
@@ -420,7 +450,7 @@ impl Light {
     #[inline(always)]
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
-            Light::Spot { position, .. } => {
+            Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
                 let v = *position - p;
                 let d2 = v.length_squared();
                 if d2 == 0.0 {
@@ -588,7 +618,7 @@ impl Light {
     /// one that found the hit near an edge or silhouette.
     pub fn pdf_li_hit(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
         match self {
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } => 0.0,
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
             Light::Sphere { sphere, .. } => {
                 let dc2 = (sphere.centre - p).length_squared();
@@ -627,7 +657,7 @@ impl Light {
     /// is reported as 0).
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
         match self {
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } => 0.0,
+            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
             Light::Sphere { sphere, .. } => {
                 let v = sphere.centre - p;
@@ -725,6 +755,16 @@ impl Light {
                 (Ray::new(disk_point(world, -wi, u2) + wi * world.radius, -wi), -wi)
             }
             Light::Point { position, .. } => (Ray::new(*position, uniform_sphere(u1)), Vec3::ZERO),
+            Light::Goniometric {
+                position,
+                to_light,
+                map,
+                ..
+            } => {
+                // In proportion to the image: each particle carries the power.
+                let wl = map.sample(u1).map_or(Vec3::Z, |(w, ..)| w);
+                (Ray::new(*position, (to_light.transpose() * wl).normalize()), Vec3::ZERO)
+            }
             Light::Sphere { sphere, .. } => {
                 let n = uniform_sphere(u1);
                 let d = to_world(cosine_hemisphere(u2), n).normalize();
@@ -799,6 +839,7 @@ impl Light {
         };
         match self {
             Light::Point { .. } => (0.0, 1.0 / (4.0 * PI)),
+            Light::Goniometric { to_light, map, .. } => (0.0, map.pdf((*to_light * ray.d).normalize())),
             Light::Sphere { sphere, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / PI),
             Light::Disk { disk, two_sided, .. } => {
                 let cos = n.dot(ray.d).max(0.0);

@@ -1120,9 +1120,14 @@ impl Scene {
                     light: Some(i as u32),
                     alpha: None,
                 }),
-                // Point, spot and distant lights have no surface; infinite
-                // lights are seen by the rays that escape (`infinite_lights`).
-                Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Infinite { .. } => {}
+                // Point, spot, goniometric and distant lights have no
+                // surface; infinite lights are seen by the rays that escape
+                // (`infinite_lights`).
+                Light::Point { .. }
+                | Light::Spot { .. }
+                | Light::Goniometric { .. }
+                | Light::Distant { .. }
+                | Light::Infinite { .. } => {}
             }
         }
         let infinite_lights = (0..lights.len() as u32)

@@ -1354,3 +1354,53 @@ fn an_infinite_lights_illuminance_sets_what_a_surface_facing_up_receives_image_o
     assert!((constant - 1.0).abs() < 0.02, "{constant}");
     assert!((image - 1.0).abs() < 0.03, "{image}");
 }
+
+#[test]
+fn a_goniometric_light_reads_its_image_as_pbrt_does_and_lights_as_the_inverse_square_says() {
+    // The image shines only within 60 degrees of its +z, which pbrt-v4
+    // reads as the light's +y: a ceiling 1 above the light is lit, the
+    // floor 1 below it dark.
+    let dir = tempfile::tempdir().unwrap();
+    let n = 32;
+    let mut map = Film::new(n, n);
+    for y in 0..n {
+        for x in 0..n {
+            let uv = raytracer::math::Vec2::new((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+            let w = raytracer::sampling::equal_area_square_to_sphere(uv);
+            map.set(x, y, Vec3::splat(if w.z > 0.5 { 1.0 } else { 0.0 }));
+        }
+    }
+    raytracer::image_io::write_image(&map, &dir.path().join("cone.pfm"), 0.0).unwrap();
+    let seen = |up: bool, power: &str| {
+        let p = dir.path().join("gonio.pbrt");
+        let look = if up { "0 1 0  0 0 1" } else { "0 -1 0  0 0 1" };
+        std::fs::write(
+            &p,
+            format!(
+                "LookAt 0 0 0  {look}\nCamera \"perspective\" \"float fov\" [ 2 ]\n\
+                 Film \"rgb\" \"integer xresolution\" [ 4 ] \"integer yresolution\" [ 4 ]\n\
+                 Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+                 LightSource \"goniometric\" \"string filename\" \"cone.pfm\" \"float scale\" [ 2 ] {power}\n\
+                 Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+                 Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+                 \"point3 P\" [ -50 1 -50  50 1 -50  50 1 50  -50 1 50 ]\n\
+                 Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+                 \"point3 P\" [ -50 -1 -50  50 -1 -50  50 -1 50  -50 -1 50 ]\n"
+            ),
+        )
+        .unwrap();
+        let img = render_to_image(&p, &["--spp", "16"]);
+        img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+    };
+    // Intensity 2 at distance 1, head on: irradiance 2, radiance 0.5 / pi times that.
+    let ceiling = seen(true, "");
+    let expected = 0.5 / std::f64::consts::PI * 2.0;
+    assert!((ceiling / expected - 1.0).abs() < 0.01, "{ceiling} vs {expected}");
+    assert_eq!(seen(false, ""), 0.0);
+    // `power` multiplies the scale by power / (4 pi times the image's mean),
+    // as in pbrt-v4.
+    let mean = map.pixels.iter().map(|c| c.x as f64).sum::<f64>() / (n * n) as f64;
+    let powered = seen(true, "\"float power\" [ 6.2831853 ]");
+    let expected = expected * 2.0 * std::f64::consts::PI / (4.0 * std::f64::consts::PI * mean);
+    assert!((powered / expected - 1.0).abs() < 0.01, "{powered} vs {expected}");
+}

@@ -1114,6 +1114,14 @@ impl<'a> Conv<'a> {
                     self.push_light(desc, Light::distant(direction, radiance * scale), &l.loc)?;
                     self.read.push(p);
                 }
+                "goniometric" => {
+                    if let Some(light) = self.goniometric(l)? {
+                        self.push_light(desc, light, &l.loc)?;
+                        self.read.push(p);
+                    } else {
+                        self.skipped_lights += 1;
+                    }
+                }
                 "infinite" => {
                     if let Some(light) = self.infinite(l)? {
                         self.push_light(desc, light, &l.loc)?;
@@ -1129,6 +1137,68 @@ impl<'a> Conv<'a> {
             }
         }
         Ok(())
+    }
+
+    /// pbrt-v4's `goniometric` light: a point at the light's origin whose
+    /// intensity `I` times `scale` (or set by `power`) is modulated by the
+    /// equal-area image `filename` (its channels averaged), read at the
+    /// direction in the light's frame with y and z exchanged (pbrt-v4's
+    /// convention: the image's +z is the frame's +y); None when unsupported
+    /// (reported).
+    fn goniometric(&mut self, l: &super::ir::Light) -> Result<Option<Light>> {
+        use crate::light::{EnvMap, EnvMapping};
+        let p = &l.params;
+        let Some(i) = self.light_colour(p, "I", &l.loc)? else {
+            return Ok(None);
+        };
+        let mut scale = p.get_float("scale", 1.0)?;
+        let turn = glam::Mat3::from_mat4(l.world_from_light);
+        let Some((_, s)) = similarity(Mat4::from_mat3(turn)) else {
+            self.problem(
+                Kind::Light,
+                &l.loc,
+                "goniometric: a transformation other than rotation and uniform scale is not supported",
+            );
+            return Ok(None);
+        };
+        let Some(file) = p.get_string("filename")? else {
+            return Err(located(&l.loc, "goniometric: \"filename\" is required"));
+        };
+        let at = place(p, "filename", &l.loc).clone();
+        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(PbrtError::at(&at, format!("goniometric: image \"{file}\" not found")).into());
+        };
+        let film = crate::image_io::read_image(&path)
+            .map_err(|e| located(&at, format!("goniometric: image \"{file}\": {e}")))?;
+        let grey = film
+            .pixels
+            .iter()
+            .map(|c| Vec3::splat((c.x + c.y + c.z) / 3.0))
+            .collect();
+        let map = EnvMap::new(film.width, film.height, grey, EnvMapping::Octahedral, &file)
+            .map_err(|e| located(&at, format!("goniometric: image \"{file}\": {e}")))?;
+        let phi = p.get_float("power", -1.0)?;
+        if phi > 0.0 {
+            // The power of intensity 1: 4 pi times the image's mean.
+            let k = map.integral().x;
+            if k <= 0.0 {
+                return Err(located(
+                    place(p, "power", &l.loc),
+                    format!("goniometric: \"power\": image \"{file}\" is black"),
+                ));
+            }
+            scale *= phi / k;
+        }
+        // World directions into the image's frame: the light's turn undone,
+        // then y and z exchanged.
+        let swap_yz = glam::Mat3::from_cols(Vec3::X, Vec3::Z, Vec3::Y);
+        let to_light = swap_yz * (turn * (1.0 / s)).transpose();
+        Ok(Some(Light::Goniometric {
+            position: l.world_from_light.transform_point3(Vec3::ZERO),
+            intensity: i * scale,
+            to_light,
+            map: std::sync::Arc::new(map),
+        }))
     }
 
     /// pbrt-v4's `infinite` light: constant `L`, or an equal-area
@@ -3360,6 +3430,11 @@ fn reflect(desc: &mut SceneDesc) {
                 *direction = vector(*direction);
             }
             Light::Distant { direction, .. } => *direction = vector(*direction),
+            Light::Goniometric { position, to_light, .. } => {
+                *position = point(*position);
+                // The image's frame sees the reflected world reflected back.
+                *to_light *= glam::Mat3::from_cols(vector(Vec3::X), vector(Vec3::Y), vector(Vec3::Z));
+            }
             Light::Disk { disk, .. } => {
                 disk.centre = point(disk.centre);
                 disk.normal = vector(disk.normal);
@@ -4653,11 +4728,15 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"measured\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"sphere\" \"float phimax\" 90\nLightSource \"goniometric\"\nLightSource \"projection\"\nLightSource \"goniometric\"\n",
+             Shape \"sphere\" \"float phimax\" 90\nLightSource \"projection\"\nLightSource \"projection\"\nLightSource \"projection\"\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
         assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
+        assert!(
+            e.contains("dir/main.pbrt:6: light \"projection\" is not supported"),
+            "{e}"
+        );
         assert!(
             e.contains("dir/main.pbrt:5: a partial sphere") && e.contains("and 1 more"),
             "{e}"
