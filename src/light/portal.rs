@@ -364,12 +364,7 @@ impl Windowed {
             let (i, d) = cell(x);
             band(i) * (1.0 - d) + band(i + 1) * d
         };
-        let start = band_at(b.min.x);
-        let total = band_at(b.max.x) - start;
-        if total.is_nan() || total <= 0.0 {
-            return None;
-        }
-        let x = self.invert(start + u.x as f64 * total, b.min.x, b.max.x, band, band_at)?;
+        let (x, total) = self.draw(u.x, b.min.x, b.max.x, band, band_at)?;
         // Within the column of cells x is in, the integral from y = 0 to
         // edge k: exact at the table's entries.
         let (i, _) = cell(x);
@@ -378,12 +373,7 @@ impl Windowed {
             let (j, d) = cell(y);
             column(j) * (1.0 - d) + column(j + 1) * d
         };
-        let start = column_at(b.min.y);
-        let strip = column_at(b.max.y) - start;
-        if strip.is_nan() || strip <= 0.0 {
-            return None;
-        }
-        let y = self.invert(start + u.y as f64 * strip, b.min.y, b.max.y, column, column_at)?;
+        let (y, _) = self.draw(u.y, b.min.y, b.max.y, column, column_at)?;
         let p = Vec2::new(x, y);
         let total = total / (n * n) as f64;
         Some((p, (self.value(p) as f64 / total) as f32))
@@ -396,6 +386,25 @@ impl Windowed {
             return 0.0;
         }
         (self.value(p) as f64 / total) as f32
+    }
+
+    /// A point of [lo, hi] drawn with `u` in proportion to the slope of the
+    /// non-decreasing, cell-wise linear cumulative function given by
+    /// `edge` and `at` (see `invert`), and the function's rise over [lo, hi].
+    fn draw(
+        &self,
+        u: f32,
+        lo: f32,
+        hi: f32,
+        edge: impl Fn(usize) -> f64,
+        at: impl Fn(f32) -> f64,
+    ) -> Option<(f32, f64)> {
+        let start = at(lo);
+        let rise = at(hi) - start;
+        if rise.is_nan() || rise <= 0.0 {
+            return None;
+        }
+        Some((self.invert(start + u as f64 * rise, lo, hi, edge, at)?, rise))
     }
 
     /// The x in [lo, hi] where the non-decreasing, cell-wise linear

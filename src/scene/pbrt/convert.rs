@@ -1114,16 +1114,13 @@ impl<'a> Conv<'a> {
                     self.push_light(desc, Light::distant(direction, radiance * scale), &l.loc)?;
                     self.read.push(p);
                 }
-                "goniometric" => {
-                    if let Some(light) = self.goniometric(l)? {
-                        self.push_light(desc, light, &l.loc)?;
-                        self.read.push(p);
+                kind @ ("goniometric" | "infinite") => {
+                    let light = if kind == "infinite" {
+                        self.infinite(l)?
                     } else {
-                        self.skipped_lights += 1;
-                    }
-                }
-                "infinite" => {
-                    if let Some(light) = self.infinite(l)? {
+                        self.goniometric(l)?
+                    };
+                    if let Some(light) = light {
                         self.push_light(desc, light, &l.loc)?;
                         self.read.push(p);
                     } else {
