@@ -199,6 +199,22 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 h.u32(map.width());
                 map.texels().iter().for_each(|&t| h.vec3(t));
             }
+            Light::Projection {
+                position,
+                intensity,
+                to_light,
+                ref projector,
+            } => {
+                h.u32(9);
+                h.vec3(position);
+                h.vec3(intensity);
+                to_light.to_cols_array().iter().for_each(|&v| h.f32(v));
+                let (w, height, tan, texels) = projector.identity();
+                h.u32(w);
+                h.u32(height);
+                h.f32(tan);
+                texels.iter().for_each(|&t| h.vec3(t));
+            }
             Light::Distant {
                 direction, radiance, ..
             } => {

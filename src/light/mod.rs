@@ -20,9 +20,11 @@
 
 mod envmap;
 mod portal;
+mod projection;
 
 pub use envmap::{EnvMap, EnvMapping};
 pub use portal::Portal;
+pub use projection::Projector;
 
 use crate::geometry::{Disk, Sphere};
 use crate::math::{orthonormal_basis, to_world, Ray, Vec2, Vec3};
@@ -94,6 +96,15 @@ pub enum Light {
         intensity: Vec3,
         to_light: Mat3,
         map: Arc<EnvMap>,
+    },
+    /// pbrt-v4's `projection`: a point light casting `projector`'s image
+    /// through a frustum about the light frame's +z, times `intensity`;
+    /// `to_light` (orthogonal) turns world directions into that frame.
+    Projection {
+        position: Vec3,
+        intensity: Vec3,
+        to_light: Mat3,
+        projector: Arc<Projector>,
     },
 }
 
@@ -217,6 +228,9 @@ impl Light {
             } => *intensity * (2.0 * PI * ((1.0 - cs) + (cs - ce) / 2.0)),
             Light::Distant { radiance, world, .. } => *radiance * (PI * world.radius * world.radius),
             Light::Goniometric { intensity, map, .. } => *intensity * map.integral(),
+            Light::Projection {
+                intensity, projector, ..
+            } => *intensity * projector.power(),
             Light::Infinite {
                 radiance,
                 portal: Some(p),
@@ -246,7 +260,11 @@ impl Light {
     pub fn is_delta(&self) -> bool {
         matches!(
             self,
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. }
+            Light::Point { .. }
+                | Light::Spot { .. }
+                | Light::Distant { .. }
+                | Light::Goniometric { .. }
+                | Light::Projection { .. }
         )
     }
 
@@ -292,8 +310,8 @@ impl Light {
         }
     }
 
-    /// A spot or goniometric light's intensity towards `w` (unit); zero for
-    /// other lights.
+    /// A spot, goniometric or projection light's intensity towards `w`
+    /// (unit); zero for other lights.
     pub fn intensity(&self, w: Vec3) -> Vec3 {
         match self {
             Light::Spot {
@@ -309,6 +327,12 @@ impl Light {
                 map,
                 ..
             } => *intensity * map.le((*to_light * w).normalize()),
+            Light::Projection {
+                intensity,
+                to_light,
+                projector,
+                ..
+            } => *intensity * projector.intensity((*to_light * w).normalize()),
             _ => Vec3::ZERO,
         }
     }
@@ -318,9 +342,10 @@ impl Light {
     pub fn position(&self) -> Vec3 {
         match self {
             Light::Sphere { sphere, .. } => sphere.centre,
-            Light::Point { position, .. } | Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
-                *position
-            }
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Goniometric { position, .. }
+            | Light::Projection { position, .. } => *position,
             Light::Triangle { vertices: v, .. } => (v[0] + v[1] + v[2]) / 3.0,
             Light::Disk { disk, .. } => disk.centre,
             Light::Distant { world, .. } | Light::Infinite { world, .. } => world.centre,
@@ -337,7 +362,8 @@ impl Light {
             | Light::Spot { .. }
             | Light::Distant { .. }
             | Light::Infinite { .. }
-            | Light::Goniometric { .. } => Vec3::ZERO,
+            | Light::Goniometric { .. }
+            | Light::Projection { .. } => Vec3::ZERO,
         }
     }
 
@@ -366,6 +392,7 @@ impl Light {
             Light::Disk { .. } => "disk",
             Light::Spot { .. } => "spot",
             Light::Goniometric { .. } => "goniometric",
+            Light::Projection { .. } => "projection",
             Light::Distant { .. } => "distant",
             Light::Infinite { .. } => "infinite",
         }
@@ -390,7 +417,9 @@ impl Light {
             | Light::Disk { radiance, .. }
             | Light::Distant { radiance, .. }
             | Light::Infinite { radiance, .. } => vec![("radiance", *radiance)],
-            Light::Spot { intensity, .. } | Light::Goniometric { intensity, .. } => vec![("intensity", *intensity)],
+            Light::Spot { intensity, .. }
+            | Light::Goniometric { intensity, .. }
+            | Light::Projection { intensity, .. } => vec![("intensity", *intensity)],
         };
         for (what, v) in emission {
             let v = v * k;
@@ -419,7 +448,9 @@ impl Light {
             | Light::Disk { radiance, .. }
             | Light::Distant { radiance, .. }
             | Light::Infinite { radiance, .. } => *radiance *= k,
-            Light::Spot { intensity, .. } | Light::Goniometric { intensity, .. } => *intensity *= k,
+            Light::Spot { intensity, .. }
+            | Light::Goniometric { intensity, .. }
+            | Light::Projection { intensity, .. } => *intensity *= k,
         }
     }
 
@@ -429,9 +460,10 @@ impl Light {
         let by = to - self.position();
         match self {
             Light::Sphere { sphere, .. } => sphere.centre = to,
-            Light::Point { position, .. } | Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
-                *position = to
-            }
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Goniometric { position, .. }
+            | Light::Projection { position, .. } => *position = to,
             Light::Triangle { vertices, .. } => vertices.iter_mut().for_each(|v| *v += by),
             Light::Disk { disk, .. } => disk.centre = to,
             Light::Distant { .. } | Light::Infinite { .. } => {}
@@ -450,7 +482,7 @@ impl Light {
     #[inline(always)]
     pub fn sample_li(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
-            Light::Spot { position, .. } | Light::Goniometric { position, .. } => {
+            Light::Spot { position, .. } | Light::Goniometric { position, .. } | Light::Projection { position, .. } => {
                 let v = *position - p;
                 let d2 = v.length_squared();
                 if d2 == 0.0 {
@@ -618,7 +650,11 @@ impl Light {
     /// one that found the hit near an edge or silhouette.
     pub fn pdf_li_hit(&self, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
         match self {
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. } => 0.0,
+            Light::Point { .. }
+            | Light::Spot { .. }
+            | Light::Distant { .. }
+            | Light::Goniometric { .. }
+            | Light::Projection { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
             Light::Sphere { sphere, .. } => {
                 let dc2 = (sphere.centre - p).length_squared();
@@ -657,7 +693,11 @@ impl Light {
     /// is reported as 0).
     pub fn pdf_li(&self, p: Vec3, wi: Vec3) -> f32 {
         match self {
-            Light::Point { .. } | Light::Spot { .. } | Light::Distant { .. } | Light::Goniometric { .. } => 0.0,
+            Light::Point { .. }
+            | Light::Spot { .. }
+            | Light::Distant { .. }
+            | Light::Goniometric { .. }
+            | Light::Projection { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
             Light::Sphere { sphere, .. } => {
                 let v = sphere.centre - p;
@@ -765,6 +805,15 @@ impl Light {
                 let wl = map.sample(u1).map_or(Vec3::Z, |(w, ..)| w);
                 (Ray::new(*position, (to_light.transpose() * wl).normalize()), Vec3::ZERO)
             }
+            Light::Projection {
+                position,
+                to_light,
+                projector,
+                ..
+            } => {
+                let wl = projector.sample(u1).map_or(Vec3::Z, |(w, _)| w);
+                (Ray::new(*position, (to_light.transpose() * wl).normalize()), Vec3::ZERO)
+            }
             Light::Sphere { sphere, .. } => {
                 let n = uniform_sphere(u1);
                 let d = to_world(cosine_hemisphere(u2), n).normalize();
@@ -818,6 +867,22 @@ impl Light {
                     Vec3::ZERO
                 }
             }
+            Light::Projection {
+                intensity,
+                to_light,
+                projector,
+                ..
+            } => {
+                // Drawn by the texels' mean, not in proportion to each
+                // colour: the flux follows the direction's own intensity.
+                let wl = (*to_light * ray.d).normalize();
+                let pdf = projector.pdf(wl);
+                if pdf > 0.0 {
+                    *intensity * projector.intensity(wl) / pdf
+                } else {
+                    Vec3::ZERO
+                }
+            }
             _ => self.power(),
         };
         LeSample { ray, n, flux }
@@ -840,6 +905,9 @@ impl Light {
         match self {
             Light::Point { .. } => (0.0, 1.0 / (4.0 * PI)),
             Light::Goniometric { to_light, map, .. } => (0.0, map.pdf((*to_light * ray.d).normalize())),
+            Light::Projection {
+                to_light, projector, ..
+            } => (0.0, projector.pdf((*to_light * ray.d).normalize())),
             Light::Sphere { sphere, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / PI),
             Light::Disk { disk, two_sided, .. } => {
                 let cos = n.dot(ray.d).max(0.0);

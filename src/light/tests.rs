@@ -831,3 +831,65 @@ fn a_goniometric_light_shines_by_its_image_and_emits_its_power() {
         "{mean} vs {power}"
     );
 }
+
+#[test]
+fn a_projection_light_casts_its_image_in_its_frustum_and_emits_its_power() {
+    // A 4 x 2 slide, each texel its own colour, over 60 degrees.
+    let texels: Vec<Vec3> = (0..8).map(|i| Vec3::new(1.0 + i as f32, 0.5, 8.0 - i as f32)).collect();
+    let projector = Arc::new(Projector::new(4, 2, texels.clone(), 60.0).unwrap());
+    let to_light = tilted();
+    let light = Light::Projection {
+        position: Vec3::ZERO,
+        intensity: Vec3::splat(2.0),
+        to_light,
+        projector,
+    };
+    assert!(light.is_delta());
+    let world = |l: Vec3| (to_light.transpose() * l).normalize();
+    // The frustum's axis shows the middle of the slide: texel (2, 1) is just
+    // right of and below the centre, (1, 0) just left of and above it.
+    let t = (30f32).to_radians().tan();
+    assert_eq!(
+        light.intensity(world(Vec3::new(0.1 * t, 0.1 * t, 1.0))),
+        texels[6] * 2.0
+    );
+    assert_eq!(
+        light.intensity(world(Vec3::new(-0.1 * t, -0.1 * t, 1.0))),
+        texels[1] * 2.0
+    );
+    // The longer side spans twice the shorter: 2 tan(30) across x.
+    assert_eq!(
+        light.intensity(world(Vec3::new(1.9 * t, 0.1 * t, 1.0))),
+        texels[7] * 2.0
+    );
+    assert_eq!(light.intensity(world(Vec3::new(2.1 * t, 0.1 * t, 1.0))), Vec3::ZERO);
+    assert_eq!(light.intensity(world(Vec3::new(0.0, 0.0, -1.0))), Vec3::ZERO);
+    // Power: the intensity integrated over the sphere, and what particles carry.
+    let mut rng = Rng::new(31, 32);
+    let n = 400_000;
+    let mc: Vec3 = (0..n)
+        .map(|_| light.intensity(uniform_sphere(rng.next_2d())))
+        .sum::<Vec3>()
+        * (4.0 * PI / n as f32);
+    // `power` takes each texel's solid angle at its centre, as pbrt-v4's
+    // `Phi` does: coarse on a slide of 8 texels over a wide frustum.
+    let power = light.power();
+    assert!(
+        (mc - power).abs().max_element() < 0.05 * power.max_element(),
+        "{mc} vs {power}"
+    );
+    let m = 20_000;
+    let mut carried = Vec3::ZERO;
+    for _ in 0..m {
+        let le = light.sample_le_flux(rng.next_2d(), rng.next_2d());
+        let (_, pdf) = light.pdf_le(&le.ray, le.n);
+        assert!(pdf > 0.0);
+        assert!((le.flux - light.intensity(le.ray.d) / pdf).abs().max_element() <= 1e-3 * le.flux.max_element());
+        carried += le.flux / m as f32;
+    }
+    // Particles carry the intensity over their density: exactly the integral.
+    assert!(
+        (carried - mc).abs().max_element() < 0.02 * mc.max_element(),
+        "{carried} vs {mc}"
+    );
+}

@@ -1126,6 +1126,7 @@ impl Scene {
                 Light::Point { .. }
                 | Light::Spot { .. }
                 | Light::Goniometric { .. }
+                | Light::Projection { .. }
                 | Light::Distant { .. }
                 | Light::Infinite { .. } => {}
             }

@@ -1404,3 +1404,53 @@ fn a_goniometric_light_reads_its_image_as_pbrt_does_and_lights_as_the_inverse_sq
     let expected = expected * 2.0 * std::f64::consts::PI / (4.0 * std::f64::consts::PI * mean);
     assert!((powered / expected - 1.0).abs() < 0.01, "{powered} vs {expected}");
 }
+
+#[test]
+fn a_projection_light_casts_its_slide_upright_and_as_the_inverse_square_says() {
+    // A 2 x 2 slide, red at the top left, white elsewhere, cast over 20
+    // degrees onto a wall 2 ahead, seen from the projector over the same
+    // angle: the picture is the slide, upright and the right way round.
+    let dir = tempfile::tempdir().unwrap();
+    let mut slide = Film::new(2, 2);
+    for (x, y) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        slide.set(
+            x,
+            y,
+            if (x, y) == (0, 0) {
+                Vec3::new(1.0, 0.0, 0.0)
+            } else {
+                Vec3::ONE
+            },
+        );
+    }
+    raytracer::image_io::write_image(&slide, &dir.path().join("slide.pfm"), 0.0).unwrap();
+    let p = dir.path().join("projector.pbrt");
+    std::fs::write(
+        &p,
+        "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
+         Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
+         Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+         LightSource \"projection\" \"string filename\" \"slide.pfm\" \"float fov\" [ 20 ]\n\
+         Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+         Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+         \"point3 P\" [ -5 -5 2  5 -5 2  5 5 2  -5 5 2 ]\n",
+    )
+    .unwrap();
+    let img = render_to_image(&p, &["--spp", "16", "--filter", "box"]);
+    let quadrant = |x0: u32, y0: u32| img.mean(x0 + 1, y0 + 1, x0 + 7, y0 + 7);
+    let (top_left, bottom_right) = (quadrant(0, 0), quadrant(8, 8));
+    assert!(
+        top_left.x > 0.02 && top_left.y < 1e-6 && top_left.z < 1e-6,
+        "{top_left}"
+    );
+    for q in [quadrant(8, 0), quadrant(0, 8), bottom_right] {
+        assert!((q.x - q.y).abs() < 1e-6 && (q.y - q.z).abs() < 1e-6, "{q}");
+    }
+    // Intensity 1 at distance 2 / cos: radiance 0.5 / pi cos^3 / 4, cos^3
+    // about 0.98 over the quadrant.
+    let expected = 0.5 / std::f32::consts::PI * 0.98 / 4.0;
+    assert!(
+        (bottom_right.y / expected - 1.0).abs() < 0.03,
+        "{bottom_right} vs {expected}"
+    );
+}
