@@ -33,3 +33,13 @@ def write_png(path, w, h, images):
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", len(images) * w, h, 8, 2, 0, 0, 0))
                 + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))
+
+
+if __name__ == "__main__":
+    # python3 bench/pfm.py OUT.png A.pfm B.pfm ...: the images side by side.
+    import sys
+
+    out, inputs = sys.argv[1], sys.argv[2:]
+    loaded = [load(f) for f in inputs]
+    write_png(out, loaded[0][0], loaded[0][1], [img for _, _, img in loaded])
+    print(f"wrote {out}")

@@ -53,14 +53,5 @@ for s in room room-open; do
 done
 echo "room with the portal against without: $("$bin" compare room-1.pfm room-open-1.pfm --max-luminance 4)"
 if [ -n "$png" ]; then
-    python3 - "$out" "$png" "$root/bench" <<'PY'
-import sys
-sys.path.insert(0, sys.argv[3])
-from pfm import load, write_png
-out, png = sys.argv[1], sys.argv[2]
-w, h, ours = load(f"{out}/ours.pfm")
-_, _, pbrt = load(f"{out}/pbrt.pfm")
-write_png(png, w, h, (ours, pbrt))
-print(f"wrote {png}")
-PY
+    python3 "$root/bench/pfm.py" "$png" "$out/ours.pfm" "$out/pbrt.pfm"
 fi

@@ -49,14 +49,5 @@ echo "ours, dots exchanged, against pbrt-v4: $("$bin" compare "$out/ours-dots-sw
 "$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --seed 1 --outfile "$out/pbrt-seed1.pfm" "$copy"
 echo "pbrt-v4, seed 1, against pbrt-v4: $("$bin" compare "$out/pbrt-seed1.pfm" "$out/pbrt.pfm" --max-luminance 4)"
 if [ -n "${PNG_OUT:-}" ]; then
-    python3 - "$out" "$PNG_OUT" "$root/bench" <<'PY'
-import sys
-sys.path.insert(0, sys.argv[3])
-from pfm import load, write_png
-out, png = sys.argv[1], sys.argv[2]
-w, h, ours = load(f"{out}/ours.pfm")
-_, _, pbrt = load(f"{out}/pbrt.pfm")
-write_png(png, w, h, (ours, pbrt))
-print(f"wrote {png}")
-PY
+    python3 "$root/bench/pfm.py" "$PNG_OUT" "$out/ours.pfm" "$out/pbrt.pfm"
 fi

@@ -572,21 +572,23 @@ mod tests {
             min: Vec2::new(0.13, 0.31),
             max: Vec2::new(0.77, 0.9),
         };
+        // The area of cell (x, y) inside the window.
+        let overlap = |x: usize, y: usize| {
+            let (x0, x1) = (
+                (x as f32 / n as f32).max(b.min.x),
+                ((x + 1) as f32 / n as f32).min(b.max.x),
+            );
+            let (y0, y1) = (
+                (y as f32 / n as f32).max(b.min.y),
+                ((y + 1) as f32 / n as f32).min(b.max.y),
+            );
+            ((x1 - x0).max(0.0) * (y1 - y0).max(0.0)) as f64
+        };
         // The window's integral, cell by cell.
         let mut exact = 0.0f64;
         for y in 0..n {
             for x in 0..n {
-                let (x0, x1) = (
-                    (x as f32 / n as f32).max(b.min.x),
-                    ((x + 1) as f32 / n as f32).min(b.max.x),
-                );
-                let (y0, y1) = (
-                    (y as f32 / n as f32).max(b.min.y),
-                    ((y + 1) as f32 / n as f32).min(b.max.y),
-                );
-                if x1 > x0 && y1 > y0 {
-                    exact += func[y * n + x] as f64 * (x1 - x0) as f64 * (y1 - y0) as f64;
-                }
+                exact += func[y * n + x] as f64 * overlap(x, y);
             }
         }
         assert!((w.integral(&b) - exact).abs() < 1e-5, "{} {exact}", w.integral(&b));
@@ -603,19 +605,7 @@ mod tests {
         let mut cells = 0;
         for y in 0..n {
             for x in 0..n {
-                let (x0, x1) = (
-                    (x as f32 / n as f32).max(b.min.x),
-                    ((x + 1) as f32 / n as f32).min(b.max.x),
-                );
-                let (y0, y1) = (
-                    (y as f32 / n as f32).max(b.min.y),
-                    ((y + 1) as f32 / n as f32).min(b.max.y),
-                );
-                let share = if x1 > x0 && y1 > y0 {
-                    func[y * n + x] as f64 * (x1 - x0) as f64 * (y1 - y0) as f64 / exact
-                } else {
-                    0.0
-                };
+                let share = func[y * n + x] as f64 * overlap(x, y) / exact;
                 let e = share * m as f64;
                 if e == 0.0 {
                     assert_eq!(counts[y * n + x], 0);
