@@ -139,6 +139,8 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         }
     }
     h.u32(desc.lights.len() as u32);
+    // Emission images are shared by a mesh's triangles: each is hashed once.
+    let mut images: Vec<*const crate::light::EmissionImage> = vec![];
     for l in &desc.lights {
         match *l {
             Light::Sphere { sphere, power } => {
@@ -156,11 +158,28 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 vertices,
                 radiance,
                 two_sided,
+                ref image,
             } => {
                 h.u32(2);
                 vertices.iter().for_each(|&v| h.vec3(v));
                 h.vec3(radiance);
                 h.u32(two_sided as u32);
+                // Images came later: hashed only where there is one.
+                if let Some(t) = image {
+                    h.bytes(b"image");
+                    t.uv.iter().for_each(|uv| h.vec3(uv.extend(0.0)));
+                    let ptr = std::sync::Arc::as_ptr(&t.image);
+                    match images.iter().position(|&p| p == ptr) {
+                        Some(i) => h.u32(i as u32),
+                        None => {
+                            images.push(ptr);
+                            let (w, height, texels) = t.image.identity();
+                            h.u32(w);
+                            h.u32(height);
+                            texels.iter().for_each(|&v| h.vec3(v));
+                        }
+                    }
+                }
             }
             Light::Disk {
                 disk,

@@ -97,6 +97,7 @@ pub fn floor_under_quad() -> SceneDesc {
             vertices,
             radiance: Vec3::splat(2.0),
             two_sided: false,
+            image: None,
         });
     }
     d

@@ -96,6 +96,9 @@ struct Vertex {
     /// The time of the shutter the vertex is at (its subpath's): the
     /// camera's, where the camera moves.
     time: f32,
+    /// Texture coordinates where a camera subpath met a light: where its
+    /// emission image is read.
+    uv: Vec2,
 }
 
 impl Vertex {
@@ -113,6 +116,7 @@ impl Vertex {
             delta: false,
             mode,
             time: 0.0,
+            uv: Vec2::ZERO,
         }
     }
 
@@ -138,6 +142,7 @@ impl Vertex {
             pdf_rev: 0.0,
             delta: false,
             mode,
+            uv: Vec2::ZERO,
         }
     }
 
@@ -423,6 +428,7 @@ impl Bdpt {
                     light_normal(light, hit.p, ray.o),
                     TransportMode::Radiance,
                 );
+                v.uv = hit.uv;
                 v.beta = beta;
                 v.pdf_fwd = path[path.len() - 1].convert_density(pdf_fwd, &v);
                 path.push(v);
@@ -619,7 +625,7 @@ impl Bdpt {
                     let Some(w) = (prev.p - pt.p).try_normalize() else {
                         return Vec3::ZERO;
                     };
-                    pt.beta * scene.lights[li].le(w)
+                    pt.beta * scene.lights[li].le(w, pt.uv)
                 }
                 Kind::Infinity(_) => {
                     let from = cameras[t - 2].p;
@@ -1191,6 +1197,7 @@ mod tests {
                 ],
                 radiance: Vec3::new(2.0, 3.0, 2.0),
                 two_sided: true,
+                image: None,
             },
             Light::Sphere {
                 sphere: Sphere {

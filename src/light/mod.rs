@@ -18,10 +18,12 @@
 //! `Scene::build` hands them (`set_scene_bounds`): photons leave a disk of
 //! that sphere's radius facing the light, as in pbrt-v4.
 
+mod emission_image;
 mod envmap;
 mod portal;
 mod projection;
 
+pub use emission_image::{EmissionImage, ImageOnTriangle};
 pub use envmap::{EnvMap, EnvMapping};
 pub use portal::Portal;
 pub use projection::Projector;
@@ -43,10 +45,13 @@ pub enum Light {
         position: Vec3,
         power: Vec3,
     },
+    /// `radiance` times, where there is one, the emission image read at
+    /// the point's texture coordinates (pbrt-v4's `filename`).
     Triangle {
         vertices: [Vec3; 3],
         radiance: Vec3,
         two_sided: bool,
+        image: Option<Arc<ImageOnTriangle>>,
     },
     /// A diffuse area light on a disk or annulus (pbrt-v4's `diffuse` area
     /// light on `disk`), emitting on the side of its normal, or both.
@@ -208,9 +213,13 @@ impl Light {
                 vertices,
                 radiance,
                 two_sided,
+                image,
             } => {
+                // With an image, its mean over the whole image, as pbrt-v4's
+                // `Phi` takes it: the triangle may cover only part of it.
                 let sides = if *two_sided { 2.0 } else { 1.0 };
-                *radiance * (PI * triangle_area(vertices) * sides)
+                let texels = image.as_ref().map_or(Vec3::ONE, |t| t.image.mean());
+                *radiance * texels * (PI * triangle_area(vertices) * sides)
             }
             Light::Disk {
                 disk,
@@ -367,15 +376,20 @@ impl Light {
         }
     }
 
-    /// Radiance leaving the light's surface towards `w` (a one-sided light
-    /// is dark from behind).
-    pub fn le(&self, w: Vec3) -> Vec3 {
+    /// Radiance leaving the light's surface towards `w` at the point with
+    /// texture coordinates `uv` (a one-sided light is dark from behind).
+    pub fn le(&self, w: Vec3, uv: Vec2) -> Vec3 {
         match self {
             Light::Triangle {
                 vertices,
                 two_sided: false,
                 ..
             } if triangle_normal(vertices).dot(w) <= 0.0 => Vec3::ZERO,
+            Light::Triangle {
+                radiance,
+                image: Some(t),
+                ..
+            } => *radiance * t.image.lookup(uv),
             Light::Disk {
                 disk, two_sided: false, ..
             } if disk.normal.dot(w) <= 0.0 => Vec3::ZERO,
@@ -412,6 +426,11 @@ impl Light {
         }
         let emission = match self {
             Light::Sphere { power, .. } => vec![("power", *power), ("radiance", self.radiance())],
+            Light::Triangle {
+                radiance,
+                image: Some(t),
+                ..
+            } => vec![("radiance", *radiance * t.image.max())],
             Light::Point { power, .. } => vec![("power", *power)],
             Light::Triangle { radiance, .. }
             | Light::Disk { radiance, .. }
@@ -619,6 +638,7 @@ impl Light {
                 vertices: v,
                 radiance,
                 two_sided,
+                image,
             } => {
                 // Uniform in area (pbrt-v4 6.5.4), then to solid angle at p.
                 let q = uniform_triangle(v, u);
@@ -635,10 +655,17 @@ impl Light {
                 if cos_l <= 0.0 {
                     return None;
                 }
+                let radiance = match image {
+                    Some(t) => {
+                        let (b0, b1) = uniform_triangle_barycentric(u);
+                        *radiance * t.at_barycentric(b0, b1)
+                    }
+                    None => *radiance,
+                };
                 Some(LightSample {
                     wi,
                     dist,
-                    weight: *radiance * (cos_l * area / d2),
+                    weight: radiance * (cos_l * area / d2),
                     pdf: d2 / (cos_l * area),
                 })
             }
@@ -883,6 +910,17 @@ impl Light {
                     Vec3::ZERO
                 }
             }
+            Light::Triangle {
+                vertices,
+                radiance,
+                two_sided,
+                image: Some(t),
+            } => {
+                // The point `sample_le` drew from u1, uniform in area.
+                let (b0, b1) = uniform_triangle_barycentric(u1);
+                let sides = if *two_sided { 2.0 } else { 1.0 };
+                *radiance * t.at_barycentric(b0, b1) * (PI * triangle_area(vertices) * sides)
+            }
             _ => self.power(),
         };
         LeSample { ray, n, flux }
@@ -1032,14 +1070,20 @@ pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
 /// A point uniformly distributed over the triangle (pbrt-v4's
 /// `SampleUniformTriangle`, which keeps strata apart).
 pub fn uniform_triangle(v: &[Vec3; 3], u: Vec2) -> Vec3 {
-    let (b0, b1) = if u.x < u.y {
+    let (b0, b1) = uniform_triangle_barycentric(u);
+    v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
+}
+
+/// The barycentric coordinates (b0, b1) of `uniform_triangle`'s point.
+#[inline(always)]
+fn uniform_triangle_barycentric(u: Vec2) -> (f32, f32) {
+    if u.x < u.y {
         let b0 = u.x / 2.0;
         (b0, u.y - b0)
     } else {
         let b1 = u.y / 2.0;
         (u.x - b1, b1)
-    };
-    v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
+    }
 }
 
 #[cfg(test)]

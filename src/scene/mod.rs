@@ -1097,7 +1097,7 @@ impl Scene {
                         axes: glam::Mat3::IDENTITY,
                     });
                 }
-                Light::Triangle { vertices: v, .. } => {
+                Light::Triangle { vertices: v, image, .. } => {
                     let tri = Triangle::new(v[0], v[1], v[2]);
                     let n = tri.normal_raw();
                     if !v.iter().all(|p| p.is_finite()) || !n.is_finite() || n.length_squared() == 0.0 {
@@ -1112,7 +1112,8 @@ impl Scene {
                         alpha: SOLID,
                     });
                     normals.push(None);
-                    uvs.push(None);
+                    // Hits read an emission image at these coordinates.
+                    uvs.push(image.as_ref().map(|t| t.uv));
                 }
                 Light::Disk { disk, .. } => disks.push(DiskObject {
                     disk: *disk,

@@ -8,7 +8,7 @@
 use raytracer::integrator::{render, IntegratorKind, RenderSettings};
 use raytracer::light::Light;
 use raytracer::material::{ConductorFresnel, Material, Roughness};
-use raytracer::math::{luminance, Vec3};
+use raytracer::math::{luminance, Vec2, Vec3};
 use raytracer::photon::PhotonSettings;
 use raytracer::scene::{Scene, SphereDesc};
 
@@ -30,10 +30,11 @@ fn glossy_room(size: u32) -> Scene {
             vertices,
             radiance: Vec3::splat(12.0),
             two_sided: false,
+            image: None,
         })
         .collect();
     assert!(
-        d.lights.iter().all(|l| l.le(Vec3::Y).x > 0.0),
+        d.lights.iter().all(|l| l.le(Vec3::Y, Vec2::ZERO).x > 0.0),
         "the quad must face the floor"
     );
     // A round lamp on the ceiling (away from the walls: photon density

@@ -1454,3 +1454,179 @@ fn a_projection_light_casts_its_slide_upright_and_as_the_inverse_square_says() {
         "{bottom_right} vs {expected}"
     );
 }
+
+/// A 4 x 4 emission image whose quadrants are red (top left), green (top
+/// right), blue (bottom left) and white, written as `quadrants.pfm` in `dir`.
+fn quadrant_image(dir: &Path) -> Film {
+    let mut img = Film::new(4, 4);
+    for y in 0..4 {
+        for x in 0..4 {
+            let c = match (x < 2, y < 2) {
+                (true, true) => Vec3::new(1.0, 0.0, 0.0),
+                (false, true) => Vec3::new(0.0, 1.0, 0.0),
+                (true, false) => Vec3::new(0.0, 0.0, 1.0),
+                (false, false) => Vec3::ONE,
+            };
+            img.set(x, y, c);
+        }
+    }
+    raytracer::image_io::write_image(&img, &dir.join("quadrants.pfm"), 0.0).unwrap();
+    img
+}
+
+/// A quad light at z = `z` over [-1, 1]^2 facing -z, with uv (0, 0) at
+/// (-1, -1) and (1, 1) at (1, 1), emitting `quadrants.pfm` times `scale`.
+fn image_quad_light(z: f32, extra: &str) -> String {
+    format!(
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"string filename\" \"quadrants.pfm\" {extra}\n\
+         Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+         \"point3 P\" [ -1 -1 {z}  -1 1 {z}  1 1 {z}  1 -1 {z} ] \
+         \"point2 uv\" [ 0 0  0 1  1 1  1 0 ]\nAttributeEnd\n"
+    )
+}
+
+#[test]
+fn an_area_lights_emission_image_is_read_at_the_surfaces_uv_with_v_up() {
+    // Seen head on from below the light, looking up its -z with y up: the
+    // picture is the image, upright and the right way round (uv (0, 1) is
+    // the image's top left, as pbrt-v4 reads it).
+    let dir = tempfile::tempdir().unwrap();
+    quadrant_image(dir.path());
+    let p = dir.path().join("screen.pbrt");
+    std::fs::write(
+        &p,
+        format!(
+            "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
+             Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n{}",
+            image_quad_light(2.0, "\"float scale\" [ 3 ]")
+        ),
+    )
+    .unwrap();
+    for integrator in ["path", "bdpt", "photon", "sppm"] {
+        let img = render_to_image(&p, &["--spp", "4", "--filter", "box", "--integrator", integrator]);
+        // Away from the middle, where the quadrants blend.
+        let block = |x0: u32, y0: u32| img.mean(x0, y0, x0 + 4, y0 + 4);
+        let expected = [
+            ((1, 1), Vec3::new(3.0, 0.0, 0.0)),
+            ((11, 1), Vec3::new(0.0, 3.0, 0.0)),
+            ((1, 11), Vec3::new(0.0, 0.0, 3.0)),
+            ((11, 11), Vec3::splat(3.0)),
+        ];
+        for ((x, y), want) in expected {
+            let got = block(x, y);
+            assert!(
+                (got - want).abs().max_element() < 1e-4,
+                "{integrator}: block at ({x}, {y}) is {got}, not {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_image_light_lights_alike_in_every_integrator_and_power_sets_its_flux() {
+    // The quad faces a grey floor 1 below it, seen from above the light
+    // (whose back is dark). Light samples, BSDF hits, light subpaths and
+    // photons each read the image: the integrators agree colour by colour,
+    // and red falls under the image's red quadrant.
+    let dir = tempfile::tempdir().unwrap();
+    let img = quadrant_image(dir.path());
+    let p = dir.path().join("lit.pbrt");
+    let scene = |extra: &str| {
+        format!(
+            "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 60 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 32 ] \"integer yresolution\" [ 32 ]\n\
+             Integrator \"path\" \"integer maxdepth\" [ 2 ]\nWorldBegin\n{}\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"integer indices\" [ 0 1 2 0 2 3 ] \
+             \"point3 P\" [ -20 -20 0  20 -20 0  20 20 0  -20 20 0 ]\n",
+            image_quad_light(1.0, extra)
+        )
+    };
+    std::fs::write(&p, scene("")).unwrap();
+    let mean = |img: &Film| img.mean(0, 0, img.width, img.height);
+    let path = render_to_image(&p, &["--spp", "64", "--integrator", "path"]);
+    let reference = mean(&path);
+    for (integrator, extra) in [
+        ("bdpt", &["--spp", "64"][..]),
+        ("photon", &["--spp", "16", "--photons", "400000"][..]),
+        ("sppm", &["--spp", "64"][..]),
+    ] {
+        let mut args = vec!["--integrator", integrator];
+        args.extend_from_slice(extra);
+        let got = mean(&render_to_image(&p, &args));
+        for c in 0..3 {
+            assert!(
+                (got[c] / reference[c] - 1.0).abs() < 0.03,
+                "{integrator}: channel {c}: {got} against the path tracer's {reference}"
+            );
+        }
+    }
+    // Looking down -z with y up, world -x is on the picture's right: the
+    // image's red quadrant (x < 0, y > 0) lies over the floor's top right,
+    // its blue one (x < 0, y < 0) over the bottom right.
+    let red_side = path.mean(20, 0, 32, 12);
+    let blue_side = path.mean(20, 20, 32, 32);
+    eprintln!("{red_side} {blue_side}");
+    assert!(
+        red_side.x > 2.0 * red_side.z && blue_side.z > 2.0 * blue_side.x,
+        "{red_side} {blue_side}"
+    );
+    // `power` sets the light's flux with the image's mean luminance in k_e,
+    // as pbrt-v4 does, where each triangle is a light that meets it alone.
+    std::fs::write(&p, scene("\"float power\" [ 10 ]")).unwrap();
+    let loaded = raytracer::scene::load(p.to_str().unwrap(), &Default::default()).unwrap();
+    let power: f32 = loaded.desc.lights.iter().map(|l| luminance(l.power())).sum();
+    assert!((power / 20.0 - 1.0).abs() < 1e-4, "{power}");
+    // Without `power`, the scale alone: the image's mean luminance times
+    // pi times the area.
+    std::fs::write(&p, scene("\"float scale\" [ 2 ]")).unwrap();
+    let loaded = raytracer::scene::load(p.to_str().unwrap(), &Default::default()).unwrap();
+    let power: f32 = loaded.desc.lights.iter().map(|l| luminance(l.power())).sum();
+    let mean_lum = img.pixels.iter().map(|&c| luminance(c)).sum::<f32>() / 16.0;
+    let expected = 2.0 * mean_lum * std::f32::consts::PI * 4.0;
+    assert!((power / expected - 1.0).abs() < 1e-4, "{power} against {expected}");
+}
+
+#[test]
+fn emission_images_that_cannot_be_read_as_pbrt_reads_them_are_refused_at_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    quadrant_image(dir.path());
+    let p = dir.path().join("bad.pbrt");
+    for (light, shape, message) in [
+        (
+            "\"string filename\" \"quadrants.pfm\" \"rgb L\" [ 1 1 1 ]",
+            "Shape \"sphere\"",
+            ("bad.pbrt:2:", "AreaLightSource: both \"L\" and \"filename\" are given"),
+        ),
+        (
+            "\"string filename\" \"missing.png\"",
+            "Shape \"sphere\"",
+            ("bad.pbrt:2:", "AreaLightSource: image \"missing.png\" not found"),
+        ),
+        (
+            "\"string filename\" \"quadrants.pfm\"",
+            "Shape \"sphere\"",
+            ("bad.pbrt:3:", "an emission image on a sphere is not supported"),
+        ),
+        (
+            "\"string filename\" \"quadrants.pfm\"",
+            "Shape \"disk\"",
+            ("bad.pbrt:3:", "an emission image on a disk is not supported"),
+        ),
+    ] {
+        let (at, message) = message;
+        std::fs::write(
+            &p,
+            format!("WorldBegin\nAreaLightSource \"diffuse\" {light}\n{shape}\n"),
+        )
+        .unwrap();
+        let out = dir.path().join("out.png");
+        let o = raytracer(&["--scene", p.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(at) && err.contains(message), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}

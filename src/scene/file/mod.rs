@@ -832,6 +832,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                     vertices,
                     radiance,
                     two_sided,
+                    image: None,
                 })
                 .collect())
         }

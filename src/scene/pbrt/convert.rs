@@ -45,9 +45,9 @@ use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
-use crate::light::Light;
+use crate::light::{EmissionImage, ImageOnTriangle, Light};
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
@@ -131,24 +131,36 @@ struct Problem {
 }
 
 /// A diffuse area light, read once for all its shapes.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Emission {
-    /// Radiance before `power` scaling (`L` times `scale`).
+    /// Radiance before `power` scaling (`L` times `scale`; with an image,
+    /// the image's scale).
     radiance: Vec3,
     /// `power`, when given (> 0).
     power: Option<f32>,
     two_sided: bool,
+    /// The emission image (`filename`), read at the shapes' texture
+    /// coordinates.
+    image: Option<Arc<EmissionImage>>,
 }
 
 impl Emission {
     /// The radiance of one shape of `area`: `power`, when given, is met by
-    /// it (pbrt-v4's k_e: power / (sides area pi) times `scale`).
+    /// it (pbrt-v4's k_e: power / (sides area pi) times `scale`, and over
+    /// the image's mean luminance where there is one).
     fn radiance_for(&self, area: f32) -> Vec3 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
+        let k = self.image.as_ref().map_or(1.0, |im| crate::math::luminance(im.mean()));
         match self.power {
-            Some(phi) => self.radiance * (phi / (sides * area * PI)),
+            Some(phi) => self.radiance * (phi / (sides * area * PI * k)),
             None => self.radiance,
         }
+    }
+
+    /// What a shape that cannot read an image emits (`--lenient`): the
+    /// image's mean.
+    fn without_image(&self, area: f32) -> Vec3 {
+        self.radiance_for(area) * self.image.as_ref().map_or(Vec3::ONE, |im| im.mean())
     }
 }
 
@@ -1209,8 +1221,7 @@ impl<'a> Conv<'a> {
         let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
             return Err(PbrtError::at(&at, format!("{kind}: image \"{file}\" not found")).into());
         };
-        let film =
-            crate::image_io::read_image(&path).map_err(|e| located(&at, format!("{kind}: image \"{file}\": {e}")))?;
+        let film = read_light_image(&path).map_err(|e| located(&at, format!("{kind}: image \"{file}\": {e}")))?;
         Ok(Some((film, file, at, (turn * (1.0 / s)).transpose())))
     }
 
@@ -1375,7 +1386,7 @@ impl<'a> Conv<'a> {
 
     fn emission(&mut self, index: usize) -> Result<Option<Emission>> {
         if let Some(e) = self.emissions.get(&index) {
-            return Ok(*e);
+            return Ok(e.clone());
         }
         let scene = self.scene;
         let al = &scene.area_lights[index];
@@ -1387,31 +1398,62 @@ impl<'a> Conv<'a> {
                 format!("AreaLightSource \"{}\" is not supported", al.ty),
             );
             None
-        } else if p.has("filename") {
-            self.problem(
-                Kind::Light,
-                place(p, "filename", &al.loc),
-                "AreaLightSource: an emission image is not supported",
-            );
-            None
         } else {
-            let colour = self.light_colour(p, "L", &al.loc)?;
+            let image = self.emission_image(index)?;
+            let colour = match image {
+                Some(_) => Some(Vec3::ONE),
+                None => self.light_colour(p, "L", &al.loc)?,
+            };
             let scale = p.get_float("scale", 1.0)?;
             let two_sided = p.get_bool("twosided", false)?;
             let power = p.get_float("power", -1.0)?;
             self.read.push(p);
+            if let (Some(im), true) = (&image, power > 0.0) {
+                if crate::math::luminance(im.mean()) <= 0.0 {
+                    return Err(located(
+                        place(p, "power", &al.loc),
+                        "AreaLightSource: \"power\": the emission image is black",
+                    ));
+                }
+            }
             colour.map(|c| Emission {
                 radiance: c * scale,
                 power: (power > 0.0).then_some(power),
                 two_sided,
+                image,
             })
         };
         if e.is_none() {
             // Its shapes are drawn without emission.
             self.skipped_lights += 1;
         }
-        self.emissions.insert(index, e);
+        self.emissions.insert(index, e.clone());
         Ok(e)
+    }
+
+    /// A diffuse area light's emission image (`filename`), as pbrt-v4 reads
+    /// it: not together with `L`.
+    fn emission_image(&mut self, index: usize) -> Result<Option<Arc<EmissionImage>>> {
+        let al = &self.scene.area_lights[index];
+        let p = &al.params;
+        let Some(file) = p.get_string("filename")? else {
+            return Ok(None);
+        };
+        let at = place(p, "filename", &al.loc).clone();
+        if p.has("L") {
+            return Err(located(
+                &at,
+                "AreaLightSource: both \"L\" and \"filename\" are given (pbrt-v4 refuses them together)",
+            ));
+        }
+        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(PbrtError::at(&at, format!("AreaLightSource: image \"{file}\" not found")).into());
+        };
+        let film =
+            read_light_image(&path).map_err(|e| located(&at, format!("AreaLightSource: image \"{file}\": {e}")))?;
+        let image = EmissionImage::new(film.width, film.height, film.pixels)
+            .map_err(|e| located(&at, format!("AreaLightSource: image \"{file}\": {e}")))?;
+        Ok(Some(Arc::new(image)))
     }
 
     // ---- materials -----------------------------------------------------------
@@ -1606,7 +1648,7 @@ impl<'a> Conv<'a> {
                 );
                 alpha = None;
             }
-            if let (Some(_), Some(m)) = (emission, scene.materials.get(shape.material)) {
+            if let (Some(_), Some(m)) = (&emission, scene.materials.get(shape.material)) {
                 if reflects(m) {
                     self.black_emitters += 1;
                 }
@@ -1640,6 +1682,7 @@ impl<'a> Conv<'a> {
                     });
                     if let Some(e) = emission {
                         let flip = shape.flips_normals();
+                        let image = e.image.clone();
                         for t in &mesh.triangles {
                             let [a, b, c] = t.map(|i| world[i as usize]);
                             let cross = (b - a).cross(c - a);
@@ -1653,12 +1696,27 @@ impl<'a> Conv<'a> {
                                 None if flip => -cross,
                                 None => cross,
                             };
-                            let vertices = if side.dot(cross) < 0.0 { [a, c, b] } else { [a, b, c] };
+                            let turn = side.dot(cross) < 0.0;
+                            let vertices = if turn { [a, c, b] } else { [a, b, c] };
                             let radiance = e.radiance_for(area);
+                            // The coordinates pbrt-v4's triangle reports
+                            // without "uv", turned with the vertices.
+                            let image = image.as_ref().map(|image| {
+                                let [ua, ub, uc] = match &mesh.uvs {
+                                    Some(uv) => t.map(|i| uv[i as usize]),
+                                    None => [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::ONE],
+                                };
+                                let uv = if turn { [ua, uc, ub] } else { [ua, ub, uc] };
+                                Arc::new(ImageOnTriangle {
+                                    image: image.clone(),
+                                    uv,
+                                })
+                            });
                             let light = Light::Triangle {
                                 vertices,
                                 radiance,
                                 two_sided: e.two_sided,
+                                image,
                             };
                             self.push_light(desc, light, &shape.loc)?;
                         }
@@ -1740,7 +1798,14 @@ impl<'a> Conv<'a> {
                             continue;
                         }
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
-                        let radiance = e.radiance_for(area);
+                        if e.image.is_some() {
+                            self.problem(
+                                Kind::Light,
+                                &shape.loc,
+                                "an emission image on a sphere is not supported, only on triangle meshes; --lenient emits the image's mean",
+                            );
+                        }
+                        let radiance = e.without_image(area);
                         let light = Light::Sphere {
                             sphere,
                             power: radiance * PI * area,
@@ -1806,7 +1871,14 @@ impl<'a> Conv<'a> {
                         // without a light above).
                         let disk = crate::geometry::Disk::new(centre, normal, radius, inner_radius, Some(axes))
                             .map_err(|msg| located(&shape.loc, format!("disk: {msg}")))?;
-                        let radiance = e.radiance_for(disk.area());
+                        if e.image.is_some() {
+                            self.problem(
+                                Kind::Light,
+                                &shape.loc,
+                                "an emission image on a disk is not supported, only on triangle meshes; --lenient emits the image's mean",
+                            );
+                        }
+                        let radiance = e.without_image(disk.area());
                         let light = Light::Disk {
                             disk,
                             radiance,
@@ -3405,6 +3477,15 @@ fn similarity(m: Mat4) -> Option<(Vec3, f32)> {
     (ok && centre.is_finite() && s.is_finite()).then_some((centre, s))
 }
 
+/// An image a light reads, as pbrt-v4 reads it: EXR and PFM as they are,
+/// 8-bit formats (PNG) decoded from sRGB.
+fn read_light_image(path: &Path) -> Result<crate::film::Film> {
+    let img = crate::texture::load_image(path, crate::texture::Encoding::Srgb)?;
+    let mut film = crate::film::Film::new(img.width, img.height);
+    film.pixels.clone_from(&img.pixels);
+    Ok(film)
+}
+
 /// Reflects the scene across the camera's vertical plane (through the
 /// camera, spanned by forward and up): the camera then sees pbrt's mirror
 /// image of our convention. Triangles keep the side they face.
@@ -3472,9 +3553,16 @@ fn reflect(desc: &mut SceneDesc) {
         match l {
             Light::Sphere { sphere, .. } => sphere.centre = point(sphere.centre),
             Light::Point { position, .. } => *position = point(*position),
-            Light::Triangle { vertices, .. } => {
+            Light::Triangle { vertices, image, .. } => {
                 let [a, b, c] = vertices.map(point);
                 *vertices = [a, c, b];
+                if let Some(t) = image {
+                    let [a, b, c] = t.uv;
+                    *image = Some(Arc::new(ImageOnTriangle {
+                        image: t.image.clone(),
+                        uv: [a, c, b],
+                    }));
+                }
             }
             Light::Spot {
                 position, direction, ..
