@@ -584,7 +584,7 @@ fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
 }
 
 /// Texture coordinates of a triangle without its own: pbrt-v4's.
-const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
+pub const DEFAULT_UV: [Vec2; 3] = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)];
 
 /// `triangle_shading` for a moving triangle, stored as placed at its
 /// motion's start and hit where `to_world` took it.

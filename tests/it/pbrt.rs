@@ -1630,3 +1630,64 @@ fn emission_images_that_cannot_be_read_as_pbrt_reads_them_are_refused_at_their_l
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn a_bilinear_patch_without_uv_reads_images_at_the_patchs_own_uv_on_both_halves() {
+    // pbrt-v4 gives a patch (u, v) from p00 to p11, a `plymesh` quad the
+    // same from its ring a b c d (p00 a, p10 b, p01 d, p11 c). Split into
+    // two triangles, the second half must keep it: the image stands upright
+    // over the whole quad, as in the first test with explicit uv.
+    let dir = tempfile::tempdir().unwrap();
+    quadrant_image(dir.path());
+    std::fs::write(
+        dir.path().join("quad.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         -1 -1 2\n1 -1 2\n1 1 2\n-1 1 2\n4 0 1 2 3\n",
+    )
+    .unwrap();
+    let shapes = [
+        "Shape \"bilinearmesh\" \"integer indices\" [ 0 1 2 3 ] \
+         \"point3 P\" [ -1 -1 2  1 -1 2  -1 1 2  1 1 2 ]",
+        "Shape \"plymesh\" \"string filename\" \"quad.ply\"",
+    ];
+    let p = dir.path().join("patch.pbrt");
+    for shape in shapes {
+        for emitting in [true, false] {
+            // As an emission image, and as a texture lit by a white sky.
+            let (light, material) = if emitting {
+                (
+                    "AreaLightSource \"diffuse\" \"string filename\" \"quadrants.pfm\" \"bool twosided\" true",
+                    "",
+                )
+            } else {
+                (
+                    "LightSource \"infinite\" \"rgb L\" [ 1 1 1 ]",
+                    "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"quadrants.pfm\" \
+                     \"string filter\" \"point\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"",
+                )
+            };
+            std::fs::write(
+                &p,
+                format!(
+                    "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+                     Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
+                     Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n{light}\n{material}\n{shape}\n"
+                ),
+            )
+            .unwrap();
+            let img = render_to_image(&p, &["--spp", "4", "--filter", "box", "--integrator", "path"]);
+            let block = |x0: u32, y0: u32| img.mean(x0, y0, x0 + 4, y0 + 4);
+            for ((x, y), channel) in [((1, 1), 0), ((11, 1), 1), ((1, 11), 2)] {
+                let got = block(x, y);
+                let others: f32 = (0..3).filter(|&c| c != channel).map(|c| got[c]).sum();
+                assert!(
+                    got[channel] > 0.1 && others < 1e-3 * got[channel].max(1.0),
+                    "{shape} (emitting {emitting}): block at ({x}, {y}) is {got}"
+                );
+            }
+            let white = block(11, 11);
+            assert!((white.x - white.z).abs() < 1e-4 && white.x > 0.1, "{shape}: {white}");
+        }
+    }
+}

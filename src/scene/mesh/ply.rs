@@ -60,6 +60,9 @@ pub struct PlyData {
     pub triangles: Vec<[u32; 3]>,
     /// Quads (each two triangles).
     pub quads: usize,
+    /// Under [`Polygons::TrianglesAndQuads`], which triangles are a quad's
+    /// second (empty where there are no quads).
+    pub second_halves: Vec<bool>,
     /// Faces skipped under [`Polygons::TrianglesAndQuads`].
     pub skipped_faces: usize,
     /// Vertices whose normal is not finite (some exporters write NaN where
@@ -570,6 +573,10 @@ fn read_plain(path: &Path, bytes: &[u8], polygons: Polygons) -> Result<PlyData> 
                             continue;
                         }
                         mesh.quads += usize::from(face.len() == 4);
+                        if polygons == Polygons::TrianglesAndQuads && face.len() == 4 {
+                            mesh.second_halves.resize(mesh.triangles.len(), false);
+                            mesh.second_halves.extend([false, true]);
+                        }
                         // Fan-triangulate; faces of fewer than three vertices add nothing.
                         for j in 2..face.len() {
                             mesh.triangles.push([face[0], face[j - 1], face[j]]);

@@ -1360,12 +1360,17 @@ impl<'a> Builder<'a> {
         if read.triangles.is_empty() {
             self.warn(loc, format!("plymesh \"{name}\": the mesh has no faces"));
         }
+        let mut second_halves = read.second_halves;
+        if !second_halves.is_empty() {
+            second_halves.resize(read.triangles.len(), false);
+        }
         let mesh = Arc::new(TriMesh {
             positions: read.positions,
             normals: read.normals,
             uvs: read.uvs,
             triangles: read.triangles,
             quads_split: read.quads,
+            second_halves,
             file: Some(path.clone()),
         });
         self.ply_cache.insert(path, mesh.clone());

@@ -47,12 +47,12 @@ use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
 use crate::light::{EmissionImage, ImageOnTriangle, Light};
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
-use crate::math::{Vec2, Vec3};
+use crate::math::Vec3;
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
-    Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc,
+    Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc, DEFAULT_UV,
 };
 use crate::scene::{CurveDesc, DiskDesc, MovingShape, MovingTriangles};
 use crate::settings::{Origin, SceneSettings, Value};
@@ -1683,7 +1683,7 @@ impl<'a> Conv<'a> {
                     if let Some(e) = emission {
                         let flip = shape.flips_normals();
                         let image = e.image.clone();
-                        for t in &mesh.triangles {
+                        for (k, t) in mesh.triangles.iter().enumerate() {
                             let [a, b, c] = t.map(|i| world[i as usize]);
                             let cross = (b - a).cross(c - a);
                             let area = 0.5 * cross.length();
@@ -1702,10 +1702,7 @@ impl<'a> Conv<'a> {
                             // The coordinates pbrt-v4's triangle reports
                             // without "uv", turned with the vertices.
                             let image = image.as_ref().map(|image| {
-                                let [ua, ub, uc] = match &mesh.uvs {
-                                    Some(uv) => t.map(|i| uv[i as usize]),
-                                    None => [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::ONE],
-                                };
+                                let [ua, ub, uc] = mesh.triangle_uvs(k).unwrap_or(DEFAULT_UV);
                                 let uv = if turn { [ua, uc, ub] } else { [ua, ub, uc] };
                                 Arc::new(ImageOnTriangle {
                                     image: image.clone(),
@@ -1724,7 +1721,7 @@ impl<'a> Conv<'a> {
                         let material = self.surface_material(desc, shape.material, no_surface)?;
                         let first = desc.triangles.len();
                         let flip = shape.flips_normals();
-                        for t in &mesh.triangles {
+                        for (k, t) in mesh.triangles.iter().enumerate() {
                             // Wound so that the geometric normal lies on the
                             // side of pbrt-v4's surface normal: the vertex
                             // normals' side (pbrt-v4 takes them as
@@ -1739,11 +1736,19 @@ impl<'a> Conv<'a> {
                                 None if flip => -cross,
                                 None => cross,
                             };
-                            let t = if side.dot(cross) < 0.0 { [t[0], t[2], t[1]] } else { *t };
+                            let turn = side.dot(cross) < 0.0;
+                            let t = if turn { [t[0], t[2], t[1]] } else { *t };
+                            // A triangle turned keeps the coordinates of
+                            // its vertices, pbrt-v4's default ones too.
+                            let uvs = match (mesh.triangle_uvs(k), turn) {
+                                (Some([a, b, c]), true) => Some([a, c, b]),
+                                (None, true) => Some([DEFAULT_UV[0], DEFAULT_UV[2], DEFAULT_UV[1]]),
+                                (uvs, false) => uvs,
+                            };
                             let tri = TriangleDesc {
                                 vertices: t.map(|i| world[i as usize]),
                                 normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
-                                uvs: mesh.uvs.as_ref().map(|uv| t.map(|i| uv[i as usize])),
+                                uvs,
                                 material,
                             };
                             if let Some(mi) = interface {
@@ -3503,9 +3508,9 @@ fn reflect(desc: &mut SceneDesc) {
             let [a, b, c] = ns.map(vector);
             *ns = [a, c, b];
         }
-        if let Some([a, b, c]) = t.uvs {
-            t.uvs = Some([a, c, b]);
-        }
+        // The default coordinates too follow their vertices.
+        let [a, b, c] = t.uvs.unwrap_or(DEFAULT_UV);
+        t.uvs = Some([a, c, b]);
     }
     let r = Mat4::from_cols(
         vector(Vec3::X).extend(0.0),

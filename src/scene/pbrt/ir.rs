@@ -169,8 +169,26 @@ pub struct TriMesh {
     /// exact for planar quads, an approximation of pbrt's curved patch for
     /// others.
     pub quads_split: usize,
+    /// Which triangles are the second half of a split patch (empty where
+    /// none is): without `uv`, pbrt-v4 gives a patch its own (u, v), which
+    /// at this half's vertices is (0, 0), (1, 1), (0, 1), where a lone
+    /// triangle's is (0, 0), (1, 0), (1, 1).
+    pub second_halves: Vec<bool>,
     /// The mesh file, for `plymesh`.
     pub file: Option<PathBuf>,
+}
+
+impl TriMesh {
+    /// Texture coordinates at triangle `k`'s vertices as pbrt-v4 reports
+    /// them: the mesh's `uv`; without, a split patch's own, or None for a
+    /// triangle's default.
+    pub fn triangle_uvs(&self, k: usize) -> Option<[Vec2; 3]> {
+        match &self.uvs {
+            Some(uv) => Some(self.triangles[k].map(|i| uv[i as usize])),
+            None if self.second_halves.get(k) == Some(&true) => Some([Vec2::ZERO, Vec2::ONE, Vec2::new(0.0, 1.0)]),
+            None => None,
+        }
+    }
 }
 
 /// A (possibly partial) sphere, pbrt-v4's defaults: radius 1, zmin = -radius,

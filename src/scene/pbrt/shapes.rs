@@ -112,6 +112,7 @@ pub fn bilinear_mesh(params: &Params, loc: &Loc, found: &mut Findings) -> Result
         let [a, b, c, d] = [q[0] as u32, q[1] as u32, q[2] as u32, q[3] as u32];
         mesh.triangles.push([a, b, d]);
         mesh.triangles.push([a, d, c]);
+        mesh.second_halves.extend([false, true]);
         mesh.quads_split += 1;
     }
     if params.get_string("emissionfilename")?.is_some() {
