@@ -738,7 +738,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         ("cone_angle", l.cone_angle.is_some(), spot),
         ("cone_delta", l.cone_delta.is_some(), spot),
         ("scale", l.scale.is_some(), spot || at_infinity),
-        ("file", l.file.is_some(), l.kind == LightKind::Infinite),
+        ("file", l.file.is_some(), l.kind == LightKind::Infinite || area_light),
         ("mapping", l.mapping.is_some(), l.kind == LightKind::Infinite),
         ("rotate", l.rotate.is_some(), l.kind == LightKind::Infinite),
         ("portal", l.portal.is_some(), l.kind == LightKind::Infinite),
@@ -825,14 +825,39 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             if !(area > 0.0 && area.is_finite()) {
                 return Err(err(format!("{kind} light: its area is zero")));
             }
-            let radiance = area_radiance(area, two_sided)?;
+            let mut radiance = area_radiance(area, two_sided)?;
+            // An emission image spans a quad from its first vertex, (0, 0),
+            // to its third, (1, 1), the image's bottom row along the first
+            // edge; a triangle takes (0, 0), (1, 0), (1, 1).
+            let uvs = [
+                [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::ONE],
+                [Vec2::ZERO, Vec2::ONE, Vec2::new(0.0, 1.0)],
+            ];
+            let image = match &l.file {
+                Some(file) => {
+                    let image = emission_image(src, file, kind).map_err(err)?;
+                    if l.power.is_some() {
+                        // `power` is the flux: over the image's mean luminance.
+                        let k = crate::math::luminance(image.mean());
+                        if k <= 0.0 {
+                            return Err(err(format!("{kind} light: `power` with a black image")));
+                        }
+                        radiance /= k;
+                    }
+                    Some(std::sync::Arc::new(image))
+                }
+                None => None,
+            };
             Ok(tris
                 .into_iter()
-                .map(|vertices| Light::Triangle {
+                .zip(uvs)
+                .map(|(vertices, uv)| Light::Triangle {
                     vertices,
                     radiance,
                     two_sided,
-                    image: None,
+                    image: image
+                        .clone()
+                        .map(|image| std::sync::Arc::new(crate::light::ImageOnTriangle { image, uv })),
                 })
                 .collect())
         }
@@ -962,6 +987,22 @@ fn environment_map(
         e => fail(e.to_string()),
     })?;
     EnvMap::new(film.width, film.height, film.pixels, mapping, file).map_err(fail)
+}
+
+/// An area light's emission image `file` (beside the scene file; 8-bit
+/// formats decoded from sRGB, EXR and PFM as they are).
+fn emission_image(src: &Source, file: &str, kind: &str) -> std::result::Result<crate::light::EmissionImage, String> {
+    let path = src.path.parent().map(Path::to_path_buf).unwrap_or_default().join(file);
+    let fail = |m: String| format!("{kind} light: emission image {}: {m}", path.display());
+    if !path.is_file() {
+        return Err(fail("file not found".into()));
+    }
+    let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb).map_err(|e| match e {
+        Error::Io { source, .. } => fail(source.to_string()),
+        Error::Parse { message, .. } => fail(message),
+        e => fail(e.to_string()),
+    })?;
+    crate::light::EmissionImage::new(img.width, img.height, img.pixels.clone()).map_err(fail)
 }
 
 #[cfg(test)]

@@ -886,6 +886,62 @@ fn an_infinite_light_may_enter_through_a_portal() {
 }
 
 #[test]
+fn a_quad_light_may_emit_an_image_spanning_it_from_its_first_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 x 1: left texel 1, right texel 3 (mean luminance 2).
+    write_env(&dir.path().join("screen.pfm"), 2, 1, |x, _| {
+        Vec3::splat(1.0 + 2.0 * x as f32)
+    });
+    let path = dir.path().join("screen.toml");
+    let light = |extra: &str| {
+        format!(
+            "{CAMERA}[[lights]]\ntype = \"quad\"\nvertices = [[0, 0, 1], [2, 0, 1], [2, 1, 1], [0, 1, 1]]\n\
+             file = \"screen.pfm\"\n{extra}\n"
+        )
+    };
+    std::fs::write(&path, light("radiance = [1, 1, 2]")).unwrap();
+    let d = load(&path, &LoadOptions::default()).unwrap().desc;
+    assert_eq!(d.lights.len(), 2);
+    // u runs along the first edge (x), v along the last (y): the image's
+    // left texel at x < 1, its right one at x > 1, whatever y.
+    let le = |l: &Light, uv: Vec2| l.le(Vec3::Z, uv);
+    for l in &d.lights {
+        let Light::Triangle { image: Some(t), .. } = l else {
+            panic!("{l:?}")
+        };
+        for (b0, b1) in [(0.6, 0.3), (0.2, 0.2), (0.1, 0.7)] {
+            let uv = t.uv[0] * b0 + t.uv[1] * b1 + t.uv[2] * (1.0 - b0 - b1);
+            let [v0, v1, v2] = match l {
+                Light::Triangle { vertices, .. } => *vertices,
+                _ => unreachable!(),
+            };
+            let x = (v0 * b0 + v1 * b1 + v2 * (1.0 - b0 - b1)).x;
+            assert!((uv.x - x / 2.0).abs() < 1e-6, "{uv} at x {x}");
+            let want = if x < 0.5 {
+                1.0
+            } else if x > 1.5 {
+                3.0
+            } else {
+                le(l, uv).x
+            };
+            assert_eq!(le(l, uv), Vec3::new(want, want, 2.0 * want), "at x {x}");
+        }
+    }
+    // `power` is the flux: over the area, pi and the image's mean luminance.
+    std::fs::write(&path, light("power = 10")).unwrap();
+    let d = load(&path, &LoadOptions::default()).unwrap().desc;
+    let flux: f32 = d.lights.iter().map(|l| crate::math::luminance(l.power())).sum();
+    assert!((flux / 10.0 - 1.0).abs() < 1e-5, "{flux}");
+    // A missing image is named.
+    std::fs::write(&path, light("power = 10").replace("screen.pfm", "nothing.pfm")).unwrap();
+    let e = load(&path, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(
+        e.contains("quad light: emission image") && e.contains("nothing.pfm: file not found"),
+        "{e}"
+    );
+}
+
+#[test]
 fn bad_lights_are_one_line_errors_at_their_line() {
     let dir = tempfile::tempdir().unwrap();
     write_env(&dir.path().join("wide.exr"), 4, 2, |_, _| Vec3::ONE);
@@ -963,6 +1019,14 @@ fn bad_lights_are_one_line_errors_at_their_line() {
         (
             "type = \"infinite\"\nportal = [[0, 0, 1], [1, 0, 1], [1, 1, 1]]",
             "`portal` needs 4 corners, not 3",
+        ),
+        (
+            "type = \"point\"\nposition = [0, 0, 0]\npower = 1\nfile = \"wide.exr\"",
+            "`file` does not apply to a point light",
+        ),
+        (
+            "type = \"quad\"\nvertices = [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]\nradiance = [1, 1, 1]\nfile = \"notes.txt\"",
+            "quad light: emission image",
         ),
         (
             "type = \"infinite\"\nportal = [[0, 0, 1], [1, 0, 1], [2, 1, 1], [0, 1, 1]]",
