@@ -9,6 +9,7 @@ use clap::Parser;
 use cli::{Cli, Command};
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::integrator;
+use raytracer::light::Light;
 use raytracer::scene::LoadedScene;
 use raytracer::Scene;
 use std::io::IsTerminal;
@@ -458,7 +459,15 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
             None => kinds.push((l.kind(), 1)),
         }
     }
-    let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let mut kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let imaged = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Triangle { image: Some(_), .. }))
+        .count();
+    if imaged > 0 {
+        kinds.push(format!("{imaged} of them with an emission image"));
+    }
     println!("lights: {} ({})", scene.lights.len(), kinds.join(", "));
     println!("materials: {}", scene.materials.len());
     println!("bvh nodes: {} ({} leaves), depth {}", s.nodes, s.leaves, s.depth);

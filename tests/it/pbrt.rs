@@ -1544,6 +1544,12 @@ fn an_image_light_lights_alike_in_every_integrator_and_power_sets_its_flux() {
         )
     };
     std::fs::write(&p, scene("")).unwrap();
+    let info = raytracer(&["info", "--scene", p.to_str().unwrap()]);
+    let info = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        info.contains("lights: 2 (2 triangle, 2 of them with an emission image)"),
+        "{info}"
+    );
     let mean = |img: &Film| img.mean(0, 0, img.width, img.height);
     let path = render_to_image(&p, &["--spp", "64", "--integrator", "path"]);
     let reference = mean(&path);
