@@ -3,16 +3,18 @@
 # turned light with a two-lobed intensity image in a closed room;
 # bench/scenes/projection.pbrt: a slide cast on a wall;
 # bench/scenes/area-image.pbrt: area lights with an emission image, a
-# mirrored screen and a ceiling triangle set by `power`) rendered by pbrt-v4
+# mirrored screen and a ceiling triangle set by `power`;
+# bench/scenes/area-image-shapes.pbrt: the same image on a sphere and a
+# disk) rendered by pbrt-v4
 # itself and by us at the same size and sample count, compared with
 # `raytracer compare --max-luminance 4`; pbrt-v4 against itself with another
 # seed for the noise of that figure; our photon map against our path tracer.
 #
-# Usage: PBRT=path/to/pbrt bench/image-lights.sh goniometric|projection|area-image [WIDTH HEIGHT SPP]
+# Usage: PBRT=path/to/pbrt bench/image-lights.sh goniometric|projection|area-image|area-image-shapes [WIDTH HEIGHT SPP]
 #   (200 150 256). Renders are left in target/<scene>-bench/.
 set -euo pipefail
 : "${PBRT:?set PBRT to a pbrt-v4 binary}"
-scene=${1:?goniometric, projection or area-image}
+scene=${1:?goniometric, projection, area-image or area-image-shapes}
 w=${2:-200} h=${3:-150} spp=${4:-256}
 root=$(cd "$(dirname "$0")/.." && pwd)
 (cd "$root" && cargo build --release --quiet --bin raytracer)
@@ -22,7 +24,7 @@ mkdir -p "$out"
 case $scene in
 goniometric) python3 "$root/bench/goniometric_map.py" "$out/gonio.pfm" 64 ;;
 projection) python3 "$root/bench/projection_slide.py" "$out/slide.pfm" ;;
-area-image) python3 "$root/bench/area_image.py" "$out/screen.png" ;;
+area-image | area-image-shapes) python3 "$root/bench/area_image.py" "$out/screen.png" ;;
 *) echo "unknown scene $scene" >&2; exit 2 ;;
 esac
 sed -e "s/\"integer xresolution\" \[ [0-9]* \]/\"integer xresolution\" [ $w ]/" \

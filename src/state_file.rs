@@ -140,14 +140,37 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
     }
     h.u32(desc.lights.len() as u32);
     // Emission images are shared by a mesh's triangles: each is hashed once.
+    // Images came later: hashed only where there is one.
     let mut images: Vec<*const crate::light::EmissionImage> = vec![];
+    let mut image = |h: &mut Fnv64, im: &std::sync::Arc<crate::light::EmissionImage>| {
+        h.bytes(b"image");
+        let ptr = std::sync::Arc::as_ptr(im);
+        match images.iter().position(|&p| p == ptr) {
+            Some(i) => h.u32(i as u32),
+            None => {
+                images.push(ptr);
+                let (w, height, texels) = im.identity();
+                h.u32(w);
+                h.u32(height);
+                texels.iter().for_each(|&v| h.vec3(v));
+            }
+        }
+    };
     for l in &desc.lights {
         match *l {
-            Light::Sphere { sphere, power } => {
+            Light::Sphere {
+                sphere,
+                power,
+                image: ref im,
+            } => {
                 h.u32(0);
                 h.vec3(sphere.centre);
                 h.f32(sphere.radius);
                 h.vec3(power);
+                if let Some(t) = im {
+                    image(&mut h, &t.image);
+                    t.axes.to_cols_array().iter().for_each(|&v| h.f32(v));
+                }
             }
             Light::Point { position, power } => {
                 h.u32(1);
@@ -158,38 +181,30 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 vertices,
                 radiance,
                 two_sided,
-                ref image,
+                image: ref im,
             } => {
                 h.u32(2);
                 vertices.iter().for_each(|&v| h.vec3(v));
                 h.vec3(radiance);
                 h.u32(two_sided as u32);
-                // Images came later: hashed only where there is one.
-                if let Some(t) = image {
-                    h.bytes(b"image");
+                if let Some(t) = im {
+                    image(&mut h, &t.image);
                     t.uv.iter().for_each(|uv| h.vec3(uv.extend(0.0)));
-                    let ptr = std::sync::Arc::as_ptr(&t.image);
-                    match images.iter().position(|&p| p == ptr) {
-                        Some(i) => h.u32(i as u32),
-                        None => {
-                            images.push(ptr);
-                            let (w, height, texels) = t.image.identity();
-                            h.u32(w);
-                            h.u32(height);
-                            texels.iter().for_each(|&v| h.vec3(v));
-                        }
-                    }
                 }
             }
             Light::Disk {
                 disk,
                 radiance,
                 two_sided,
+                image: ref im,
             } => {
                 h.u32(7);
                 h.bytes(format!("{disk:?}").as_bytes());
                 h.vec3(radiance);
                 h.u32(two_sided as u32);
+                if let Some(im) = im {
+                    image(&mut h, im);
+                }
             }
             Light::Spot {
                 position,

@@ -13,5 +13,5 @@ pub mod triangle;
 pub use bvh::{BoxBvh, Bvh, BvhStats};
 pub use curve::{Curve, CurveKind};
 pub use disk::Disk;
-pub use sphere::Sphere;
+pub use sphere::{sphere_uv, Sphere};
 pub use triangle::{Triangle, TriangleTest};

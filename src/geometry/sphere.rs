@@ -1,6 +1,6 @@
 //! Ray-sphere intersection (the light and glass spheres).
 
-use crate::math::{Aabb, Ray, Vec3};
+use crate::math::{Aabb, Ray, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -48,6 +48,17 @@ impl Sphere {
     pub fn area(&self) -> f32 {
         4.0 * std::f32::consts::PI * self.radius * self.radius
     }
+}
+
+/// pbrt-v4's sphere parametrisation about the z axis: the texture
+/// coordinates of the point whose unit normal is `n` (in the sphere's own
+/// frame).
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
+    Vec2::new(
+        phi / std::f32::consts::TAU,
+        1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
 }
 
 #[cfg(test)]

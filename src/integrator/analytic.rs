@@ -53,6 +53,7 @@ pub fn closed_sphere_desc(material: Material, light: Option<(f32, f32)>, size: u
                 radius,
             },
             power: Vec3::splat(power),
+            image: None,
         });
     }
     d

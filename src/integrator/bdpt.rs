@@ -1188,6 +1188,7 @@ mod tests {
                 disk: Disk::new(Vec3::new(0.0, 1.5, 2.5), -Vec3::Z, 0.4, 0.1, None).unwrap(),
                 radiance: Vec3::splat(3.0),
                 two_sided: false,
+                image: None,
             },
             Light::Triangle {
                 vertices: [
@@ -1205,6 +1206,7 @@ mod tests {
                     radius: 0.1,
                 },
                 power: Vec3::splat(15.0),
+                image: None,
             },
             Light::infinite(Vec3::splat(0.1), None, glam::Mat3::IDENTITY),
             Light::distant(Vec3::new(0.3, 0.2, -1.0).normalize(), Vec3::splat(0.5)),

@@ -103,6 +103,22 @@ impl ImageOnTriangle {
     }
 }
 
+/// A sphere light's emission image: the image and the sphere's axes (its
+/// columns: the object frame's x, y, z in the world), read at pbrt-v4's
+/// sphere coordinates about the frame's z.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageOnSphere {
+    pub image: Arc<EmissionImage>,
+    pub axes: glam::Mat3,
+}
+
+impl ImageOnSphere {
+    /// The image where the sphere's outward unit normal is `n` (world).
+    pub fn at_normal(&self, n: Vec3) -> Vec3 {
+        self.image.lookup(crate::geometry::sphere_uv(self.axes.transpose() * n))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -23,7 +23,7 @@ mod envmap;
 mod portal;
 mod projection;
 
-pub use emission_image::{EmissionImage, ImageOnTriangle};
+pub use emission_image::{EmissionImage, ImageOnSphere, ImageOnTriangle};
 pub use envmap::{EnvMap, EnvMapping};
 pub use portal::Portal;
 pub use projection::Projector;
@@ -37,9 +37,11 @@ use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
+    /// `power` as if the image, where there is one, were 1 everywhere.
     Sphere {
         sphere: Sphere,
         power: Vec3,
+        image: Option<Arc<ImageOnSphere>>,
     },
     Point {
         position: Vec3,
@@ -59,6 +61,8 @@ pub enum Light {
         disk: Disk,
         radiance: Vec3,
         two_sided: bool,
+        /// Read at the disk's own texture coordinates (`Disk::uv_dpdu`).
+        image: Option<Arc<EmissionImage>>,
     },
     /// pbrt-v4's `spot`: a point light at `position` whose intensity towards
     /// a direction at angle theta from the axis `direction` (unit) is
@@ -208,7 +212,8 @@ impl Light {
     /// `set_scene_bounds`.
     pub fn power(&self) -> Vec3 {
         match self {
-            Light::Sphere { power, .. } | Light::Point { power, .. } => *power,
+            Light::Sphere { power, image, .. } => *power * image.as_ref().map_or(Vec3::ONE, |t| t.image.mean()),
+            Light::Point { power, .. } => *power,
             Light::Triangle {
                 vertices,
                 radiance,
@@ -225,9 +230,11 @@ impl Light {
                 disk,
                 radiance,
                 two_sided,
+                image,
             } => {
                 let sides = if *two_sided { 2.0 } else { 1.0 };
-                *radiance * (PI * disk.area() * sides)
+                let texels = image.as_ref().map_or(Vec3::ONE, |im| im.mean());
+                *radiance * texels * (PI * disk.area() * sides)
             }
             Light::Spot {
                 intensity,
@@ -365,7 +372,7 @@ impl Light {
     /// infinite lights, which have none; see `le_escaped`).
     pub fn radiance(&self) -> Vec3 {
         match self {
-            Light::Sphere { sphere, power } => *power / (PI * sphere.area()),
+            Light::Sphere { sphere, power, .. } => *power / (PI * sphere.area()),
             Light::Triangle { radiance, .. } | Light::Disk { radiance, .. } => *radiance,
             Light::Point { .. }
             | Light::Spot { .. }
@@ -393,6 +400,12 @@ impl Light {
             Light::Disk {
                 disk, two_sided: false, ..
             } if disk.normal.dot(w) <= 0.0 => Vec3::ZERO,
+            Light::Disk {
+                radiance,
+                image: Some(im),
+                ..
+            } => *radiance * im.lookup(uv),
+            Light::Sphere { image: Some(t), .. } => self.radiance() * t.image.lookup(uv),
             _ => self.radiance(),
         }
     }
@@ -425,7 +438,15 @@ impl Light {
             }
         }
         let emission = match self {
-            Light::Sphere { power, .. } => vec![("power", *power), ("radiance", self.radiance())],
+            Light::Sphere { power, image, .. } => {
+                let k = image.as_ref().map_or(1.0, |t| t.image.max());
+                vec![("power", *power * k), ("radiance", self.radiance() * k)]
+            }
+            Light::Disk {
+                radiance,
+                image: Some(im),
+                ..
+            } => vec![("radiance", *radiance * im.max())],
             Light::Triangle {
                 radiance,
                 image: Some(t),
@@ -579,7 +600,7 @@ impl Light {
                     pdf: 0.0,
                 })
             }
-            Light::Sphere { sphere, .. } => {
+            Light::Sphere { sphere, image, .. } => {
                 let v = sphere.centre - p;
                 let dc2 = v.length_squared();
                 let r2 = sphere.radius * sphere.radius;
@@ -602,10 +623,15 @@ impl Light {
                     (dc2 - r2).max(0.0).sqrt()
                 };
                 let solid_angle = 2.0 * PI * one_minus_cos_max;
+                let radiance = match image {
+                    // The point seen along wi, on the near side.
+                    Some(t) => self.radiance() * t.at_normal(((p + wi * dist) - sphere.centre) / sphere.radius),
+                    None => self.radiance(),
+                };
                 Some(LightSample {
                     wi,
                     dist,
-                    weight: self.radiance() * solid_angle,
+                    weight: radiance * solid_angle,
                     pdf: 1.0 / solid_angle,
                 })
             }
@@ -613,6 +639,7 @@ impl Light {
                 disk,
                 radiance,
                 two_sided,
+                image,
             } => {
                 let q = disk_area_point(disk, u);
                 let d = q - p;
@@ -627,10 +654,14 @@ impl Light {
                 if cos_l <= 0.0 {
                     return None;
                 }
+                let radiance = match image {
+                    Some(im) => *radiance * im.lookup(disk.uv_dpdu(q).0),
+                    None => *radiance,
+                };
                 Some(LightSample {
                     wi,
                     dist,
-                    weight: *radiance * (cos_l * disk.area() / d2),
+                    weight: radiance * (cos_l * disk.area() / d2),
                     pdf: d2 / (cos_l * disk.area()),
                 })
             }
@@ -909,6 +940,19 @@ impl Light {
                 } else {
                     Vec3::ZERO
                 }
+            }
+            Light::Sphere {
+                power, image: Some(t), ..
+            } => *power * t.at_normal(n),
+            Light::Disk {
+                disk,
+                radiance,
+                two_sided,
+                image: Some(im),
+            } => {
+                let sides = if *two_sided { 2.0 } else { 1.0 };
+                let q = disk_area_point(disk, u1);
+                *radiance * im.lookup(disk.uv_dpdu(q).0) * (PI * disk.area() * sides)
             }
             Light::Triangle {
                 vertices,

@@ -12,6 +12,7 @@ fn sphere_light_radiance_matches_scene_definition() {
             radius: 0.1,
         },
         power: Vec3::splat(14.0 * PI),
+        image: None,
     };
     assert!((l.radiance().x - 111.41).abs() < 0.01);
 }
@@ -25,6 +26,7 @@ fn small_sphere_irradiance_matches_point_light() {
             radius: 0.01,
         },
         power,
+        image: None,
     };
     let point = Light::Point {
         position: Vec3::new(0.0, 0.0, 2.0),
@@ -51,6 +53,7 @@ fn emitted_particles_leave_the_surface_outwards() {
             radius: 0.5,
         },
         power: Vec3::ONE,
+        image: None,
     };
     let mut rng = Rng::new(3, 3);
     for _ in 0..1000 {
@@ -143,6 +146,7 @@ fn sphere_pdf_li_is_one_over_the_cone() {
             radius: 0.5,
         },
         power: Vec3::ONE,
+        image: None,
     };
     let mut rng = Rng::new(2, 2);
     for _ in 0..100 {
@@ -424,6 +428,7 @@ fn every_light() -> Vec<(&'static str, Light)> {
                     radius: 0.3,
                 },
                 power: Vec3::new(10.0, 8.0, 6.0),
+                image: None,
             },
         ),
         (
@@ -442,6 +447,7 @@ fn every_light() -> Vec<(&'static str, Light)> {
                     .unwrap(),
                 radiance: Vec3::new(2.0, 1.5, 1.0),
                 two_sided: false,
+                image: None,
             },
         ),
         (
@@ -450,6 +456,7 @@ fn every_light() -> Vec<(&'static str, Light)> {
                 disk: crate::geometry::Disk::new(Vec3::new(-0.1, 0.0, 0.2), Vec3::Z, 0.4, 0.0, None).unwrap(),
                 radiance: Vec3::new(1.0, 2.0, 3.0),
                 two_sided: true,
+                image: None,
             },
         ),
         (
@@ -696,6 +703,7 @@ fn disk_light_irradiance_on_its_axis_is_the_closed_form() {
             disk: crate::geometry::Disk::new(Vec3::new(0.0, 0.0, h), -Vec3::Z, r, ri, None).unwrap(),
             radiance: Vec3::splat(l),
             two_sided: false,
+            image: None,
         };
         let mut rng = Rng::new(11, 12);
         let n = 200_000;

@@ -495,6 +495,7 @@ impl SceneDesc {
                         radius,
                     },
                     power,
+                    image: None,
                 }
             } else {
                 Light::Point { position, power }
@@ -784,7 +785,7 @@ impl SphereObject {
         // The axes are orthonormal: their transpose takes world to object.
         let q = self.axes.transpose() * n;
         let dpdu = Vec3::new(-q.y, q.x, 0.0) * (std::f32::consts::TAU * self.sphere.radius);
-        (sphere_uv(q), self.axes * dpdu)
+        (crate::geometry::sphere_uv(q), self.axes * dpdu)
     }
 }
 
@@ -794,16 +795,6 @@ struct DiskObject {
     material: u32,
     light: Option<u32>,
     alpha: Option<u32>,
-}
-
-/// pbrt-v4's sphere parametrisation about the z axis: the texture
-/// coordinates of the point whose unit normal is `n`.
-fn sphere_uv(n: Vec3) -> Vec2 {
-    let phi = n.y.atan2(n.x).rem_euclid(std::f32::consts::TAU);
-    Vec2::new(
-        phi / std::f32::consts::TAU,
-        1.0 - n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-    )
 }
 
 /// Which cut-out, as an index into the alpha textures, each shape of a
@@ -1088,13 +1079,14 @@ impl Scene {
             l.check(1.0).map_err(|m| Error::Scene(format!("light {i}: {m}")))?;
             // Emitters reflect nothing and block light like any surface.
             match l {
-                Light::Sphere { sphere, .. } => {
+                Light::Sphere { sphere, image, .. } => {
                     spheres.push(SphereObject {
                         sphere: *sphere,
                         material: black,
                         light: Some(i as u32),
                         alpha: None,
-                        axes: glam::Mat3::IDENTITY,
+                        // Hits read an emission image in the sphere's frame.
+                        axes: image.as_ref().map_or(glam::Mat3::IDENTITY, |t| t.axes),
                     });
                 }
                 Light::Triangle { vertices: v, image, .. } => {

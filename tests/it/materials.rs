@@ -45,6 +45,7 @@ fn glossy_room(size: u32) -> Scene {
         disk: raytracer::geometry::Disk::new(Vec3::new(0.0, -0.98, 0.4), Vec3::Y, 0.12, 0.0, None).unwrap(),
         radiance: Vec3::new(20.0, 16.0, 10.0),
         two_sided: false,
+        image: None,
     });
     d.lights
         .push(Light::infinite(Vec3::new(0.3, 0.4, 0.6), None, glam::Mat3::IDENTITY));

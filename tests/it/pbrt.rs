@@ -1458,10 +1458,15 @@ fn a_projection_light_casts_its_slide_upright_and_as_the_inverse_square_says() {
 /// A 4 x 4 emission image whose quadrants are red (top left), green (top
 /// right), blue (bottom left) and white, written as `quadrants.pfm` in `dir`.
 fn quadrant_image(dir: &Path) -> Film {
-    let mut img = Film::new(4, 4);
-    for y in 0..4 {
-        for x in 0..4 {
-            let c = match (x < 2, y < 2) {
+    quadrant_image_of(dir, 4, "quadrants.pfm")
+}
+
+/// The quadrant image at `n` x `n` texels, written as `name` in `dir`.
+fn quadrant_image_of(dir: &Path, n: u32, name: &str) -> Film {
+    let mut img = Film::new(n, n);
+    for y in 0..n {
+        for x in 0..n {
+            let c = match (x < n / 2, y < n / 2) {
                 (true, true) => Vec3::new(1.0, 0.0, 0.0),
                 (false, true) => Vec3::new(0.0, 1.0, 0.0),
                 (true, false) => Vec3::new(0.0, 0.0, 1.0),
@@ -1470,7 +1475,7 @@ fn quadrant_image(dir: &Path) -> Film {
             img.set(x, y, c);
         }
     }
-    raytracer::image_io::write_image(&img, &dir.join("quadrants.pfm"), 0.0).unwrap();
+    raytracer::image_io::write_image(&img, &dir.join(name), 0.0).unwrap();
     img
 }
 
@@ -1595,9 +1600,65 @@ fn an_image_light_lights_alike_in_every_integrator_and_power_sets_its_flux() {
 }
 
 #[test]
+fn spheres_and_disks_read_emission_images_at_pbrts_coordinates() {
+    // 8 x 8, so that the points below are clear of the quadrants' blend.
+    let dir = tempfile::tempdir().unwrap();
+    quadrant_image_of(dir.path(), 8, "quadrants.pfm");
+    let p = dir.path().join("shapes.pbrt");
+    let (red, green, blue, white) = (0, 1, 2, 3);
+    let cases = [
+        // A sphere seen from -x, z up: u (phi / 2 pi about z) runs right to
+        // left across its face, v (from the south pole) up. The image shows
+        // mirrored, its top left (red) at the picture's top right.
+        (
+            "LookAt -5 0 0  0 0 0  0 0 1",
+            "Shape \"sphere\"",
+            [((22, 9), red), ((9, 9), green), ((22, 22), blue), ((9, 22), white)],
+        ),
+        // A disk seen from above, y up: u runs round it from +x, v from the
+        // rim inwards. Straight up from the centre (u = 1/4) the inner ring
+        // is red and the rim blue; straight down (u = 3/4) green and white.
+        (
+            "LookAt 0 0 5  0 0 0  0 1 0",
+            "Shape \"disk\"",
+            [((16, 12), red), ((16, 6), blue), ((16, 19), green), ((16, 25), white)],
+        ),
+    ];
+    for (camera, shape, expected) in cases {
+        std::fs::write(
+            &p,
+            format!(
+                "{camera}\nCamera \"perspective\" \"float fov\" [ 30 ]\n\
+                 Film \"rgb\" \"integer xresolution\" [ 32 ] \"integer yresolution\" [ 32 ]\n\
+                 Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
+                 AreaLightSource \"diffuse\" \"string filename\" \"quadrants.pfm\"\n{shape}\n"
+            ),
+        )
+        .unwrap();
+        for integrator in ["path", "bdpt"] {
+            let img = render_to_image(&p, &["--spp", "4", "--filter", "box", "--integrator", integrator]);
+            for ((x, y), colour) in expected {
+                let c = img.get(x, y);
+                let ok = if colour == white {
+                    c.x > 0.9 && (c.x - c.y).abs() < 1e-4 && (c.x - c.z).abs() < 1e-4
+                } else {
+                    c[colour] > 0.9 && (0..3).filter(|&k| k != colour).all(|k| c[k] < 1e-4)
+                };
+                assert!(
+                    ok,
+                    "{shape} ({integrator}): pixel ({x}, {y}) is {c}, not colour {colour}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn emission_images_that_cannot_be_read_as_pbrt_reads_them_are_refused_at_their_line() {
     let dir = tempfile::tempdir().unwrap();
     quadrant_image(dir.path());
+    // A black image: `power` cannot be met.
+    raytracer::image_io::write_image(&Film::new(2, 2), &dir.path().join("black.pfm"), 0.0).unwrap();
     let p = dir.path().join("bad.pbrt");
     for (light, shape, message) in [
         (
@@ -1611,14 +1672,9 @@ fn emission_images_that_cannot_be_read_as_pbrt_reads_them_are_refused_at_their_l
             ("bad.pbrt:2:", "AreaLightSource: image \"missing.png\" not found"),
         ),
         (
-            "\"string filename\" \"quadrants.pfm\"",
+            "\"string filename\" \"black.pfm\" \"float power\" [ 1 ]",
             "Shape \"sphere\"",
-            ("bad.pbrt:3:", "an emission image on a sphere is not supported"),
-        ),
-        (
-            "\"string filename\" \"quadrants.pfm\"",
-            "Shape \"disk\"",
-            ("bad.pbrt:3:", "an emission image on a disk is not supported"),
+            ("bad.pbrt:2:", "the emission image is black"),
         ),
     ] {
         let (at, message) = message;

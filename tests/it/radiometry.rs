@@ -102,6 +102,7 @@ fn small_sphere_light_matches_point_light() {
             radius: 0.05,
         },
         power: Vec3::splat(POWER),
+        image: None,
     };
     let lp = centre_radiance(plane_scene(point), 1);
     let ls = centre_radiance(plane_scene(sphere), 64);
@@ -135,6 +136,7 @@ fn a_sphere_light_never_shadows_its_own_samples() {
             radius: 0.5,
         },
         power: Vec3::splat(POWER),
+        image: None,
     };
     let mut desc = plane_scene(light);
     desc.camera.fov_y_deg = 60.0;

@@ -88,6 +88,7 @@ fn random_scene(spheres: usize, disks: usize, lights: usize, seed: u64) -> Scene
                 radius: 0.05 + 0.1 * r.next_f32(),
             },
             power: Vec3::splat(10.0),
+            image: None,
         });
     }
     d

@@ -121,6 +121,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
                 radius: r,
             },
             power: Vec3::splat(power),
+            image: None,
         }],
         cutouts: vec![],
         media: vec![],

@@ -800,6 +800,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             Ok(vec![Light::Sphere {
                 sphere: Sphere { centre, radius },
                 power: power()?,
+                image: None,
             }])
         }
         LightKind::Point => {
@@ -873,6 +874,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                 disk,
                 radiance: area_radiance(disk.area(), two_sided)?,
                 two_sided,
+                image: None,
             }])
         }
         LightKind::Spot => {

@@ -1066,6 +1066,7 @@ fn disk_lights_are_read_and_bad_ones_refused() {
             disk,
             radiance,
             two_sided: false,
+            ..
         }] => {
             assert_eq!(disk.normal, Vec3::Y);
             // L = Phi / (pi A) for one side.

@@ -45,7 +45,7 @@ use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
-use crate::light::{EmissionImage, ImageOnTriangle, Light};
+use crate::light::{EmissionImage, ImageOnSphere, ImageOnTriangle, Light};
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::Vec3;
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
@@ -155,12 +155,6 @@ impl Emission {
             Some(phi) => self.radiance * (phi / (sides * area * PI * k)),
             None => self.radiance,
         }
-    }
-
-    /// What a shape that cannot read an image emits (`--lenient`): the
-    /// image's mean.
-    fn without_image(&self, area: f32) -> Vec3 {
-        self.radiance_for(area) * self.image.as_ref().map_or(Vec3::ONE, |im| im.mean())
     }
 }
 
@@ -1803,17 +1797,19 @@ impl<'a> Conv<'a> {
                             continue;
                         }
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
-                        if e.image.is_some() {
-                            self.problem(
-                                Kind::Light,
-                                &shape.loc,
-                                "an emission image on a sphere is not supported, only on triangle meshes; --lenient emits the image's mean",
-                            );
-                        }
-                        let radiance = e.without_image(area);
+                        let radiance = e.radiance_for(area);
+                        // The image is read at pbrt-v4's sphere coordinates,
+                        // in the sphere's frame (which turns and mirrors).
+                        let axes = glam::Mat3::from_cols(
+                            m.transform_vector3(Vec3::X) / scale,
+                            m.transform_vector3(Vec3::Y) / scale,
+                            m.transform_vector3(Vec3::Z) / scale,
+                        );
+                        let image = e.image.clone().map(|image| Arc::new(ImageOnSphere { image, axes }));
                         let light = Light::Sphere {
                             sphere,
                             power: radiance * PI * area,
+                            image,
                         };
                         self.push_light(desc, light, &shape.loc)?;
                     } else {
@@ -1876,18 +1872,12 @@ impl<'a> Conv<'a> {
                         // without a light above).
                         let disk = crate::geometry::Disk::new(centre, normal, radius, inner_radius, Some(axes))
                             .map_err(|msg| located(&shape.loc, format!("disk: {msg}")))?;
-                        if e.image.is_some() {
-                            self.problem(
-                                Kind::Light,
-                                &shape.loc,
-                                "an emission image on a disk is not supported, only on triangle meshes; --lenient emits the image's mean",
-                            );
-                        }
-                        let radiance = e.without_image(disk.area());
+                        let radiance = e.radiance_for(disk.area());
                         let light = Light::Disk {
                             disk,
                             radiance,
                             two_sided: e.two_sided,
+                            image: e.image.clone(),
                         };
                         self.push_light(desc, light, &shape.loc)?;
                     } else {
@@ -3556,7 +3546,16 @@ fn reflect(desc: &mut SceneDesc) {
     }
     for l in &mut desc.lights {
         match l {
-            Light::Sphere { sphere, .. } => sphere.centre = point(sphere.centre),
+            Light::Sphere { sphere, image, .. } => {
+                sphere.centre = point(sphere.centre);
+                if let Some(t) = image {
+                    let a = t.axes;
+                    *image = Some(Arc::new(ImageOnSphere {
+                        image: t.image.clone(),
+                        axes: glam::Mat3::from_cols(vector(a.x_axis), vector(a.y_axis), vector(a.z_axis)),
+                    }));
+                }
+            }
             Light::Point { position, .. } => *position = point(*position),
             Light::Triangle { vertices, image, .. } => {
                 let [a, b, c] = vertices.map(point);
@@ -4024,7 +4023,7 @@ mod tests {
             panic!()
         };
         assert_eq!((radiance, two_sided), (Vec3::new(2.0, 4.0, 6.0), true));
-        let Light::Sphere { sphere, power } = c.desc.lights[3] else {
+        let Light::Sphere { sphere, power, .. } = c.desc.lights[3] else {
             panic!("{:?}", c.desc.lights)
         };
         assert!((sphere.radius - 0.5).abs() < 1e-6);
@@ -4141,6 +4140,7 @@ mod tests {
             mut disk,
             radiance,
             two_sided,
+            ..
         } = c.desc.lights[0]
         else {
             panic!("not a disk light: {:?}", c.desc.lights[0])
