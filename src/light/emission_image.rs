@@ -25,17 +25,7 @@ impl EmissionImage {
     /// An image of `width` x `height` texels, row 0 at the top; negative
     /// components count as zero.
     pub fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Result<EmissionImage, String> {
-        if width == 0 || height == 0 || texels.len() as u64 != width as u64 * height as u64 {
-            return Err(format!("an image of {width}x{height} texels needs as many values"));
-        }
-        if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
-            return Err(format!(
-                "texel ({}, {}) is not a finite number",
-                i as u32 % width,
-                i as u32 / width
-            ));
-        }
-        let texels: Vec<Vec3> = texels.into_iter().map(|t| t.max(Vec3::ZERO)).collect();
+        let texels = super::clamped_texels("an image", width, height, texels)?;
         // Summed in f64: a large image's mean would drift in f32.
         let sum = texels.iter().fold([0f64; 3], |s, t| {
             [s[0] + t.x as f64, s[1] + t.y as f64, s[2] + t.z as f64]

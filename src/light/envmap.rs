@@ -72,24 +72,12 @@ impl EnvMap {
         mapping: EnvMapping,
         name: &str,
     ) -> std::result::Result<EnvMap, String> {
-        if width == 0 || height == 0 || texels.len() as u64 != width as u64 * height as u64 {
-            return Err(format!(
-                "an environment map of {width}x{height} texels needs as many values"
-            ));
-        }
+        let texels = super::clamped_texels("an environment map", width, height, texels)?;
         if mapping == EnvMapping::Octahedral && width != height {
             return Err(format!(
                 "an octahedral (equal-area) environment map must be square, not {width}x{height}"
             ));
         }
-        if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
-            return Err(format!(
-                "texel ({}, {}) is not a finite number",
-                i as u32 % width,
-                i as u32 / width
-            ));
-        }
-        let texels: Vec<Vec3> = texels.into_iter().map(|t| t.max(Vec3::ZERO)).collect();
         let (w, h) = (width as usize, height as usize);
         let mut weights = Vec::with_capacity(w * h);
         let mut integral = glam::DVec3::ZERO;

@@ -1111,6 +1111,23 @@ pub fn triangle_area(v: &[Vec3; 3]) -> f32 {
     0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()
 }
 
+/// A light's image of `width` x `height` texels with negative components
+/// made zero; an error when the size does not match (`what` names the
+/// image) or a texel is not finite.
+fn clamped_texels(what: &str, width: u32, height: u32, texels: Vec<Vec3>) -> Result<Vec<Vec3>, String> {
+    if width == 0 || height == 0 || texels.len() as u64 != width as u64 * height as u64 {
+        return Err(format!("{what} of {width}x{height} texels needs as many values"));
+    }
+    if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
+        return Err(format!(
+            "texel ({}, {}) is not a finite number",
+            i as u32 % width,
+            i as u32 / width
+        ));
+    }
+    Ok(texels.into_iter().map(|t| t.max(Vec3::ZERO)).collect())
+}
+
 /// A point uniformly distributed over the triangle (pbrt-v4's
 /// `SampleUniformTriangle`, which keeps strata apart).
 pub fn uniform_triangle(v: &[Vec3; 3], u: Vec2) -> Vec3 {

@@ -32,20 +32,10 @@ impl Projector {
     /// components count as zero) cast over a frustum of `fov_deg` degrees
     /// across the image's shorter side.
     pub fn new(width: u32, height: u32, texels: Vec<Vec3>, fov_deg: f32) -> Result<Projector, String> {
-        if width == 0 || height == 0 || texels.len() as u64 != width as u64 * height as u64 {
-            return Err(format!("an image of {width}x{height} texels needs as many values"));
-        }
-        if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
-            return Err(format!(
-                "texel ({}, {}) is not a finite number",
-                i as u32 % width,
-                i as u32 / width
-            ));
-        }
+        let texels = super::clamped_texels("an image", width, height, texels)?;
         if !(fov_deg > 0.0 && fov_deg < 180.0) {
             return Err(format!("fov {fov_deg} must be in (0, 180) degrees"));
         }
-        let texels: Vec<Vec3> = texels.into_iter().map(|t| t.max(Vec3::ZERO)).collect();
         let aspect = width as f32 / height as f32;
         let (min, max) = if aspect > 1.0 {
             (Vec2::new(-aspect, -1.0), Vec2::new(aspect, 1.0))

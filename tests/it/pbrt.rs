@@ -1479,6 +1479,16 @@ fn quadrant_image_of(dir: &Path, n: u32, name: &str) -> Film {
     img
 }
 
+/// The start of a test scene of one bounce seen by a square camera: the
+/// camera's `LookAt`, its fov and the image's side, up to `WorldBegin`.
+fn one_bounce(look_at: &str, fov: u32, side: u32) -> String {
+    format!(
+        "LookAt {look_at}\nCamera \"perspective\" \"float fov\" [ {fov} ]\n\
+         Film \"rgb\" \"integer xresolution\" [ {side} ] \"integer yresolution\" [ {side} ]\n\
+         Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n"
+    )
+}
+
 /// A quad light at z = `z` over [-1, 1]^2 facing -z, with uv (0, 0) at
 /// (-1, -1) and (1, 1) at (1, 1), emitting `quadrants.pfm` times `scale`.
 fn image_quad_light(z: f32, extra: &str) -> String {
@@ -1500,12 +1510,7 @@ fn an_area_lights_emission_image_is_read_at_the_surfaces_uv_with_v_up() {
     let p = dir.path().join("screen.pbrt");
     std::fs::write(
         &p,
-        format!(
-            "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
-             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
-             Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n{}",
-            image_quad_light(2.0, "\"float scale\" [ 3 ]")
-        ),
+        one_bounce("0 0 0  0 0 1  0 1 0", 40, 16) + &image_quad_light(2.0, "\"float scale\" [ 3 ]"),
     )
     .unwrap();
     for integrator in ["path", "bdpt", "photon", "sppm"] {
@@ -1611,7 +1616,7 @@ fn spheres_and_disks_read_emission_images_at_pbrts_coordinates() {
         // left across its face, v (from the south pole) up. The image shows
         // mirrored, its top left (red) at the picture's top right.
         (
-            "LookAt -5 0 0  0 0 0  0 0 1",
+            "-5 0 0  0 0 0  0 0 1",
             "Shape \"sphere\"",
             [((22, 9), red), ((9, 9), green), ((22, 22), blue), ((9, 22), white)],
         ),
@@ -1619,7 +1624,7 @@ fn spheres_and_disks_read_emission_images_at_pbrts_coordinates() {
         // rim inwards. Straight up from the centre (u = 1/4) the inner ring
         // is red and the rim blue; straight down (u = 3/4) green and white.
         (
-            "LookAt 0 0 5  0 0 0  0 1 0",
+            "0 0 5  0 0 0  0 1 0",
             "Shape \"disk\"",
             [((16, 12), red), ((16, 6), blue), ((16, 19), green), ((16, 25), white)],
         ),
@@ -1627,12 +1632,8 @@ fn spheres_and_disks_read_emission_images_at_pbrts_coordinates() {
     for (camera, shape, expected) in cases {
         std::fs::write(
             &p,
-            format!(
-                "{camera}\nCamera \"perspective\" \"float fov\" [ 30 ]\n\
-                 Film \"rgb\" \"integer xresolution\" [ 32 ] \"integer yresolution\" [ 32 ]\n\
-                 Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n\
-                 AreaLightSource \"diffuse\" \"string filename\" \"quadrants.pfm\"\n{shape}\n"
-            ),
+            one_bounce(camera, 30, 32)
+                + &format!("AreaLightSource \"diffuse\" \"string filename\" \"quadrants.pfm\"\n{shape}\n"),
         )
         .unwrap();
         for integrator in ["path", "bdpt"] {
@@ -1731,11 +1732,7 @@ fn a_bilinear_patch_without_uv_reads_images_at_the_patchs_own_uv_on_both_halves(
             };
             std::fs::write(
                 &p,
-                format!(
-                    "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
-                     Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
-                     Integrator \"path\" \"integer maxdepth\" [ 1 ]\nWorldBegin\n{light}\n{material}\n{shape}\n"
-                ),
+                one_bounce("0 0 0  0 0 1  0 1 0", 40, 16) + &format!("{light}\n{material}\n{shape}\n"),
             )
             .unwrap();
             let img = render_to_image(&p, &["--spp", "4", "--filter", "box", "--integrator", "path"]);
