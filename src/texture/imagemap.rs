@@ -796,8 +796,12 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
         if film.width == 0 || film.height == 0 {
             return Err(perr("the image is empty".into()));
         }
-        if film.pixels.iter().any(|p| !p.is_finite()) {
-            return Err(perr("the image holds a value that is not a finite number".into()));
+        if let Some(i) = film.pixels.iter().position(|p| !p.is_finite()) {
+            return Err(perr(format!(
+                "texel ({}, {}) is not a finite number",
+                i as u32 % film.width,
+                i as u32 / film.width
+            )));
         }
         return Ok(TexImage::finish(
             path.to_path_buf(),
@@ -818,7 +822,7 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
             Ok(f) if f.reading_enabled() => reader.set_format(f),
             _ => {
                 return Err(perr(
-                    "not an image file of a known format (PNG, JPEG, TGA, EXR, PFM)".into(),
+                    "not an image file of a known format (PNG, JPEG, TGA, HDR, EXR, PFM)".into(),
                 ))
             }
         }

@@ -977,34 +977,38 @@ fn environment_map(
             ))
         }
     };
+    let img = light_image(src, file, "infinite light: environment map")?;
+    EnvMap::new(img.width, img.height, img.pixels.clone(), mapping, file)
+        .map_err(|m| format!("infinite light: environment map {}: {m}", img.path.display()))
+}
+
+/// An area light's emission image `file`.
+fn emission_image(src: &Source, file: &str, kind: &str) -> std::result::Result<crate::light::EmissionImage, String> {
+    let what = format!("{kind} light: emission image");
+    let img = light_image(src, file, &what)?;
+    crate::light::EmissionImage::new(img.width, img.height, img.pixels.clone())
+        .map_err(|m| format!("{what} {}: {m}", img.path.display()))
+}
+
+/// An image a light reads, `file` beside the scene file: EXR, PFM and
+/// Radiance HDR as they are, 8-bit formats (PNG, JPEG, TGA) decoded from
+/// sRGB, as pbrt-v4 reads them. Errors start with `what` and the path.
+fn light_image(
+    src: &Source,
+    file: &str,
+    what: &str,
+) -> std::result::Result<std::sync::Arc<crate::texture::TexImage>, String> {
     let path = src.path.parent().map(Path::to_path_buf).unwrap_or_default().join(file);
-    let fail = |m: String| format!("infinite light: environment map {}: {m}", path.display());
+    let fail = |m: String| format!("{what} {}: {m}", path.display());
     if !path.is_file() {
         return Err(fail("file not found".into()));
     }
-    let film = crate::image_io::read_image(&path).map_err(|e| match e {
+    crate::texture::load_image(&path, crate::texture::Encoding::Srgb).map_err(|e| match e {
         Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => fail("file not found".into()),
         Error::Io { source, .. } => fail(source.to_string()),
         Error::Parse { message, .. } => fail(message),
         e => fail(e.to_string()),
-    })?;
-    EnvMap::new(film.width, film.height, film.pixels, mapping, file).map_err(fail)
-}
-
-/// An area light's emission image `file` (beside the scene file; 8-bit
-/// formats decoded from sRGB, EXR and PFM as they are).
-fn emission_image(src: &Source, file: &str, kind: &str) -> std::result::Result<crate::light::EmissionImage, String> {
-    let path = src.path.parent().map(Path::to_path_buf).unwrap_or_default().join(file);
-    let fail = |m: String| format!("{kind} light: emission image {}: {m}", path.display());
-    if !path.is_file() {
-        return Err(fail("file not found".into()));
-    }
-    let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb).map_err(|e| match e {
-        Error::Io { source, .. } => fail(source.to_string()),
-        Error::Parse { message, .. } => fail(message),
-        e => fail(e.to_string()),
-    })?;
-    crate::light::EmissionImage::new(img.width, img.height, img.pixels.clone()).map_err(fail)
+    })
 }
 
 #[cfg(test)]

@@ -829,6 +829,47 @@ fn write_env(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> Vec3) {
 }
 
 #[test]
+fn environment_maps_may_be_hdr_or_8_bit_images_as_pbrt_reads_them() {
+    let dir = tempfile::tempdir().unwrap();
+    // The same 4 x 2 map as PFM, Radiance HDR and 8-bit PNG.
+    let value = |x: u32, y: u32| Vec3::new(0.5 + x as f32, 0.25, 1.0 + y as f32) * 0.25;
+    write_env(&dir.path().join("sky.pfm"), 4, 2, value);
+    let pixels: Vec<::image::Rgb<f32>> = (0..2)
+        .flat_map(|y| (0..4).map(move |x| ::image::Rgb(value(x, y).to_array())))
+        .collect();
+    let file = std::fs::File::create(dir.path().join("sky.hdr")).unwrap();
+    ::image::codecs::hdr::HdrEncoder::new(file)
+        .encode(&pixels, 4, 2)
+        .unwrap();
+    // 8-bit: 188 is 0.5029 in linear sRGB, 0 is 0.
+    let mut png = ::image::RgbImage::new(4, 2);
+    png.pixels_mut().for_each(|p| *p = ::image::Rgb([188, 0, 188]));
+    png.save(dir.path().join("sky.png")).unwrap();
+    let map = |name: &str| {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(
+            &path,
+            format!("{CAMERA}[[lights]]\ntype = \"infinite\"\nfile = \"{name}\"\n"),
+        )
+        .unwrap();
+        let d = load(&path, &LoadOptions::default()).unwrap().desc;
+        let Light::Infinite { map: Some(m), .. } = &d.lights[0] else {
+            panic!("{:?}", d.lights[0])
+        };
+        m.texels().to_vec()
+    };
+    let (pfm, hdr) = (map("sky.pfm"), map("sky.hdr"));
+    assert_eq!(pfm.len(), 8);
+    for (a, b) in pfm.iter().zip(&hdr) {
+        // RGBE keeps 8 bits of mantissa a texel.
+        assert!((*a - *b).abs().max_element() <= 0.01 * a.max_element(), "{a} {b}");
+    }
+    for t in map("sky.png") {
+        assert!((t - Vec3::new(0.5029, 0.0, 0.5029)).abs().max_element() < 1e-3, "{t}");
+    }
+}
+
+#[test]
 fn environment_maps_are_read_beside_the_scene_file() {
     use crate::light::EnvMapping;
     let dir = tempfile::tempdir().unwrap();
@@ -956,7 +997,7 @@ fn bad_lights_are_one_line_errors_at_their_line() {
             "missing.exr: file not found",
         ),
         ("type = \"infinite\"\nfile = \"junk.exr\"", "junk.exr"),
-        ("type = \"infinite\"\nfile = \"notes.txt\"", "not a .pfm or .exr file"),
+        ("type = \"infinite\"\nfile = \"notes.txt\"", "not an image file of a known format"),
         (
             "type = \"infinite\"\nfile = \"nan.pfm\"",
             "texel (1, 0) is not a finite number",

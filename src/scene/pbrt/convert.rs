@@ -1324,8 +1324,7 @@ impl<'a> Conv<'a> {
             // With the column, as a missing mesh or include is reported.
             return Err(PbrtError::at(&at, format!("infinite: image \"{file}\" not found")).into());
         };
-        let film =
-            crate::image_io::read_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        let film = read_light_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
         let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
             .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
         if e > 0.0 {
@@ -3472,8 +3471,8 @@ fn similarity(m: Mat4) -> Option<(Vec3, f32)> {
     (ok && centre.is_finite() && s.is_finite()).then_some((centre, s))
 }
 
-/// An image a light reads, as pbrt-v4 reads it: EXR and PFM as they are,
-/// 8-bit formats (PNG) decoded from sRGB.
+/// An image a light reads, as pbrt-v4 reads it: EXR, PFM and Radiance HDR
+/// as they are, 8-bit formats (PNG, JPEG, TGA) decoded from sRGB.
 fn read_light_image(path: &Path) -> Result<crate::film::Film> {
     let img = crate::texture::load_image(path, crate::texture::Encoding::Srgb)?;
     let mut film = crate::film::Film::new(img.width, img.height);
