@@ -1212,11 +1212,23 @@ impl<'a> Conv<'a> {
             return Err(located(&l.loc, format!("{kind}: \"filename\" is required")));
         };
         let at = place(p, "filename", &l.loc).clone();
-        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
-            return Err(PbrtError::at(&at, format!("{kind}: image \"{file}\" not found")).into());
-        };
-        let film = read_light_image(&path).map_err(|e| located(&at, format!("{kind}: image \"{file}\": {e}")))?;
+        let film = self.read_light_image(&at, &file, kind)?;
         Ok(Some((film, file, at, (turn * (1.0 / s)).transpose())))
+    }
+
+    /// The image `file` a light of `kind` names at `at`, found as meshes
+    /// and includes are, read as pbrt-v4 reads it: EXR, PFM and Radiance HDR
+    /// as they are, 8-bit formats (PNG, JPEG, TGA) decoded from sRGB.
+    fn read_light_image(&self, at: &Loc, file: &str, kind: &str) -> Result<crate::film::Film> {
+        let Some(path) = self.scene.candidates(at, file).into_iter().find(|c| c.is_file()) else {
+            // With the column, as a missing mesh or include is reported.
+            return Err(PbrtError::at(at, format!("{kind}: image \"{file}\" not found")).into());
+        };
+        let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb)
+            .map_err(|e| located(at, format!("{kind}: image \"{file}\": {e}")))?;
+        let mut film = crate::film::Film::new(img.width, img.height);
+        film.pixels.clone_from(&img.pixels);
+        Ok(film)
     }
 
     /// pbrt-v4's `projection` light: a point at the light's origin casting
@@ -1320,11 +1332,7 @@ impl<'a> Conv<'a> {
         if p.has("L") {
             return Err(located(&at, "infinite: give \"L\" or \"filename\", not both"));
         }
-        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
-            // With the column, as a missing mesh or include is reported.
-            return Err(PbrtError::at(&at, format!("infinite: image \"{file}\" not found")).into());
-        };
-        let film = read_light_image(&path).map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
+        let film = self.read_light_image(&at, &file, "infinite")?;
         let map = EnvMap::new(film.width, film.height, film.pixels, EnvMapping::Octahedral, &file)
             .map_err(|e| located(&at, format!("infinite: image \"{file}\": {e}")))?;
         if e > 0.0 {
@@ -1439,11 +1447,7 @@ impl<'a> Conv<'a> {
                 "AreaLightSource: both \"L\" and \"filename\" are given (pbrt-v4 refuses them together)",
             ));
         }
-        let Some(path) = self.scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
-            return Err(PbrtError::at(&at, format!("AreaLightSource: image \"{file}\" not found")).into());
-        };
-        let film =
-            read_light_image(&path).map_err(|e| located(&at, format!("AreaLightSource: image \"{file}\": {e}")))?;
+        let film = self.read_light_image(&at, &file, "AreaLightSource")?;
         let image = EmissionImage::new(film.width, film.height, film.pixels)
             .map_err(|e| located(&at, format!("AreaLightSource: image \"{file}\": {e}")))?;
         Ok(Some(Arc::new(image)))
@@ -3469,15 +3473,6 @@ fn similarity(m: Mat4) -> Option<(Vec3, f32)> {
         && axes[1].dot(axes[2]).abs() <= tol * s;
     let centre = m.transform_point3(Vec3::ZERO);
     (ok && centre.is_finite() && s.is_finite()).then_some((centre, s))
-}
-
-/// An image a light reads, as pbrt-v4 reads it: EXR, PFM and Radiance HDR
-/// as they are, 8-bit formats (PNG, JPEG, TGA) decoded from sRGB.
-fn read_light_image(path: &Path) -> Result<crate::film::Film> {
-    let img = crate::texture::load_image(path, crate::texture::Encoding::Srgb)?;
-    let mut film = crate::film::Film::new(img.width, img.height);
-    film.pixels.clone_from(&img.pixels);
-    Ok(film)
 }
 
 /// Reflects the scene across the camera's vertical plane (through the
