@@ -289,6 +289,11 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(b"cutouts");
         h.bytes(format!("{:?}", desc.cutouts).as_bytes());
     }
+    // So did emitters that reflect, likewise.
+    if desc.light_surfaces.iter().any(Option::is_some) {
+        h.bytes(b"light surfaces");
+        h.bytes(format!("{:?}", desc.light_surfaces).as_bytes());
+    }
     // So did media, likewise.
     if !desc.media.is_empty() {
         h.bytes(b"media");

@@ -1,12 +1,12 @@
 //! Scenes with known answers for integrator and photon tests: the inside of a
-//! diffuse sphere (white furnace, or lit by a small sphere light at its centre)
-//! and a closed diffuse box.
+//! diffuse sphere (white furnace, or lit by a small sphere light at its centre),
+//! a closed diffuse box, and a closed box whose walls are lights that reflect.
 
 use crate::geometry::Sphere;
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::Vec3;
-use crate::scene::{CameraDesc, Scene, SceneDesc, SphereDesc, TriangleDesc};
+use crate::scene::{CameraDesc, LightSurface, Scene, SceneDesc, SphereDesc, TriangleDesc};
 
 fn empty(camera: CameraDesc) -> SceneDesc {
     SceneDesc::empty("analytic", camera)
@@ -104,10 +104,8 @@ pub fn floor_under_quad() -> SceneDesc {
     d
 }
 
-/// A closed cube [-1, 1]^3 of 12 triangles of one grey albedo, lit by `light`.
-pub fn closed_box(albedo: f32, light: Light) -> Scene {
-    let mut d = empty(inside_camera(8));
-    let m = d.material("wall", Material::diffuse(albedo, albedo, albedo));
+/// The 12 triangles of the cube [-1, 1]^3.
+fn cube_triangles() -> Vec<[Vec3; 3]> {
     let c = |i: usize| {
         Vec3::new(
             if i & 1 == 0 { -1.0 } else { 1.0 },
@@ -124,18 +122,51 @@ pub fn closed_box(albedo: f32, light: Light) -> Scene {
         [0, 2, 6, 4],
         [1, 3, 7, 5],
     ];
-    for f in faces {
-        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            d.triangles.push(TriangleDesc {
-                vertices: t.map(c),
-                normals: None,
-                uvs: None,
-                material: m,
-            });
-        }
+    faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
+        .map(|t| t.map(c))
+        .collect()
+}
+
+/// A closed cube [-1, 1]^3 of 12 triangles of one grey albedo, lit by `light`.
+pub fn closed_box(albedo: f32, light: Light) -> Scene {
+    let mut d = empty(inside_camera(8));
+    let m = d.material("wall", Material::diffuse(albedo, albedo, albedo));
+    for vertices in cube_triangles() {
+        d.triangles.push(TriangleDesc {
+            vertices,
+            normals: None,
+            uvs: None,
+            material: m,
+        });
     }
     d.lights.push(light);
     Scene::build(d).unwrap()
+}
+
+/// The cube [-1, 1]^3 whose walls are one-sided triangle lights of
+/// radiance `le` facing in, each reflecting by `wall` (pbrt-v4's emitters
+/// keep their material). With a Lambertian `wall` of albedo a the radiance
+/// is `le / (1 - a)` everywhere inside.
+pub fn glowing_box(wall: Material, le: f32, size: u32) -> SceneDesc {
+    let mut d = empty(inside_camera(size));
+    let m = d.material("wall", wall);
+    for [a, b, c] in cube_triangles() {
+        // Emitting on the side of (b - a) x (c - a): inwards.
+        let outwards = (b - a).cross(c - a).dot(a + b + c) > 0.0;
+        d.lights.push(Light::Triangle {
+            vertices: if outwards { [a, c, b] } else { [a, b, c] },
+            radiance: Vec3::splat(le),
+            two_sided: false,
+            image: None,
+        });
+        d.light_surfaces.push(Some(LightSurface {
+            material: m,
+            ..LightSurface::default()
+        }));
+    }
+    d
 }
 
 /// A white furnace (the inside of a unit sphere of an emissive Lambertian
@@ -173,5 +204,69 @@ pub fn path_settings(spp: u32, max_depth: Option<u32>) -> super::RenderSettings 
         spp,
         max_depth,
         ..super::RenderSettings::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glowing_box;
+    use crate::integrator::{render, IntegratorKind, LightSampling, RenderSettings};
+    use crate::material::Material;
+
+    /// Every integrator inside a box of lights that reflect: le / (1 - a),
+    /// twice what the walls emit with a = 1/2. Emitters that reflect nothing
+    /// would show only le.
+    #[test]
+    fn emitters_that_reflect_glow_as_radiosity_says_in_every_integrator() {
+        let (a, le) = (0.5f32, 1.5);
+        let expected = le / (1.0 - a);
+        let scene = crate::Scene::build(glowing_box(Material::diffuse(a, a, a), le, 8)).unwrap();
+        let base = RenderSettings {
+            spp: 64,
+            ..RenderSettings::default()
+        };
+        let mut runs = vec![];
+        for ls in [LightSampling::Mis, LightSampling::Bsdf, LightSampling::Light] {
+            let s = RenderSettings {
+                integrator: IntegratorKind::Path,
+                light_sampling: ls,
+                ..base.clone()
+            };
+            runs.push((format!("path ({ls:?})"), s));
+        }
+        runs.push((
+            "bdpt".into(),
+            RenderSettings {
+                integrator: IntegratorKind::Bdpt,
+                ..base.clone()
+            },
+        ));
+        for fg in [0, 16] {
+            let mut s = RenderSettings {
+                integrator: IntegratorKind::Photon,
+                ssaa: 2,
+                ..base.clone()
+            };
+            s.photon.photons = 100_000;
+            // Deep enough that truncating the photons' paths costs < 1e-4.
+            s.photon.max_bounces = 16;
+            s.photon.final_gather = fg;
+            runs.push((format!("photon (final gather {fg})"), s));
+        }
+        let mut s = RenderSettings {
+            integrator: IntegratorKind::Sppm,
+            passes: 8,
+            ..base.clone()
+        };
+        s.photon.photons = 20_000;
+        s.photon.max_bounces = 16;
+        runs.push(("sppm".into(), s));
+        for (what, s) in runs {
+            let film = render(&scene, &s, &|| {}).unwrap().film;
+            let mean = film.mean(0, 0, 8, 8);
+            for c in mean.to_array() {
+                assert!((c - expected).abs() / expected < 0.02, "{what}: {mean} vs {expected}");
+            }
+        }
     }
 }

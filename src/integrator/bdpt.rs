@@ -76,8 +76,8 @@ enum Kind {
 struct Vertex {
     kind: Kind,
     p: Vec3,
-    /// Unit geometric normal (for a light, the emitting side's); zero where
-    /// there is no surface (cameras, point and spot lights).
+    /// Unit geometric normal (for a light endpoint, the emitting side's);
+    /// zero where there is no surface (cameras, point and spot lights).
     ng: Vec3,
     /// The hit and its BSDF, for surface vertices.
     hit: Option<Hit>,
@@ -96,8 +96,8 @@ struct Vertex {
     /// The time of the shutter the vertex is at (its subpath's): the
     /// camera's, where the camera moves.
     time: f32,
-    /// Texture coordinates where a camera subpath met a light: where its
-    /// emission image is read.
+    /// Texture coordinates where a camera subpath met a light or a surface:
+    /// where an emission image is read.
     uv: Vec2,
 }
 
@@ -142,7 +142,17 @@ impl Vertex {
             pdf_rev: 0.0,
             delta: false,
             mode,
-            uv: Vec2::ZERO,
+            uv: hit.uv,
+        }
+    }
+
+    /// The light this vertex emits by: a light endpoint's, or that of an
+    /// emitter a subpath went on from because it reflects.
+    fn emitter(&self) -> Option<usize> {
+        match self.kind {
+            Kind::Light(li) => Some(li),
+            Kind::Surface => self.hit.and_then(|h| h.light).map(|li| li as usize),
+            _ => None,
         }
     }
 
@@ -237,7 +247,13 @@ impl Vertex {
         let Some(w) = (next.p - self.p).try_normalize() else {
             return 0.0;
         };
-        let (_, pdf_dir) = scene.lights[li].pdf_le(&Ray::new(self.p, w), self.ng);
+        let light = &scene.lights[li];
+        // A surface vertex's normal is the hit's, not the emitting side's.
+        let n = match self.kind {
+            Kind::Surface => light_normal(light, self.p, next.p),
+            _ => self.ng,
+        };
+        let (_, pdf_dir) = light.pdf_le(&Ray::new(self.p, w), n);
         self.convert_density(pdf_dir, next)
     }
 
@@ -248,7 +264,7 @@ impl Vertex {
     /// the point on its light.
     fn pdf_origin(&self, scene: &Scene) -> f32 {
         match self.kind {
-            Kind::Light(li) => self.pdf_light_origin(scene, li),
+            Kind::Light(_) | Kind::Surface => self.emitter().map_or(0.0, |li| self.pdf_light_origin(scene, li)),
             Kind::Infinity(_) => scene
                 .infinite_lights()
                 .iter()
@@ -420,7 +436,7 @@ impl Bdpt {
                 }
                 break;
             };
-            if let Some(li) = hit.light {
+            if let Some(li) = hit.light.filter(|_| !scene.reflects(&hit)) {
                 let light = &scene.lights[li as usize];
                 let mut v = Vertex::endpoint(
                     Kind::Light(li as usize),
@@ -587,8 +603,8 @@ impl Bdpt {
             return;
         }
         stats.other_rays += 1;
-        // Lights are black to particles: a light subpath ends on one.
-        while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY).filter(|h| h.light.is_none()) {
+        // A light subpath ends on a light that reflects nothing.
+        while let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY).filter(|h| scene.reflects(h)) {
             let m = scene.material(hit.material);
             let wo = -ray.d;
             let sp = scene.surface_seen(&hit, None);
@@ -619,15 +635,15 @@ impl Bdpt {
     ) -> Vec3 {
         let pt = &cameras[t - 1];
         if s == 0 {
-            let l = match pt.kind {
-                Kind::Light(li) => {
+            let l = match (pt.kind, pt.emitter()) {
+                (Kind::Light(_) | Kind::Surface, Some(li)) => {
                     let prev = &cameras[t - 2];
                     let Some(w) = (prev.p - pt.p).try_normalize() else {
                         return Vec3::ZERO;
                     };
                     pt.beta * scene.lights[li].le(w, pt.uv)
                 }
-                Kind::Infinity(_) => {
+                (Kind::Infinity(_), _) => {
                     let from = cameras[t - 2].p;
                     let le: Vec3 = scene
                         .infinite_lights()
@@ -742,6 +758,8 @@ impl Bdpt {
         let pt_minus_rev = match (qs, pt.kind, pt_minus) {
             (Some(q), _, Some(pm)) => pt.pdf(scene, Some(q), pm),
             (None, Kind::Light(_) | Kind::Infinity(_), Some(pm)) => pt.pdf(scene, None, pm),
+            // An emitter the camera subpath went on from, as the light it is.
+            (None, Kind::Surface, Some(pm)) => pt.emitter().map_or(0.0, |li| pt.pdf_light(scene, li, pm)),
             _ => 0.0,
         };
         let qs_rev = qs.map_or(0.0, |q| pt.pdf(scene, pt_minus, q));

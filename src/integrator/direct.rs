@@ -89,7 +89,9 @@ pub fn walk_camera_path(
         let wo = -ray.d;
         if let Some(li) = hit.light {
             l += beta * emitted_radiance(scene, li as usize, &ray, &hit, from);
-            break;
+            if !scene.reflects(&hit) {
+                break;
+            }
         }
         let m = scene.material(hit.material);
         l += beta * m.le();

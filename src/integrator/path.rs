@@ -99,7 +99,9 @@ impl RadianceEstimator for PathTracer {
             if let Some(li) = hit.light {
                 let (from, w) = weigh(from);
                 l += beta * emitted_radiance(scene, li as usize, &ray, &hit, from) * w;
-                break;
+                if !scene.reflects(&hit) {
+                    break;
+                }
             }
             let m = scene.material(hit.material);
             l += beta * m.le();

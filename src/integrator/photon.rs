@@ -185,7 +185,9 @@ impl PhotonMapping<'_> {
                     if self.shadow_samples == 0 && depth == 0 {
                         sum += beta * scene.lights[l as usize].le(-ray.d, y.uv);
                     }
-                    break;
+                    if !scene.reflects(&y) {
+                        break;
+                    }
                 }
                 let m = scene.material(y.material);
                 let wo = -ray.d;

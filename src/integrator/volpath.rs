@@ -128,7 +128,9 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         if let Some(li) = hit.light {
             let (from, w) = weigh(from);
             l += weight(beta, ratio) * emitted_radiance(scene, li as usize, &ray, &hit, from) * w;
-            break;
+            if !scene.reflects(&hit) {
+                break;
+            }
         }
         if scene.is_interface(&hit) {
             crossings += 1;

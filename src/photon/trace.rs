@@ -11,7 +11,7 @@
 //! weight). At a mirror or glass surface (9.2) the photon is never stored: it
 //! is reflected or refracted (Fresnel picks which), its power scaled by the
 //! mirror's reflectance (by roulette when below 1). Photons stop after
-//! `max_bounces` surface hits of either kind, on a light (lights are black), or
+//! `max_bounces` surface hits of either kind, on a light that reflects nothing, or
 //! when they leave the scene.
 //!
 //! Stored photons are tagged by the path that brought them: direct (light ->
@@ -185,7 +185,7 @@ fn trace_chunk(
             let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) else {
                 break;
             };
-            if hit.light.is_some() {
+            if !scene.reflects(&hit) {
                 break;
             }
             for (s, c) in arrived.iter_mut().zip(power.to_array()) {

@@ -246,6 +246,18 @@ pub struct TriangleDesc {
     pub material: u32,
 }
 
+/// How an area light's surface reflects: by `material`; for a triangle,
+/// with these vertex normals and texture coordinates (as a
+/// `TriangleDesc`'s); for a sphere, with texture coordinates in the frame
+/// `axes` (as a `SphereDesc`'s). A disk has its own.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightSurface {
+    pub material: u32,
+    pub normals: Option<[Vec3; 3]>,
+    pub uvs: Option<[Vec2; 3]>,
+    pub axes: Option<glam::Mat3>,
+}
+
 /// Shapes cut out by an alpha texture (pbrt-v4's `alpha` shape parameter):
 /// where the texture's scalar value `a` at a ray's hit is below 1, the hit
 /// counts with probability `a` (never where `a` is 0), decided by a hash of
@@ -362,6 +374,10 @@ pub struct SceneDesc {
     pub disks: Vec<DiskDesc>,
     pub curves: Vec<CurveDesc>,
     pub lights: Vec<Light>,
+    /// The surface each area light reflects by, by light index (pbrt-v4's
+    /// emitters keep their shape's material). A light missing here, or
+    /// `None`, reflects nothing.
+    pub light_surfaces: Vec<Option<LightSurface>>,
     /// Shapes cut out by alpha textures.
     pub cutouts: Vec<Cutout>,
     /// Participating media, by name.
@@ -457,6 +473,7 @@ impl SceneDesc {
             disks: vec![],
             curves: vec![],
             lights: vec![],
+            light_surfaces: vec![],
             cutouts: vec![],
             media: vec![],
             camera_medium: None,
@@ -863,6 +880,8 @@ pub struct Scene {
     pub camera: Camera,
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
+    /// The material of emitters that reflect nothing.
+    black_emitter: u32,
     pub lights: Vec<Light>,
     /// Cumulative light powers (largest channel) for choosing one light in
     /// proportion to its power; the last entry is the total.
@@ -1077,16 +1096,30 @@ impl Scene {
         names.push("<light>".into());
         for (i, l) in lights.iter_mut().enumerate() {
             l.check(1.0).map_err(|m| Error::Scene(format!("light {i}: {m}")))?;
-            // Emitters reflect nothing and block light like any surface.
+            // An emitter reflects by its material, or nothing (`black`), and
+            // blocks light like any surface.
+            let reflecting = desc.light_surfaces.get(i).and_then(|s| s.as_ref());
+            let surface = match reflecting.map(|s| s.material) {
+                Some(m) if m >= nmat => {
+                    return Err(Error::Scene(format!("light {i} names material {m} of {nmat}")));
+                }
+                Some(m) => m,
+                None => black,
+            };
             match l {
                 Light::Sphere { sphere, image, .. } => {
                     spheres.push(SphereObject {
                         sphere: *sphere,
-                        material: black,
+                        material: surface,
                         light: Some(i as u32),
                         alpha: None,
-                        // Hits read an emission image in the sphere's frame.
-                        axes: image.as_ref().map_or(glam::Mat3::IDENTITY, |t| t.axes),
+                        // Hits read an emission image, and textures, in the
+                        // sphere's frame.
+                        axes: image
+                            .as_ref()
+                            .map(|t| t.axes)
+                            .or(reflecting.and_then(|s| s.axes))
+                            .unwrap_or(glam::Mat3::IDENTITY),
                     });
                 }
                 Light::Triangle { vertices: v, image, .. } => {
@@ -1097,19 +1130,26 @@ impl Scene {
                     }
                     tris.push(tri);
                     info.push(TriInfo {
-                        material: black,
+                        material: surface,
                         object: (desc.triangles.len() + desc.spheres.len() + desc.disks.len() + i) as u32,
                         normal: n.normalize(),
                         light: Some(i as u32),
                         alpha: SOLID,
                     });
-                    normals.push(None);
-                    // Hits read an emission image at these coordinates.
-                    uvs.push(image.as_ref().map(|t| t.uv));
+                    let valid_normals = reflecting
+                        .and_then(|s| s.normals)
+                        .filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0));
+                    normals.push(valid_normals);
+                    // Hits read an emission image at these coordinates,
+                    // which are the surface's own where it has any.
+                    let surface_uvs = reflecting
+                        .and_then(|s| s.uvs)
+                        .filter(|uv| uv.iter().all(|c| c.is_finite()));
+                    uvs.push(image.as_ref().map(|t| t.uv).or(surface_uvs));
                 }
                 Light::Disk { disk, .. } => disks.push(DiskObject {
                     disk: *disk,
-                    material: black,
+                    material: surface,
                     light: Some(i as u32),
                     alpha: None,
                 }),
@@ -1213,6 +1253,7 @@ impl Scene {
             camera,
             materials,
             material_names: names,
+            black_emitter: black,
             lights,
             light_cdf: vec![],
             light_pmfs: vec![],
@@ -2048,6 +2089,12 @@ impl Scene {
 
     pub fn material(&self, id: u32) -> &Material {
         &self.materials[id as usize]
+    }
+
+    /// Whether light goes on from `hit`: true on every surface but an
+    /// emitter that reflects nothing, where paths end.
+    pub fn reflects(&self, hit: &Hit) -> bool {
+        hit.light.is_none() || hit.material != self.black_emitter
     }
 
     /// Moves light `index` (and the sphere it emits from) to `position`,

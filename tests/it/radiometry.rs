@@ -37,6 +37,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         disks: vec![],
         curves: vec![],
         lights: vec![light],
+        light_surfaces: vec![],
         cutouts: vec![],
         media: vec![],
         camera_medium: None,

@@ -47,14 +47,14 @@ use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
 use crate::light::{EmissionImage, ImageOnSphere, ImageOnTriangle, Light};
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
     Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc, DEFAULT_UV,
 };
-use crate::scene::{CurveDesc, DiskDesc, MovingShape, MovingTriangles};
+use crate::scene::{CurveDesc, DiskDesc, LightSurface, MovingShape, MovingTriangles};
 use crate::settings::{Origin, SceneSettings, Value};
 use crate::texture::Texture;
 use glam::Mat4;
@@ -183,7 +183,6 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         skipped_shapes_count: 0,
         skipped_lights: 0,
         dropped_light_triangles: 0,
-        black_emitters: 0,
         imaging_ratio: 1.0,
         shutter: [0.0, 1.0],
         first_motion: None,
@@ -298,12 +297,6 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
             c.dropped_light_triangles
         ));
     }
-    if c.black_emitters > 0 {
-        c.warnings.push(format!(
-            "{} emitting shapes have a material that reflects light; emitters here reflect nothing",
-            c.black_emitters
-        ));
-    }
     if !c.problems.is_empty() {
         if !lenient {
             return Err(c.error());
@@ -346,7 +339,6 @@ struct Conv<'a> {
     skipped_shapes_count: usize,
     skipped_lights: usize,
     dropped_light_triangles: usize,
-    black_emitters: usize,
 }
 
 fn origin(loc: &Loc) -> Origin {
@@ -367,6 +359,16 @@ impl<'a> Conv<'a> {
     fn push_light(&self, desc: &mut SceneDesc, light: Light, loc: &Loc) -> Result<()> {
         light.check(self.imaging_ratio).map_err(|m| located(loc, m))?;
         desc.lights.push(light);
+        Ok(())
+    }
+
+    /// Adds an area light, with the surface it reflects by if any.
+    fn push_emitter(&self, desc: &mut SceneDesc, light: Light, surface: Option<LightSurface>, loc: &Loc) -> Result<()> {
+        self.push_light(desc, light, loc)?;
+        if let Some(s) = surface {
+            desc.light_surfaces.resize(desc.lights.len() - 1, None);
+            desc.light_surfaces.push(Some(s));
+        }
         Ok(())
     }
 
@@ -1645,11 +1647,20 @@ impl<'a> Conv<'a> {
                 );
                 alpha = None;
             }
-            if let (Some(_), Some(m)) = (&emission, scene.materials.get(shape.material)) {
-                if reflects(m) {
-                    self.black_emitters += 1;
-                }
-            }
+            // pbrt-v4's emitters also reflect by their material; one that
+            // reflects nothing ends paths as our lights do by default.
+            let emitter_material = match (&emission, scene.materials.get(shape.material)) {
+                (Some(_), Some(m)) if reflects(m) => Some(self.material(desc, shape.material)?),
+                _ => None,
+            };
+            let surface = |normals: Option<[Vec3; 3]>, uvs: Option<[Vec2; 3]>, axes: Option<glam::Mat3>| {
+                emitter_material.map(|material| LightSurface {
+                    material,
+                    normals,
+                    uvs,
+                    axes,
+                })
+            };
             let m = shape.world_from_object;
             let alpha_given = alpha.is_some();
             if shape.motion.is_some()
@@ -1698,9 +1709,9 @@ impl<'a> Conv<'a> {
                             let radiance = e.radiance_for(area);
                             // The coordinates pbrt-v4's triangle reports
                             // without "uv", turned with the vertices.
+                            let [ua, ub, uc] = mesh.triangle_uvs(k).unwrap_or(DEFAULT_UV);
+                            let uv = if turn { [ua, uc, ub] } else { [ua, ub, uc] };
                             let image = image.as_ref().map(|image| {
-                                let [ua, ub, uc] = mesh.triangle_uvs(k).unwrap_or(DEFAULT_UV);
-                                let uv = if turn { [ua, uc, ub] } else { [ua, ub, uc] };
                                 Arc::new(ImageOnTriangle {
                                     image: image.clone(),
                                     uv,
@@ -1712,7 +1723,15 @@ impl<'a> Conv<'a> {
                                 two_sided: e.two_sided,
                                 image,
                             };
-                            self.push_light(desc, light, &shape.loc)?;
+                            let ns = normals.as_ref().map(|ns| {
+                                let [na, nb, nc] = t.map(|i| ns[i as usize]);
+                                if turn {
+                                    [na, nc, nb]
+                                } else {
+                                    [na, nb, nc]
+                                }
+                            });
+                            self.push_emitter(desc, light, surface(ns, Some(uv), None), &shape.loc)?;
                         }
                     } else {
                         let material = self.surface_material(desc, shape.material, no_surface)?;
@@ -1814,7 +1833,7 @@ impl<'a> Conv<'a> {
                             power: radiance * PI * area,
                             image,
                         };
-                        self.push_light(desc, light, &shape.loc)?;
+                        self.push_emitter(desc, light, surface(None, None, Some(axes)), &shape.loc)?;
                     } else {
                         let material = self.surface_material(desc, shape.material, no_surface)?;
                         if let Some(alpha) = alpha {
@@ -1882,7 +1901,7 @@ impl<'a> Conv<'a> {
                             two_sided: e.two_sided,
                             image: e.image.clone(),
                         };
-                        self.push_light(desc, light, &shape.loc)?;
+                        self.push_emitter(desc, light, surface(None, None, None), &shape.loc)?;
                     } else {
                         let material = self.surface_material(desc, shape.material, no_surface)?;
                         if let Some(interface) = interface {
@@ -3533,6 +3552,19 @@ fn reflect(desc: &mut SceneDesc) {
         m.motion = m.motion.mirrored(r);
     }
     desc.camera_motion = desc.camera_motion.as_ref().map(|m| m.mirrored(r));
+    // Emitters' surfaces follow their lights' vertices (turned as below).
+    for s in desc.light_surfaces.iter_mut().flatten() {
+        if let Some(ns) = &mut s.normals {
+            let [a, b, c] = ns.map(vector);
+            *ns = [a, c, b];
+        }
+        if let Some([a, b, c]) = s.uvs {
+            s.uvs = Some([a, c, b]);
+        }
+        s.axes = s
+            .axes
+            .map(|a| glam::Mat3::from_cols(vector(a.x_axis), vector(a.y_axis), vector(a.z_axis)));
+    }
     for (_, m) in &mut desc.media {
         if let Some(g) = &m.density {
             m.density = Some(std::sync::Arc::new(g.reflected(r)));
