@@ -463,10 +463,21 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     let imaged = scene
         .lights
         .iter()
-        .filter(|l| matches!(l, Light::Triangle { image: Some(_), .. }))
+        .filter(|l| {
+            matches!(
+                l,
+                Light::Triangle { image: Some(_), .. }
+                    | Light::Sphere { image: Some(_), .. }
+                    | Light::Disk { image: Some(_), .. }
+            )
+        })
         .count();
     if imaged > 0 {
         kinds.push(format!("{imaged} of them with an emission image"));
+    }
+    let reflecting = scene.desc.light_surfaces.iter().flatten().count();
+    if reflecting > 0 {
+        kinds.push(format!("{reflecting} of them reflecting by a material"));
     }
     println!("lights: {} ({})", scene.lights.len(), kinds.join(", "));
     println!("materials: {}", scene.materials.len());

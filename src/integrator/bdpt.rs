@@ -641,7 +641,7 @@ impl Bdpt {
                     let Some(w) = (prev.p - pt.p).try_normalize() else {
                         return Vec3::ZERO;
                     };
-                    pt.beta * scene.lights[li].le(w, pt.uv)
+                    pt.beta * scene.lights[li].le(pt.p, w, pt.uv)
                 }
                 (Kind::Infinity(_), _) => {
                     let from = cameras[t - 2].p;

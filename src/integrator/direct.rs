@@ -167,7 +167,7 @@ pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(Vec3, f32)>) -> 
 /// Radiance of light `li` where `ray` hit it, weighted as `escaped_radiance`.
 pub fn emitted_radiance(scene: &Scene, li: usize, ray: &Ray, hit: &Hit, from: Option<(Vec3, f32)>) -> Vec3 {
     let light = &scene.lights[li];
-    let le = light.le(-ray.d, hit.uv);
+    let le = light.le(hit.p, -ray.d, hit.uv);
     match from {
         None => le,
         Some((p, pdf)) => le * power_heuristic(pdf, scene.light_pmf(li) * light.pdf_li_hit(p, ray.d, hit.p)),

@@ -183,7 +183,7 @@ impl PhotonMapping<'_> {
                     // Shadow rays counted this light, or the caustic map did
                     // when it came through specular or glossy surfaces.
                     if self.shadow_samples == 0 && depth == 0 {
-                        sum += beta * scene.lights[l as usize].le(-ray.d, y.uv);
+                        sum += beta * scene.lights[l as usize].le(y.p, -ray.d, y.uv);
                     }
                     if !scene.reflects(&y) {
                         break;

@@ -383,10 +383,12 @@ impl Light {
         }
     }
 
-    /// Radiance leaving the light's surface towards `w` at the point with
-    /// texture coordinates `uv` (a one-sided light is dark from behind).
-    pub fn le(&self, w: Vec3, uv: Vec2) -> Vec3 {
+    /// Radiance leaving the light's surface at `p` towards `w`, where its
+    /// texture coordinates are `uv` (a one-sided light is dark from behind,
+    /// a sphere from inside: seen through a glass that emits).
+    pub fn le(&self, p: Vec3, w: Vec3, uv: Vec2) -> Vec3 {
         match self {
+            Light::Sphere { sphere, .. } if (p - sphere.centre).dot(w) <= 0.0 => Vec3::ZERO,
             Light::Triangle {
                 vertices,
                 two_sided: false,

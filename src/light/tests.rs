@@ -130,9 +130,12 @@ fn triangle_lights_emit_their_power_from_their_emitting_sides() {
         let expected = if two_sided { 0.5 } else { 1.0 };
         assert!((down as f32 / n as f32 - expected).abs() < 0.02, "{two_sided}: {down}");
         // Seen from below it shines; from above only when two-sided.
-        assert_eq!(l.le(Vec3::new(0.0, 0.0, -1.0), Vec2::ZERO), Vec3::splat(1.5));
         assert_eq!(
-            l.le(Vec3::new(0.0, 0.0, 1.0), Vec2::ZERO).x,
+            l.le(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec2::ZERO),
+            Vec3::splat(1.5)
+        );
+        assert_eq!(
+            l.le(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), Vec2::ZERO).x,
             if two_sided { 1.5 } else { 0.0 }
         );
     }

@@ -34,7 +34,7 @@ fn glossy_room(size: u32) -> Scene {
         })
         .collect();
     assert!(
-        d.lights.iter().all(|l| l.le(Vec3::Y, Vec2::ZERO).x > 0.0),
+        d.lights.iter().all(|l| l.le(Vec3::ZERO, Vec3::Y, Vec2::ZERO).x > 0.0),
         "the quad must face the floor"
     );
     // A round lamp on the ceiling (away from the walls: photon density

@@ -1536,7 +1536,7 @@ fn an_area_lights_emission_image_is_read_at_the_surfaces_uv_with_v_up() {
 #[test]
 fn an_image_light_lights_alike_in_every_integrator_and_power_sets_its_flux() {
     // The quad faces a grey floor 1 below it, seen from above the light
-    // (whose back is dark). Light samples, BSDF hits, light subpaths and
+    // (whose back, in the default grey, reflects the floor's light). Light samples, BSDF hits, light subpaths and
     // photons each read the image: the integrators agree colour by colour,
     // and red falls under the image's red quadrant.
     let dir = tempfile::tempdir().unwrap();
@@ -1557,7 +1557,7 @@ fn an_image_light_lights_alike_in_every_integrator_and_power_sets_its_flux() {
     let info = raytracer(&["info", "--scene", p.to_str().unwrap()]);
     let info = String::from_utf8_lossy(&info.stdout);
     assert!(
-        info.contains("lights: 2 (2 triangle, 2 of them with an emission image)"),
+        info.contains("lights: 2 (2 triangle, 2 of them with an emission image, 2 of them reflecting by a material)"),
         "{info}"
     );
     let mean = |img: &Film| img.mean(0, 0, img.width, img.height);

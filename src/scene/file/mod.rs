@@ -122,8 +122,22 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
     let textures = materials::textures(&src, &file.textures, &dir, files)?;
     let materials = materials::materials(&src, &file.materials, &textures, &dir, files)?;
     for l in &file.lights {
-        for light in light(&src, l)? {
+        // The surface an area light reflects by, if it names a material.
+        let reflecting = match &l.get_ref().material {
+            Some(name) => Some(material_index(&src, &materials, &mut desc, name)?),
+            None => None,
+        };
+        for (k, light) in light(&src, l)?.into_iter().enumerate() {
             light.check(1.0).map_err(|m| src.error(l.span(), m))?;
+            if let Some(material) = reflecting {
+                let uvs = matches!(light, Light::Triangle { .. }).then_some(AREA_LIGHT_UVS[k]);
+                desc.light_surfaces.resize(desc.lights.len(), None);
+                desc.light_surfaces.push(Some(crate::scene::LightSurface {
+                    material,
+                    uvs,
+                    ..Default::default()
+                }));
+            }
             desc.lights.push(light);
         }
     }
@@ -306,6 +320,26 @@ impl Media<'_> {
     }
 }
 
+/// The index in `desc` of the material `name`, added at its first use.
+fn material_index(
+    src: &Source,
+    materials: &BTreeMap<String, Material>,
+    desc: &mut SceneDesc,
+    name: &Spanned<String>,
+) -> Result<u32> {
+    match materials.get(name.get_ref()) {
+        Some(m) => Ok(desc.material(name.get_ref(), m.clone())),
+        None => Err(src.error(
+            name.span(),
+            format!(
+                "unknown material '{}' (defined: {})",
+                name.get_ref(),
+                materials.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
+}
+
 fn shapes(
     src: &Source,
     specs: &[Spanned<ShapeSpec>],
@@ -316,19 +350,7 @@ fn shapes(
     desc: &mut SceneDesc,
 ) -> Result<Vec<MeshReport>> {
     let path = src.path;
-    let material = |desc: &mut SceneDesc, name: &Spanned<String>| -> Result<u32> {
-        match materials.get(name.get_ref()) {
-            Some(m) => Ok(desc.material(name.get_ref(), m.clone())),
-            None => Err(src.error(
-                name.span(),
-                format!(
-                    "unknown material '{}' (defined: {})",
-                    name.get_ref(),
-                    materials.keys().cloned().collect::<Vec<_>>().join(", ")
-                ),
-            )),
-        }
-    };
+    let material = |desc: &mut SceneDesc, name: &Spanned<String>| material_index(src, materials, desc, name);
 
     let mesh_count = specs.iter().filter(|s| s.get_ref().kind == ShapeKind::Mesh).count();
     if let Some(p) = &opts.mesh {
@@ -701,6 +723,15 @@ fn box_triangles(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
         .collect()
 }
 
+/// The texture coordinates of a triangle or quad light's triangles, for its
+/// emission image and its material: a quad's span from its first vertex,
+/// (0, 0), to its third, (1, 1), the image's bottom row along the first
+/// edge; a triangle takes (0, 0), (1, 0), (1, 1).
+const AREA_LIGHT_UVS: [[Vec2; 3]; 2] = [
+    [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::ONE],
+    [Vec2::ZERO, Vec2::ONE, Vec2::new(0.0, 1.0)],
+];
+
 fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
     let l = spanned.get_ref();
     let err = |m: String| src.error(spanned.span(), m);
@@ -742,6 +773,11 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         ("mapping", l.mapping.is_some(), l.kind == LightKind::Infinite),
         ("rotate", l.rotate.is_some(), l.kind == LightKind::Infinite),
         ("portal", l.portal.is_some(), l.kind == LightKind::Infinite),
+        (
+            "material",
+            l.material.is_some(),
+            area_light || disk || l.kind == LightKind::Sphere,
+        ),
     ];
     if let Some((key, ..)) = given.iter().find(|(_, given, applies)| *given && !applies) {
         let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
@@ -827,13 +863,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
                 return Err(err(format!("{kind} light: its area is zero")));
             }
             let mut radiance = area_radiance(area, two_sided)?;
-            // An emission image spans a quad from its first vertex, (0, 0),
-            // to its third, (1, 1), the image's bottom row along the first
-            // edge; a triangle takes (0, 0), (1, 0), (1, 1).
-            let uvs = [
-                [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::ONE],
-                [Vec2::ZERO, Vec2::ONE, Vec2::new(0.0, 1.0)],
-            ];
+            let uvs = AREA_LIGHT_UVS;
             let image = match &l.file {
                 Some(file) => {
                     let image = emission_image(src, file, kind).map_err(err)?;

@@ -945,7 +945,7 @@ fn a_quad_light_may_emit_an_image_spanning_it_from_its_first_vertex() {
     assert_eq!(d.lights.len(), 2);
     // u runs along the first edge (x), v along the last (y): the image's
     // left texel at x < 1, its right one at x > 1, whatever y.
-    let le = |l: &Light, uv: Vec2| l.le(Vec3::Z, uv);
+    let le = |l: &Light, uv: Vec2| l.le(Vec3::ZERO, Vec3::Z, uv);
     for l in &d.lights {
         let Light::Triangle { image: Some(t), .. } = l else {
             panic!("{l:?}")
@@ -1536,4 +1536,44 @@ fn textures_may_be_placed_by_the_point_rather_than_by_uv() {
         let e = parse_str(&text.replacen(from, to, 1)).unwrap_err().to_string();
         assert!(e.starts_with("test.toml:") && e.contains(what), "{to}: {e}");
     }
+}
+
+#[test]
+fn an_area_light_may_reflect_by_a_material() {
+    // A quad light facing away from the camera, lit by a sphere light
+    // behind the camera: its back is dark unless it reflects.
+    let scene = |material: &str| {
+        format!(
+            "{CAMERA}width = 8\nheight = 8\n[materials.white]\nalbedo = [0.8, 0.8, 0.8]\n\
+             [[lights]]\ntype = \"sphere\"\ncentre = [0, 0, -4]\nradius = 0.5\npower = 100\n\
+             [[lights]]\ntype = \"quad\"\nradiance = [5, 5, 5]\n{material}\
+             vertices = [[-2, -2, 1], [2, -2, 1], [2, 2, 1], [-2, 2, 1]]\n"
+        )
+    };
+    let centre = |text: &str| {
+        let d = parse_str(text).unwrap().desc;
+        let s = crate::integrator::analytic::path_settings(16, None);
+        render(&Scene::build(d).unwrap(), &s, &|| {}).unwrap().film.get(4, 4)
+    };
+    let d = parse_str(&scene("material = \"white\"\n")).unwrap().desc;
+    let Some(Some(surface)) = d.light_surfaces.get(1) else {
+        panic!("{:?}", d.light_surfaces)
+    };
+    assert_eq!(d.materials[surface.material as usize].0, "white");
+    assert_eq!(surface.uvs, Some(AREA_LIGHT_UVS[0]));
+    assert_eq!(d.light_surfaces.first(), Some(&None));
+    // The quad faces +z, away from the camera at z = -3.
+    assert_eq!(centre(&scene("")), Vec3::ZERO);
+    let lit = centre(&scene("material = \"white\"\n"));
+    assert!(lit.x > 0.05 && lit.x < 5.0, "{lit}");
+    // An unknown material is named at its line; a light without a surface
+    // takes none.
+    let e = parse_str(&scene("material = \"chalk\"\n")).unwrap_err().to_string();
+    assert!(
+        e.contains("test.toml:17") && e.contains("unknown material 'chalk'"),
+        "{e}"
+    );
+    let point = format!("{CAMERA}[materials.white]\nalbedo = [1, 1, 1]\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 0]\npower = 1\nmaterial = \"white\"\n");
+    let e = parse_str(&point).unwrap_err().to_string();
+    assert!(e.contains("`material` does not apply to a point light"), "{e}");
 }

@@ -177,6 +177,8 @@ pub(super) struct LightSpec {
     /// Disk lights: the side the disk faces, the radius of its hole.
     pub(super) normal: Option<Vec3Spec>,
     pub(super) inner_radius: Option<Num>,
+    /// Lights with a surface: the material it also reflects by.
+    pub(super) material: Option<Spanned<String>>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]

@@ -2336,15 +2336,17 @@ fn colour_space(p: &Params, name: &str) -> Option<String> {
     (param.ty == super::ParamType::Rgb && &*param.color_space != "srgb").then(|| param.color_space.to_string())
 }
 
-/// Whether a material (as pbrt would render it) reflects any light.
+/// Whether a material (as pbrt would render it) may reflect light: all but
+/// a diffuse one of a black reflectance (not a texture), as emitters that
+/// only emit are written.
 fn reflects(m: &super::ir::Material) -> bool {
     match m.ty.as_str() {
         "diffuse" => match m.params.get("reflectance") {
-            None => true,
-            Some(p) => p
+            Some(p) if p.ty != super::ParamType::Texture => p
                 .spectra()
                 .iter()
                 .any(|s| s.to_rgb().is_none_or(|c| c.max_element() > 0.0)),
+            _ => true,
         },
         _ => true,
     }

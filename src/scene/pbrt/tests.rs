@@ -2661,3 +2661,47 @@ fn motion_with_media_is_refused_at_the_moving_shape() {
     let c = converted(text, Files::default(), true).unwrap_or_else(|e| panic!("{e}"));
     assert!(c.desc.moving.is_empty() && !c.desc.media.is_empty());
 }
+
+#[test]
+fn emitters_keep_a_material_that_reflects() {
+    use crate::light::Light;
+    use crate::material::Material;
+    // pbrt-v4's emitting shapes reflect by their material; one of black
+    // diffuse reflectance (how emitters that only emit are written) does not.
+    let text = "WorldBegin\nTexture \"t\" \"spectrum\" \"checkerboard\"\n\
+         AttributeBegin\nAreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\nAreaLightSource \"diffuse\"\nShape \"disk\"\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nAreaLightSource \"diffuse\"\nShape \"disk\"\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"conductor\"\nAreaLightSource \"diffuse\"\nTranslate 0 0 3\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] \"point2 uv\" [0.1 0.2 0.3 0.4 0.5 0.6]\n\
+         AttributeEnd\n";
+    let c = converted(text, Files::default(), false).unwrap();
+    let d = &c.desc;
+    assert_eq!(d.lights.len(), 4);
+    let name = |i: usize| {
+        d.light_surfaces
+            .get(i)
+            .cloned()
+            .flatten()
+            .map(|s| d.materials[s.material as usize].1.clone())
+    };
+    assert!(matches!(name(0), Some(Material::Diffuse { .. })), "{:?}", name(0));
+    assert_eq!(name(1), None);
+    assert!(matches!(name(2), Some(Material::Diffuse { .. })), "{:?}", name(2));
+    assert!(matches!(name(3), Some(Material::Conductor { .. })), "{:?}", name(3));
+    // The triangle's texture coordinates stay with their vertices, which the
+    // scene's reflection turns as it turns the light's.
+    let (Some(Some(s)), Light::Triangle { vertices, .. }) = (d.light_surfaces.get(3), &d.lights[3]) else {
+        panic!("{:?}", d.lights[3])
+    };
+    let uvs = s.uvs.unwrap();
+    for (uv, p) in uvs.iter().zip(vertices) {
+        let at = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+            .iter()
+            .position(|&(x, y)| (p.x.abs() - x).abs() < 1e-5 && (p.y - y).abs() < 1e-5)
+            .unwrap();
+        let want = [Vec2::new(0.1, 0.2), Vec2::new(0.3, 0.4), Vec2::new(0.5, 0.6)][at];
+        assert!((*uv - want).length() < 1e-6, "{uv} at {p}, want {want}");
+    }
+    assert!(!c.warnings.iter().any(|w| w.contains("reflect")), "{:?}", c.warnings);
+}
