@@ -547,6 +547,59 @@ Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -2 0 -2  2 0
 Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -2 0 2  2 0 2  2 0.5 2  -2 0.5 2 ]
 """)
 
+put("pbrt", "reflecting-emitters.pbrt", """LookAt 0 1 -3  0 1 0  0 1 0
+Camera "perspective" "float fov" [ 50 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+Sampler "independent" "integer pixelsamples" [ 2 ]
+Integrator "bdpt" "integer maxdepth" [ 5 ]
+WorldBegin
+Texture "t" "spectrum" "checkerboard" "float uscale" [ 4 ]
+AttributeBegin
+  Material "dielectric" "float eta" [ 1.5 ]
+  AreaLightSource "diffuse" "rgb L" [ 0.2 0.6 0.3 ]
+  Translate -0.6 0.5 0
+  Shape "sphere" "float radius" [ 0.5 ]
+AttributeEnd
+AttributeBegin
+  Material "conductor" "float roughness" [ 0.1 ]
+  AreaLightSource "diffuse" "rgb L" [ 0.5 0.5 0.5 ] "bool twosided" true
+  Translate 0.6 0.5 0.5
+  Shape "disk" "float radius" [ 0.4 ]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "texture reflectance" "t"
+  AreaLightSource "diffuse" "rgb L" [ 3 3 3 ]
+  ReverseOrientation
+  Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -1 2 -1  1 2 -1  1 2 1  -1 2 1 ]
+    "point2 uv" [ 0 0  1 0  1 1  0 1 ]
+AttributeEnd
+Material "diffuse"
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ]
+""")
+
+put("scene", "reflecting-light.toml", camera + """
+[materials.d]
+albedo = [0.5, 0.5, 0.5]
+
+[[lights]]
+type = "quad"
+radiance = [2, 2, 2]
+material = "d"
+vertices = [[-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1]]
+
+[[lights]]
+type = "sphere"
+centre = [0, 0, 0.5]
+radius = 0.3
+power = 5
+material = "d"
+
+[[shapes]]
+type = "quad"
+material = "d"
+vertices = [[-2, -1, -2], [2, -1, -2], [2, -1, 2], [-2, -1, 2]]
+""")
+
 put("scene", "portal.toml", camera + """
 [[lights]]
 type = "infinite"

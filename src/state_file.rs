@@ -162,6 +162,7 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 sphere,
                 power,
                 image: ref im,
+                emits,
             } => {
                 h.u32(0);
                 h.vec3(sphere.centre);
@@ -170,6 +171,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
                 if let Some(t) = im {
                     image(&mut h, &t.image);
                     t.axes.to_cols_array().iter().for_each(|&v| h.f32(v));
+                }
+                // Spheres emitting inwards came later: hashed only then.
+                if emits != crate::light::Emits::Outwards {
+                    h.bytes(format!("{emits:?}").as_bytes());
                 }
             }
             Light::Point { position, power } => {

@@ -57,6 +57,7 @@ pub fn place_and_build(mesh: &Mesh) {
         disks: vec![],
         curves: vec![],
         lights: vec![],
+        light_surfaces: vec![],
         cutouts: vec![],
         media: vec![],
         camera_medium: None,

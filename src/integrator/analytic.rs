@@ -54,6 +54,7 @@ pub fn closed_sphere_desc(material: Material, light: Option<(f32, f32)>, size: u
             },
             power: Vec3::splat(power),
             image: None,
+            emits: Default::default(),
         });
     }
     d
@@ -207,11 +208,85 @@ pub fn path_settings(spp: u32, max_depth: Option<u32>) -> super::RenderSettings 
     }
 }
 
+/// A grey ball (albedo `a`, radius 0.12) in front of the camera inside a
+/// unit sphere light of radiance `le` that emits inwards (pbrt-v4's sphere
+/// under `ReverseOrientation`), or both ways, and reflects nothing: the
+/// ball's radiance is `a le` everywhere on it (it sees only the light),
+/// the light's `le`.
+pub fn ball_in_a_glowing_sphere(a: f32, le: f32, emits: crate::light::Emits) -> Scene {
+    let mut d = empty(inside_camera(16));
+    let m = d.material("ball", Material::diffuse(a, a, a));
+    d.spheres.push(SphereDesc {
+        axes: None,
+        sphere: Sphere {
+            centre: Vec3::new(0.0, 0.0, 0.65),
+            radius: 0.12,
+        },
+        material: m,
+    });
+    let sphere = Sphere {
+        centre: Vec3::ZERO,
+        radius: 1.0,
+    };
+    d.lights.push(Light::Sphere {
+        power: Vec3::splat(le * std::f32::consts::PI * sphere.area() * emits.sides()),
+        sphere,
+        image: None,
+        emits,
+    });
+    Scene::build(d).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::glowing_box;
+    use super::{ball_in_a_glowing_sphere, glowing_box};
     use crate::integrator::{render, IntegratorKind, LightSampling, RenderSettings};
+    use crate::light::Emits;
     use crate::material::Material;
+
+    /// Inside a sphere light that emits inwards (or both ways) every
+    /// integrator sees the light's radiance on it and its reflection on a
+    /// ball within: light samples drawn over the inside, BSDF hits on it
+    /// weighed against them, bdpt's particles leaving it inwards. (Photons
+    /// leaving it are checked against light samples in `light::tests`.)
+    #[test]
+    fn a_sphere_light_emitting_inwards_lights_what_it_holds() {
+        let (a, le) = (0.5f32, 2.0);
+        for emits in [Emits::Inwards, Emits::Both] {
+            let scene = ball_in_a_glowing_sphere(a, le, emits);
+            let mut runs = vec![];
+            for ls in [LightSampling::Mis, LightSampling::Bsdf, LightSampling::Light] {
+                let s = RenderSettings {
+                    integrator: IntegratorKind::Path,
+                    light_sampling: ls,
+                    spp: 64,
+                    ..RenderSettings::default()
+                };
+                runs.push((format!("path ({ls:?})"), s));
+            }
+            for integrator in [IntegratorKind::Bdpt, IntegratorKind::Photon, IntegratorKind::Sppm] {
+                let s = RenderSettings {
+                    integrator,
+                    spp: 64,
+                    ssaa: 4,
+                    passes: 4,
+                    ..RenderSettings::default()
+                };
+                runs.push((integrator.name().into(), s));
+            }
+            for (what, s) in runs {
+                let film = render(&scene, &s, &|| {}).unwrap().film;
+                let ball = film.mean(6, 6, 10, 10).x;
+                let wall = film.get(0, 0).x;
+                assert!(
+                    (ball - a * le).abs() / (a * le) < 0.02,
+                    "{emits:?} {what}: ball {ball} vs {}",
+                    a * le
+                );
+                assert!((wall - le).abs() / le < 0.01, "{emits:?} {what}: wall {wall} vs {le}");
+            }
+        }
+    }
 
     /// Every integrator inside a box of lights that reflect: le / (1 - a),
     /// twice what the walls emit with a = 1/2. Emitters that reflect nothing

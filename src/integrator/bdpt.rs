@@ -44,7 +44,7 @@ use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
 use crate::camera::Differentials;
 use crate::film::{Filter, PixelRect, PixelSum};
-use crate::light::{triangle_normal, Light};
+use crate::light::{triangle_normal, Emits, Light};
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::Sampler;
 use crate::scene::{Hit, Scene};
@@ -319,7 +319,14 @@ fn shading_correction(hit: &Hit, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
 /// `towards` for two-sided lights; zero for lights without a surface.
 fn light_normal(light: &Light, p: Vec3, towards: Vec3) -> Vec3 {
     let (n, two_sided) = match light {
-        Light::Sphere { sphere, .. } => ((p - sphere.centre).normalize_or_zero(), false),
+        Light::Sphere { sphere, emits, .. } => {
+            let n = (p - sphere.centre).normalize_or_zero();
+            match emits {
+                Emits::Outwards => (n, false),
+                Emits::Inwards => (-n, false),
+                Emits::Both => (n, true),
+            }
+        }
         Light::Triangle {
             vertices, two_sided, ..
         } => (triangle_normal(vertices), *two_sided),
@@ -1225,6 +1232,7 @@ mod tests {
                 },
                 power: Vec3::splat(15.0),
                 image: None,
+                emits: Default::default(),
             },
             Light::infinite(Vec3::splat(0.1), None, glam::Mat3::IDENTITY),
             Light::distant(Vec3::new(0.3, 0.2, -1.0).normalize(), Vec3::splat(0.5)),

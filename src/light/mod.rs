@@ -37,11 +37,13 @@ use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
-    /// `power` as if the image, where there is one, were 1 everywhere.
+    /// `power` (over every side it emits from) as if the image, where there
+    /// is one, were 1 everywhere.
     Sphere {
         sphere: Sphere,
         power: Vec3,
         image: Option<Arc<ImageOnSphere>>,
+        emits: Emits,
     },
     Point {
         position: Vec3,
@@ -142,6 +144,36 @@ pub struct LightSample {
     /// `pdf_li_hit` would say at the sampled point, without computing it
     /// again for multiple importance sampling.
     pub pdf: f32,
+}
+
+/// The sides of a sphere light that emit: pbrt-v4's sphere emits outwards,
+/// inwards under `ReverseOrientation`, and both ways when two-sided.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Emits {
+    #[default]
+    Outwards,
+    Inwards,
+    Both,
+}
+
+impl Emits {
+    /// How many sides emit.
+    pub fn sides(self) -> f32 {
+        if self == Emits::Both {
+            2.0
+        } else {
+            1.0
+        }
+    }
+
+    /// Whether the side seen from a point inside (else outside) emits.
+    pub fn seen_from(self, inside: bool) -> bool {
+        match self {
+            Emits::Outwards => !inside,
+            Emits::Inwards => inside,
+            Emits::Both => true,
+        }
+    }
 }
 
 /// One particle leaving a light (`Light::sample_le_flux`).
@@ -372,7 +404,9 @@ impl Light {
     /// infinite lights, which have none; see `le_escaped`).
     pub fn radiance(&self) -> Vec3 {
         match self {
-            Light::Sphere { sphere, power, .. } => *power / (PI * sphere.area()),
+            Light::Sphere {
+                sphere, power, emits, ..
+            } => *power / (PI * sphere.area() * emits.sides()),
             Light::Triangle { radiance, .. } | Light::Disk { radiance, .. } => *radiance,
             Light::Point { .. }
             | Light::Spot { .. }
@@ -388,7 +422,8 @@ impl Light {
     /// a sphere from inside: seen through a glass that emits).
     pub fn le(&self, p: Vec3, w: Vec3, uv: Vec2) -> Vec3 {
         match self {
-            Light::Sphere { sphere, .. } if (p - sphere.centre).dot(w) <= 0.0 => Vec3::ZERO,
+            // Leaving the inside (towards the centre) or the outside.
+            Light::Sphere { sphere, emits, .. } if !emits.seen_from((p - sphere.centre).dot(w) < 0.0) => Vec3::ZERO,
             Light::Triangle {
                 vertices,
                 two_sided: false,
@@ -602,12 +637,38 @@ impl Light {
                     pdf: 0.0,
                 })
             }
-            Light::Sphere { sphere, image, .. } => {
+            Light::Sphere {
+                sphere, image, emits, ..
+            } => {
                 let v = sphere.centre - p;
                 let dc2 = v.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                if dc2 <= r2 {
+                let inside = dc2 <= r2;
+                if !emits.seen_from(inside) {
                     return None;
+                }
+                if inside {
+                    // All of the inside is in view: a point uniform in area.
+                    let n = uniform_sphere(u);
+                    let q = sphere.centre + n * sphere.radius;
+                    let d = q - p;
+                    let dist = d.length();
+                    let wi = d / dist;
+                    let cos_l = n.dot(wi);
+                    if !(dist > 0.0 && cos_l > 0.0) {
+                        return None;
+                    }
+                    let pdf = dist * dist / (cos_l * sphere.area());
+                    let radiance = match image {
+                        Some(t) => self.radiance() * t.at_normal(n),
+                        None => self.radiance(),
+                    };
+                    return Some(LightSample {
+                        wi,
+                        dist,
+                        weight: radiance / pdf,
+                        pdf,
+                    });
                 }
                 let dc = dc2.sqrt();
                 let axis = v / dc;
@@ -716,11 +777,15 @@ impl Light {
             | Light::Goniometric { .. }
             | Light::Projection { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
-            Light::Sphere { sphere, .. } => {
+            Light::Sphere { sphere, emits, .. } => {
                 let dc2 = (sphere.centre - p).length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                if dc2 <= r2 {
+                let inside = dc2 <= r2;
+                if !emits.seen_from(inside) {
                     return 0.0;
+                }
+                if inside {
+                    return inside_sphere_pdf(sphere, p, wi, q);
                 }
                 let sin2_max = r2 / dc2;
                 let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
@@ -759,12 +824,19 @@ impl Light {
             | Light::Goniometric { .. }
             | Light::Projection { .. } => 0.0,
             Light::Infinite { .. } => self.pdf_li_escaped(p, wi),
-            Light::Sphere { sphere, .. } => {
+            Light::Sphere { sphere, emits, .. } => {
                 let v = sphere.centre - p;
                 let dc2 = v.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                if dc2 <= r2 {
+                let inside = dc2 <= r2;
+                if !emits.seen_from(inside) {
                     return 0.0;
+                }
+                if inside {
+                    // Where the ray leaves the sphere.
+                    let b = wi.dot(v);
+                    let t = b + (r2 - (dc2 - b * b)).max(0.0).sqrt();
+                    return inside_sphere_pdf(sphere, p, wi, p + wi * t);
                 }
                 let sin2_max = r2 / dc2;
                 let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
@@ -874,10 +946,22 @@ impl Light {
                 let wl = projector.sample(u1).map_or(Vec3::Z, |(w, _)| w);
                 (Ray::new(*position, (to_light.transpose() * wl).normalize()), Vec3::ZERO)
             }
-            Light::Sphere { sphere, .. } => {
+            Light::Sphere { sphere, emits, .. } => {
                 let n = uniform_sphere(u1);
+                let mut u2 = u2;
+                // The side: a two-sided sphere's as a two-sided disk's.
+                let inwards = match emits {
+                    Emits::Outwards => false,
+                    Emits::Inwards => true,
+                    Emits::Both => {
+                        let inwards = u2.x >= 0.5;
+                        u2.x = (if inwards { u2.x * 2.0 - 1.0 } else { u2.x * 2.0 }).min(1.0 - f32::EPSILON);
+                        inwards
+                    }
+                };
+                let (n, step) = if inwards { (-n, 1.0 - 1e-4) } else { (n, 1.0 + 1e-4) };
                 let d = to_world(cosine_hemisphere(u2), n).normalize();
-                let o = sphere.centre + n * (sphere.radius * (1.0 + 1e-4));
+                let o = sphere.centre - n * (sphere.radius * if inwards { step } else { -step });
                 (Ray::new(o, d), n)
             }
             Light::Disk { disk, two_sided, .. } => emit_cosine(disk_area_point(disk, u1), disk.normal, *two_sided, u2),
@@ -944,8 +1028,15 @@ impl Light {
                 }
             }
             Light::Sphere {
-                power, image: Some(t), ..
-            } => *power * t.at_normal(n),
+                sphere,
+                power,
+                image: Some(t),
+                ..
+            } => {
+                // The image is read at the outward normal, whichever side emits.
+                let outward = if n.dot(ray.o - sphere.centre) < 0.0 { -n } else { n };
+                *power * t.at_normal(outward)
+            }
             Light::Disk {
                 disk,
                 radiance,
@@ -992,7 +1083,7 @@ impl Light {
             Light::Projection {
                 to_light, projector, ..
             } => (0.0, projector.pdf((*to_light * ray.d).normalize())),
-            Light::Sphere { sphere, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / PI),
+            Light::Sphere { sphere, emits, .. } => (1.0 / sphere.area(), n.dot(ray.d).max(0.0) / (PI * emits.sides())),
             Light::Disk { disk, two_sided, .. } => {
                 let cos = n.dot(ray.d).max(0.0);
                 let side = if *two_sided { 0.5 } else { 1.0 };
@@ -1080,6 +1171,16 @@ fn emit_cosine(q: Vec3, n: Vec3, two_sided: bool, mut u2: Vec2) -> (Ray, Vec3) {
     }
     let d = to_world(cosine_hemisphere(u2), n).normalize();
     (Ray::new(crate::math::offset_origin(q, n, d), d), n)
+}
+
+/// The solid-angle density at `p`, inside `sphere`, of the point `q` on it
+/// along `wi` when points are drawn uniformly over its area.
+fn inside_sphere_pdf(sphere: &Sphere, p: Vec3, wi: Vec3, q: Vec3) -> f32 {
+    let cos_l = ((q - sphere.centre) / sphere.radius).dot(wi);
+    if cos_l <= 0.0 {
+        return 0.0;
+    }
+    (q - p).length_squared() / (cos_l * sphere.area())
 }
 
 /// A point uniformly distributed in area over a disk or annulus.

@@ -13,6 +13,7 @@ fn sphere_light_radiance_matches_scene_definition() {
         },
         power: Vec3::splat(14.0 * PI),
         image: None,
+        emits: Default::default(),
     };
     assert!((l.radiance().x - 111.41).abs() < 0.01);
 }
@@ -27,6 +28,7 @@ fn small_sphere_irradiance_matches_point_light() {
         },
         power,
         image: None,
+        emits: Default::default(),
     };
     let point = Light::Point {
         position: Vec3::new(0.0, 0.0, 2.0),
@@ -54,6 +56,7 @@ fn emitted_particles_leave_the_surface_outwards() {
         },
         power: Vec3::ONE,
         image: None,
+        emits: Default::default(),
     };
     let mut rng = Rng::new(3, 3);
     for _ in 0..1000 {
@@ -150,6 +153,7 @@ fn sphere_pdf_li_is_one_over_the_cone() {
         },
         power: Vec3::ONE,
         image: None,
+        emits: Default::default(),
     };
     let mut rng = Rng::new(2, 2);
     for _ in 0..100 {
@@ -432,6 +436,7 @@ fn every_light() -> Vec<(&'static str, Light)> {
                 },
                 power: Vec3::new(10.0, 8.0, 6.0),
                 image: None,
+                emits: Default::default(),
             },
         ),
         (
@@ -907,4 +912,53 @@ fn a_projection_light_casts_its_image_in_its_frustum_and_emits_its_power() {
         (carried - mc).abs().max_element() < 0.02 * mc.max_element(),
         "{carried} vs {mc}"
     );
+}
+
+#[test]
+fn sphere_lights_emitting_inwards_or_both_ways_agree_with_their_light_samples() {
+    // pbrt-v4's sphere under ReverseOrientation emits inwards, a two-sided
+    // one both ways. Inside, photons onto a disk bring what shadow rays
+    // (points uniform over the inside) find; outside, only a two-sided one
+    // sends anything; particles start on the sphere on their side.
+    let sphere = Sphere {
+        centre: Vec3::new(0.1, -0.2, 0.3),
+        radius: 1.5,
+    };
+    for emits in [Emits::Inwards, Emits::Both] {
+        let light = Light::Sphere {
+            sphere,
+            power: Vec3::new(6.0, 4.0, 2.0),
+            image: None,
+            emits,
+        };
+        let (centre, normal) = (
+            sphere.centre + Vec3::new(0.4, 0.3, -0.5),
+            Vec3::new(0.3, 1.0, -0.2).normalize(),
+        );
+        let (photons, shading) = flux_on_disk(&light, centre, normal, 0.3, 400_000, 11);
+        assert!(
+            close(photons, shading, 0.02),
+            "{emits:?}: photons {photons} vs shadow rays {shading}"
+        );
+        let outside = sphere.centre + Vec3::new(0.0, 3.0, 0.0);
+        let lit_outside = light.sample_li(outside, Vec2::new(0.3, 0.6)).is_some();
+        assert_eq!(lit_outside, emits == Emits::Both, "{emits:?}");
+        let mut rng = Rng::new(5, 5);
+        let mut inwards = 0;
+        for _ in 0..1000 {
+            let (ray, n) = light.sample_le(rng.next_2d(), rng.next_2d());
+            let out = (ray.o - sphere.centre) / sphere.radius;
+            assert!((out.length() - 1.0).abs() < 1e-3 && ray.d.dot(n) >= 0.0);
+            if n.dot(out) < 0.0 {
+                inwards += 1;
+                assert!(out.length() < 1.0, "a particle leaving inwards starts inside");
+            }
+        }
+        let want = if emits == Emits::Both { 400..600 } else { 1000..1001 };
+        assert!(want.contains(&inwards), "{emits:?}: {inwards} of 1000 inwards");
+        // Radiance leaves the inside, and the outside only when two-sided.
+        let p = sphere.centre + Vec3::Z * sphere.radius;
+        assert!(light.le(p, -Vec3::Z, Vec2::ZERO).x > 0.0);
+        assert_eq!(light.le(p, Vec3::Z, Vec2::ZERO).x > 0.0, emits == Emits::Both);
+    }
 }

@@ -513,6 +513,7 @@ impl SceneDesc {
                     },
                     power,
                     image: None,
+                    emits: Default::default(),
                 }
             } else {
                 Light::Point { position, power }

@@ -104,6 +104,7 @@ fn small_sphere_light_matches_point_light() {
         },
         power: Vec3::splat(POWER),
         image: None,
+        emits: Default::default(),
     };
     let lp = centre_radiance(plane_scene(point), 1);
     let ls = centre_radiance(plane_scene(sphere), 64);
@@ -138,6 +139,7 @@ fn a_sphere_light_never_shadows_its_own_samples() {
         },
         power: Vec3::splat(POWER),
         image: None,
+        emits: Default::default(),
     };
     let mut desc = plane_scene(light);
     desc.camera.fov_y_deg = 60.0;

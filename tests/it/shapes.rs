@@ -89,6 +89,7 @@ fn random_scene(spheres: usize, disks: usize, lights: usize, seed: u64) -> Scene
             },
             power: Vec3::splat(10.0),
             image: None,
+            emits: Default::default(),
         });
     }
     d

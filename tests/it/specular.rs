@@ -123,6 +123,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
             },
             power: Vec3::splat(power),
             image: None,
+            emits: Default::default(),
         }],
         light_surfaces: vec![],
         cutouts: vec![],

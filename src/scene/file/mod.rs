@@ -762,7 +762,11 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         ("position", l.position.is_some(), l.kind == LightKind::Point || spot),
         ("vertices", l.vertices.is_some(), area_light),
         ("radiance", l.radiance.is_some(), area_light || disk || at_infinity),
-        ("two_sided", l.two_sided.is_some(), area_light || disk),
+        (
+            "two_sided",
+            l.two_sided.is_some(),
+            area_light || disk || l.kind == LightKind::Sphere,
+        ),
         ("power", l.power.is_some(), !at_infinity),
         ("direction", l.direction.is_some(), spot || l.kind == LightKind::Distant),
         ("intensity", l.intensity.is_some(), spot),
@@ -833,10 +837,16 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             if radius <= 0.0 {
                 return Err(err(format!("sphere light: radius {radius} must be > 0")));
             }
+            let emits = if l.two_sided.unwrap_or(false) {
+                crate::light::Emits::Both
+            } else {
+                crate::light::Emits::Outwards
+            };
             Ok(vec![Light::Sphere {
                 sphere: Sphere { centre, radius },
                 power: power()?,
                 image: None,
+                emits,
             }])
         }
         LightKind::Point => {

@@ -1577,3 +1577,32 @@ fn an_area_light_may_reflect_by_a_material() {
     let e = parse_str(&point).unwrap_err().to_string();
     assert!(e.contains("`material` does not apply to a point light"), "{e}");
 }
+
+#[test]
+fn a_two_sided_sphere_light_glows_inside_too_with_its_power_over_both_sides() {
+    let light = |extra: &str| {
+        let text = format!("{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1\npower = 8\n{extra}");
+        parse_str(&text).unwrap().desc.lights[0].clone()
+    };
+    let (one, both) = (light(""), light("two_sided = true\n"));
+    assert!(matches!(
+        one,
+        Light::Sphere {
+            emits: crate::light::Emits::Outwards,
+            ..
+        }
+    ));
+    assert!(matches!(
+        both,
+        Light::Sphere {
+            emits: crate::light::Emits::Both,
+            ..
+        }
+    ));
+    assert_eq!(both.radiance() * 2.0, one.radiance());
+    assert_eq!(both.power(), one.power());
+    // Seen from inside, towards the centre: dark unless two-sided.
+    let p = Vec3::new(0.0, 0.0, 1.0);
+    assert_eq!(one.le(p, -Vec3::Z, Vec2::ZERO), Vec3::ZERO);
+    assert_eq!(both.le(p, -Vec3::Z, Vec2::ZERO), both.radiance());
+}

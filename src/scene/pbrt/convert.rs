@@ -45,7 +45,7 @@ use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
-use crate::light::{EmissionImage, ImageOnSphere, ImageOnTriangle, Light};
+use crate::light::{EmissionImage, Emits, ImageOnSphere, ImageOnTriangle, Light};
 use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::{Vec2, Vec3};
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
@@ -1809,15 +1809,13 @@ impl<'a> Conv<'a> {
                         radius: s.radius.abs() * scale,
                     };
                     if let Some(e) = emission {
-                        if shape.flips_normals() && !e.two_sided {
-                            self.problem(
-                                Kind::Light,
-                                &shape.loc,
-                                "a sphere light emitting inwards (ReverseOrientation) is not supported",
-                            );
-                            self.skipped_lights += 1;
-                            continue;
-                        }
+                        // pbrt-v4 emits on the side of the normal its hits
+                        // report: inwards when `flips_normals`.
+                        let emits = match (e.two_sided, shape.flips_normals()) {
+                            (true, _) => Emits::Both,
+                            (false, true) => Emits::Inwards,
+                            (false, false) => Emits::Outwards,
+                        };
                         let area = 4.0 * PI * sphere.radius * sphere.radius;
                         let radiance = e.radiance_for(area);
                         // The image is read at pbrt-v4's sphere coordinates,
@@ -1830,8 +1828,9 @@ impl<'a> Conv<'a> {
                         let image = e.image.clone().map(|image| Arc::new(ImageOnSphere { image, axes }));
                         let light = Light::Sphere {
                             sphere,
-                            power: radiance * PI * area,
+                            power: radiance * PI * area * emits.sides(),
                             image,
+                            emits,
                         };
                         self.push_emitter(desc, light, surface(None, None, Some(axes)), &shape.loc)?;
                     } else {
