@@ -11,7 +11,9 @@
 # seed for the noise of that figure; our photon map against our path tracer.
 #
 # Usage: PBRT=path/to/pbrt bench/image-lights.sh goniometric|projection|area-image|area-image-shapes [WIDTH HEIGHT SPP]
-#   (200 150 256). Renders are left in target/<scene>-bench/.
+#   (200 150 256). Renders are left in target/<scene>-bench/. Another scene
+#   of bench/scenes that needs no generated image may be named too;
+#   INTEGRATORS lists ours to compare with our path tracer ("photon").
 set -euo pipefail
 : "${PBRT:?set PBRT to a pbrt-v4 binary}"
 scene=${1:?goniometric, projection, area-image or area-image-shapes}
@@ -25,7 +27,7 @@ case $scene in
 goniometric) python3 "$root/bench/goniometric_map.py" "$out/gonio.pfm" 64 ;;
 projection) python3 "$root/bench/projection_slide.py" "$out/slide.pfm" ;;
 area-image | area-image-shapes) python3 "$root/bench/area_image.py" "$out/screen.png" ;;
-*) echo "unknown scene $scene" >&2; exit 2 ;;
+*) [ -f "$root/bench/scenes/$scene.pbrt" ] || { echo "unknown scene $scene" >&2; exit 2; } ;;
 esac
 sed -e "s/\"integer xresolution\" \[ [0-9]* \]/\"integer xresolution\" [ $w ]/" \
     -e "s/\"integer yresolution\" \[ [0-9]* \]/\"integer yresolution\" [ $h ]/" \
@@ -41,5 +43,7 @@ awk -v a="$start" -v b="$mid" -v c="$end" 'BEGIN { printf "pbrt-v4 %.1f s, ours 
 echo "ours against pbrt-v4: $("$bin" compare ours.pfm pbrt.pfm --max-luminance 4)"
 "$PBRT" --quiet --nthreads "${PBRT_THREADS:-2}" --seed 1 --outfile pbrt-seed1.pfm "$scene.pbrt"
 echo "pbrt-v4, seed 1, against pbrt-v4: $("$bin" compare pbrt-seed1.pfm pbrt.pfm --max-luminance 4)"
-"$bin" -q --scene "$scene.pbrt" --integrator photon -o photon.pfm
-echo "ours (photon) against ours (path): $("$bin" compare photon.pfm ours.pfm --max-luminance 4)"
+for i in ${INTEGRATORS:-photon}; do
+    "$bin" -q --scene "$scene.pbrt" --integrator "$i" -o "$i.pfm"
+    echo "ours ($i) against ours (path): $("$bin" compare "$i.pfm" ours.pfm --max-luminance 4)"
+done
