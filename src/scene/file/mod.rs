@@ -773,7 +773,11 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         ("cone_angle", l.cone_angle.is_some(), spot),
         ("cone_delta", l.cone_delta.is_some(), spot),
         ("scale", l.scale.is_some(), spot || at_infinity),
-        ("file", l.file.is_some(), l.kind == LightKind::Infinite || area_light),
+        (
+            "file",
+            l.file.is_some(),
+            l.kind == LightKind::Infinite || area_light || l.kind == LightKind::Sphere,
+        ),
         ("mapping", l.mapping.is_some(), l.kind == LightKind::Infinite),
         ("rotate", l.rotate.is_some(), l.kind == LightKind::Infinite),
         ("portal", l.portal.is_some(), l.kind == LightKind::Infinite),
@@ -824,6 +828,22 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
         }
         Ok(n)
     };
+    // An area light's emission image, which `power` (the flux) then
+    // divides `emission` by its mean luminance.
+    let light_emission_image = |emission: &mut Vec3| -> Result<Option<std::sync::Arc<crate::light::EmissionImage>>> {
+        let Some(file) = &l.file else {
+            return Ok(None);
+        };
+        let image = emission_image(src, file, kind).map_err(err)?;
+        if l.power.is_some() {
+            let k = crate::math::luminance(image.mean());
+            if k <= 0.0 {
+                return Err(err(format!("{kind} light: `power` with a black image")));
+            }
+            *emission /= k;
+        }
+        Ok(Some(std::sync::Arc::new(image)))
+    };
     let non_negative = |key: &str, v: Vec3| -> Result<Vec3> {
         if v.min_element() < 0.0 {
             return Err(err(format!("{kind} light: {key} {:?} must be >= 0", v.to_array())));
@@ -842,10 +862,19 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             } else {
                 crate::light::Emits::Outwards
             };
+            // An image wraps round the world's z axis, as pbrt-v4's sphere
+            // coordinates run about its own.
+            let mut power = power()?;
+            let image = light_emission_image(&mut power)?.map(|image| {
+                std::sync::Arc::new(crate::light::ImageOnSphere {
+                    image,
+                    axes: glam::Mat3::IDENTITY,
+                })
+            });
             Ok(vec![Light::Sphere {
                 sphere: Sphere { centre, radius },
-                power: power()?,
-                image: None,
+                power,
+                image,
                 emits,
             }])
         }
@@ -874,21 +903,7 @@ fn light(src: &Source, spanned: &Spanned<LightSpec>) -> Result<Vec<Light>> {
             }
             let mut radiance = area_radiance(area, two_sided)?;
             let uvs = AREA_LIGHT_UVS;
-            let image = match &l.file {
-                Some(file) => {
-                    let image = emission_image(src, file, kind).map_err(err)?;
-                    if l.power.is_some() {
-                        // `power` is the flux: over the image's mean luminance.
-                        let k = crate::math::luminance(image.mean());
-                        if k <= 0.0 {
-                            return Err(err(format!("{kind} light: `power` with a black image")));
-                        }
-                        radiance /= k;
-                    }
-                    Some(std::sync::Arc::new(image))
-                }
-                None => None,
-            };
+            let image = light_emission_image(&mut radiance)?;
             Ok(tris
                 .into_iter()
                 .zip(uvs)

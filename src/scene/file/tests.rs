@@ -1606,3 +1606,33 @@ fn a_two_sided_sphere_light_glows_inside_too_with_its_power_over_both_sides() {
     assert_eq!(one.le(p, -Vec3::Z, Vec2::ZERO), Vec3::ZERO);
     assert_eq!(both.le(p, -Vec3::Z, Vec2::ZERO), both.radiance());
 }
+
+#[test]
+fn a_sphere_light_wraps_its_emission_image_with_z_up() {
+    // A 2 x 2 image: blue top row, red bottom row. The sphere's top (+z)
+    // reads blue, its bottom red; `power` sets the flux by the image's
+    // mean luminance.
+    let dir = tempfile::tempdir().unwrap();
+    write_env(&dir.path().join("glow.pfm"), 2, 2, |_, y| {
+        if y == 0 {
+            Vec3::new(0.0, 0.0, 1.0)
+        } else {
+            Vec3::new(1.0, 0.0, 0.0)
+        }
+    });
+    let path = dir.path().join("s.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "{CAMERA}[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1\npower = 10\nfile = \"glow.pfm\"\n"
+        ),
+    )
+    .unwrap();
+    let d = load(&path, &LoadOptions::default()).unwrap().desc;
+    let l = &d.lights[0];
+    let up = l.sample_li(Vec3::new(0.0, 0.0, 5.0), Vec2::new(0.5, 0.5)).unwrap();
+    let down = l.sample_li(Vec3::new(0.0, 0.0, -5.0), Vec2::new(0.5, 0.5)).unwrap();
+    assert!(up.weight.z > 0.0 && up.weight.x == 0.0, "{:?}", up.weight);
+    assert!(down.weight.x > 0.0 && down.weight.z == 0.0, "{:?}", down.weight);
+    assert!((crate::math::luminance(l.power()) - 10.0).abs() < 1e-3, "{}", l.power());
+}
