@@ -237,9 +237,33 @@ pub fn ball_in_a_glowing_sphere(a: f32, le: f32, emits: crate::light::Emits) -> 
     Scene::build(d).unwrap()
 }
 
+/// An integrating sphere: the inside of a unit sphere light of radiance
+/// `le` that emits inwards (or both ways) and reflects by a Lambertian of
+/// albedo `a`, whose radiance inside is `le / (1 - a)` everywhere. Its
+/// points sample the light they lie on.
+pub fn integrating_sphere(a: f32, le: f32, emits: crate::light::Emits) -> Scene {
+    let mut d = empty(inside_camera(8));
+    let m = d.material("wall", Material::diffuse(a, a, a));
+    let sphere = Sphere {
+        centre: Vec3::new(0.3, -0.2, 0.1),
+        radius: 1.0,
+    };
+    d.lights.push(Light::Sphere {
+        power: Vec3::splat(le * std::f32::consts::PI * sphere.area() * emits.sides()),
+        sphere,
+        image: None,
+        emits,
+    });
+    d.light_surfaces.push(Some(LightSurface {
+        material: m,
+        ..LightSurface::default()
+    }));
+    Scene::build(d).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{ball_in_a_glowing_sphere, glowing_box};
+    use super::{ball_in_a_glowing_sphere, glowing_box, integrating_sphere};
     use crate::integrator::{render, IntegratorKind, LightSampling, RenderSettings};
     use crate::light::Emits;
     use crate::material::Material;
@@ -284,6 +308,49 @@ mod tests {
                     a * le
                 );
                 assert!((wall - le).abs() / le < 0.01, "{emits:?} {what}: wall {wall} vs {le}");
+            }
+        }
+    }
+
+    /// Inside a sphere light that emits inwards and reflects, each point
+    /// of it samples the light it lies on, from inside (rounding puts such
+    /// a point on either side of the surface): le / (1 - a) everywhere.
+    #[test]
+    fn an_integrating_sphere_glows_as_radiosity_says() {
+        let (a, le) = (0.5f32, 1.0);
+        for emits in [Emits::Inwards, Emits::Both] {
+            let scene = integrating_sphere(a, le, emits);
+            let mut runs = vec![];
+            for ls in [LightSampling::Mis, LightSampling::Bsdf, LightSampling::Light] {
+                let s = RenderSettings {
+                    integrator: IntegratorKind::Path,
+                    light_sampling: ls,
+                    spp: 64,
+                    ..RenderSettings::default()
+                };
+                runs.push((format!("path ({ls:?})"), s));
+            }
+            let s = RenderSettings {
+                integrator: IntegratorKind::Bdpt,
+                spp: 64,
+                ..RenderSettings::default()
+            };
+            runs.push(("bdpt".into(), s));
+            let mut s = RenderSettings {
+                integrator: IntegratorKind::Photon,
+                ssaa: 2,
+                ..RenderSettings::default()
+            };
+            s.photon.max_bounces = 16;
+            runs.push(("photon".into(), s));
+            for (what, s) in runs {
+                let film = render(&scene, &s, &|| {}).unwrap().film;
+                let mean = film.mean(0, 0, 8, 8).x;
+                let expected = le / (1.0 - a);
+                assert!(
+                    (mean - expected).abs() / expected < 0.02,
+                    "{emits:?} {what}: {mean} vs {expected}"
+                );
             }
         }
     }

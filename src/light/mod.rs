@@ -643,7 +643,7 @@ impl Light {
                 let v = sphere.centre - p;
                 let dc2 = v.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                let inside = dc2 <= r2;
+                let inside = counts_as_inside(sphere, p);
                 if !emits.seen_from(inside) {
                     return None;
                 }
@@ -780,7 +780,7 @@ impl Light {
             Light::Sphere { sphere, emits, .. } => {
                 let dc2 = (sphere.centre - p).length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                let inside = dc2 <= r2;
+                let inside = counts_as_inside(sphere, p);
                 if !emits.seen_from(inside) {
                     return 0.0;
                 }
@@ -828,7 +828,7 @@ impl Light {
                 let v = sphere.centre - p;
                 let dc2 = v.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                let inside = dc2 <= r2;
+                let inside = counts_as_inside(sphere, p);
                 if !emits.seen_from(inside) {
                     return 0.0;
                 }
@@ -1171,6 +1171,17 @@ fn emit_cosine(q: Vec3, n: Vec3, two_sided: bool, mut u2: Vec2) -> (Ray, Vec3) {
     }
     let d = to_world(cosine_hemisphere(u2), n).normalize();
     (Ray::new(crate::math::offset_origin(q, n, d), d), n)
+}
+
+/// Whether `p` is inside `sphere` for its light: a point on the surface
+/// counts as inside, whichever side rounding put it on, as pbrt-v4 counts
+/// it (by its origin offset towards the centre). A sphere light that
+/// reflects samples itself from its own surface: from inside, where the
+/// whole inside is in view (an integrating sphere), and never by a cone
+/// that shrinks to the point itself.
+fn counts_as_inside(sphere: &Sphere, p: Vec3) -> bool {
+    let slack = 1e-4 * sphere.radius + 8.0 * f32::EPSILON * (sphere.centre.abs().max_element() + sphere.radius);
+    (p - sphere.centre).length() <= sphere.radius + slack
 }
 
 /// The solid-angle density at `p`, inside `sphere`, of the point `q` on it

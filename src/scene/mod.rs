@@ -498,13 +498,18 @@ impl SceneDesc {
     }
 
     /// Sets the radius of every sphere light; 0 turns them into point lights.
+    /// A sphere keeps the sides it emits from and its surface; a light
+    /// made a sphere or a point has no surface to reflect by.
     pub fn set_light_radius(&mut self, radius: f32) {
-        for l in self
-            .lights
-            .iter_mut()
-            .filter(|l| matches!(l, Light::Sphere { .. } | Light::Point { .. } | Light::Triangle { .. }))
-        {
+        for (i, l) in self.lights.iter_mut().enumerate() {
+            if !matches!(l, Light::Sphere { .. } | Light::Point { .. } | Light::Triangle { .. }) {
+                continue;
+            }
             let (position, power) = (l.position(), l.power());
+            let was_sphere = match l {
+                Light::Sphere { emits, .. } => Some(*emits),
+                _ => None,
+            };
             *l = if radius > 0.0 {
                 Light::Sphere {
                     sphere: Sphere {
@@ -513,11 +518,16 @@ impl SceneDesc {
                     },
                     power,
                     image: None,
-                    emits: Default::default(),
+                    emits: was_sphere.unwrap_or_default(),
                 }
             } else {
                 Light::Point { position, power }
             };
+            if radius <= 0.0 || was_sphere.is_none() {
+                if let Some(s) = self.light_surfaces.get_mut(i) {
+                    *s = None;
+                }
+            }
         }
     }
 }

@@ -1605,6 +1605,20 @@ fn a_two_sided_sphere_light_glows_inside_too_with_its_power_over_both_sides() {
     let p = Vec3::new(0.0, 0.0, 1.0);
     assert_eq!(one.le(p, -Vec3::Z, Vec2::ZERO), Vec3::ZERO);
     assert_eq!(both.le(p, -Vec3::Z, Vec2::ZERO), both.radiance());
+    // `--light-radius` keeps the sides a sphere emits from, and so its
+    // radiance; a light it turns into a sphere keeps no surface.
+    let text = format!(
+        "{CAMERA}[materials.m]\nalbedo = [1, 1, 1]\n[[lights]]\ntype = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1\npower = 8\ntwo_sided = true\nmaterial = \"m\"\n\
+         [[lights]]\ntype = \"triangle\"\nradiance = [1, 1, 1]\nvertices = [[0, 0, 2], [1, 0, 2], [0, 1, 2]]\nmaterial = \"m\"\n"
+    );
+    let mut d = parse_str(&text).unwrap().desc;
+    d.set_light_radius(0.5);
+    let Light::Sphere { emits, sphere, .. } = &d.lights[0] else {
+        panic!("{:?}", d.lights[0])
+    };
+    assert_eq!((*emits, sphere.radius), (crate::light::Emits::Both, 0.5));
+    assert_eq!(d.lights[0].power(), both.power());
+    assert!(d.light_surfaces[0].is_some() && d.light_surfaces[1].is_none());
 }
 
 #[test]

@@ -183,6 +183,8 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         skipped_shapes_count: 0,
         skipped_lights: 0,
         dropped_light_triangles: 0,
+        emitters_bounding_media: 0,
+        emitters_unbumped: 0,
         imaging_ratio: 1.0,
         shutter: [0.0, 1.0],
         first_motion: None,
@@ -291,6 +293,18 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         });
     }
     c.report_unused();
+    if c.emitters_bounding_media > 0 {
+        c.warnings.push(format!(
+            "{} emitting shapes bound a medium: they reflect nothing here, where pbrt-v4 reflects by their material",
+            c.emitters_bounding_media
+        ));
+    }
+    if c.emitters_unbumped > 0 {
+        c.warnings.push(format!(
+            "{} emitting shapes have a bump or normal map, which is not applied on emitters",
+            c.emitters_unbumped
+        ));
+    }
     if c.dropped_light_triangles > 0 {
         c.warnings.push(format!(
             "{} emitting triangles of zero area dropped",
@@ -339,6 +353,10 @@ struct Conv<'a> {
     skipped_shapes_count: usize,
     skipped_lights: usize,
     dropped_light_triangles: usize,
+    /// Emitting shapes whose material would reflect but that bound a
+    /// medium, and those whose material is bumped (warned of once each).
+    emitters_bounding_media: usize,
+    emitters_unbumped: usize,
 }
 
 fn origin(loc: &Loc) -> Origin {
@@ -1650,7 +1668,18 @@ impl<'a> Conv<'a> {
             // pbrt-v4's emitters also reflect by their material; one that
             // reflects nothing ends paths as our lights do by default.
             let emitter_material = match (&emission, scene.materials.get(shape.material)) {
-                (Some(_), Some(m)) if reflects(m) => Some(self.material(desc, shape.material)?),
+                // An emitter bounds no medium here: its surface would let
+                // rays into one they do not enter. It reflects nothing.
+                (Some(_), Some(m)) if reflects(m) && interface.is_some() => {
+                    self.emitters_bounding_media += 1;
+                    None
+                }
+                (Some(_), Some(m)) if reflects(m) => {
+                    if m.params.get("displacement").is_some() || m.params.get("normalmap").is_some() {
+                        self.emitters_unbumped += 1;
+                    }
+                    Some(self.material(desc, shape.material)?)
+                }
                 _ => None,
             };
             let surface = |normals: Option<[Vec3; 3]>, uvs: Option<[Vec2; 3]>, axes: Option<glam::Mat3>| {

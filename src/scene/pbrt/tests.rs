@@ -2704,4 +2704,23 @@ fn emitters_keep_a_material_that_reflects() {
         assert!((*uv - want).length() < 1e-6, "{uv} at {p}, want {want}");
     }
     assert!(!c.warnings.iter().any(|w| w.contains("reflect")), "{:?}", c.warnings);
+    // A glass emitter that bounds a medium reflects nothing, with a
+    // warning; a bumped one reflects, its bump not applied, with a warning.
+    let text = "WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+         AttributeBegin\nMaterial \"dielectric\"\nMediumInterface \"fog\" \"\"\nAreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"diffuse\" \"float displacement\" 0.1\nAreaLightSource \"diffuse\"\nShape \"disk\"\nAttributeEnd\n";
+    let c = converted(text, Files::default(), false).unwrap();
+    assert_eq!(c.desc.lights.len(), 2);
+    assert_eq!(c.desc.light_surfaces.first().cloned().flatten(), None);
+    assert!(
+        matches!(c.desc.light_surfaces.get(1), Some(Some(_))),
+        "{:?}",
+        c.desc.light_surfaces
+    );
+    for w in [
+        "1 emitting shapes bound a medium",
+        "1 emitting shapes have a bump or normal map",
+    ] {
+        assert!(c.warnings.iter().any(|x| x.contains(w)), "{w}: {:?}", c.warnings);
+    }
 }
