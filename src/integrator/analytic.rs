@@ -224,17 +224,20 @@ pub fn ball_in_a_glowing_sphere(a: f32, le: f32, emits: crate::light::Emits) -> 
         },
         material: m,
     });
-    let sphere = Sphere {
-        centre: Vec3::ZERO,
-        radius: 1.0,
-    };
-    d.lights.push(Light::Sphere {
+    d.lights.push(unit_sphere_light(Vec3::ZERO, le, emits));
+    Scene::build(d).unwrap()
+}
+
+/// A sphere light of radius 1 at `centre` whose radiance is `le` on each
+/// side it emits from.
+fn unit_sphere_light(centre: Vec3, le: f32, emits: crate::light::Emits) -> Light {
+    let sphere = Sphere { centre, radius: 1.0 };
+    Light::Sphere {
         power: Vec3::splat(le * std::f32::consts::PI * sphere.area() * emits.sides()),
         sphere,
         image: None,
         emits,
-    });
-    Scene::build(d).unwrap()
+    }
 }
 
 /// An integrating sphere: the inside of a unit sphere light of radiance
@@ -244,16 +247,8 @@ pub fn ball_in_a_glowing_sphere(a: f32, le: f32, emits: crate::light::Emits) -> 
 pub fn integrating_sphere(a: f32, le: f32, emits: crate::light::Emits) -> Scene {
     let mut d = empty(inside_camera(8));
     let m = d.material("wall", Material::diffuse(a, a, a));
-    let sphere = Sphere {
-        centre: Vec3::new(0.3, -0.2, 0.1),
-        radius: 1.0,
-    };
-    d.lights.push(Light::Sphere {
-        power: Vec3::splat(le * std::f32::consts::PI * sphere.area() * emits.sides()),
-        sphere,
-        image: None,
-        emits,
-    });
+    // Off the origin, so that points on it round both ways.
+    d.lights.push(unit_sphere_light(Vec3::new(0.3, -0.2, 0.1), le, emits));
     d.light_surfaces.push(Some(LightSurface {
         material: m,
         ..LightSurface::default()
