@@ -532,6 +532,18 @@ impl SceneDesc {
     }
 }
 
+/// A triangle's vertex normals, where all are finite and nonzero (else it
+/// is shaded flat).
+fn shading_normals(ns: Option<[Vec3; 3]>) -> Option<[Vec3; 3]> {
+    ns.filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0))
+}
+
+/// A triangle's texture coordinates, where all are finite (else it takes
+/// the default ones).
+fn texture_uvs(uvs: Option<[Vec2; 3]>) -> Option<[Vec2; 3]> {
+    uvs.filter(|uv| uv.iter().all(|c| c.is_finite()))
+}
+
 /// What a primitive is, for the hit record and photon storage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PrimKind {
@@ -1047,11 +1059,8 @@ impl Scene {
                 light: None,
                 alpha: cut.triangles.get(i).copied().unwrap_or(SOLID),
             });
-            normals.push(
-                t.normals
-                    .filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0)),
-            );
-            uvs.push(t.uvs.filter(|uv| uv.iter().all(|c| c.is_finite())));
+            normals.push(shading_normals(t.normals));
+            uvs.push(texture_uvs(t.uvs));
         }
         let mut lights = desc.lights.clone();
         let mut spheres: Vec<SphereObject> = desc
@@ -1147,15 +1156,10 @@ impl Scene {
                         light: Some(i as u32),
                         alpha: SOLID,
                     });
-                    let valid_normals = reflecting
-                        .and_then(|s| s.normals)
-                        .filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0));
-                    normals.push(valid_normals);
+                    normals.push(shading_normals(reflecting.and_then(|s| s.normals)));
                     // Hits read an emission image at these coordinates,
                     // which are the surface's own where it has any.
-                    let surface_uvs = reflecting
-                        .and_then(|s| s.uvs)
-                        .filter(|uv| uv.iter().all(|c| c.is_finite()));
+                    let surface_uvs = texture_uvs(reflecting.and_then(|s| s.uvs));
                     uvs.push(image.as_ref().map(|t| t.uv).or(surface_uvs));
                 }
                 Light::Disk { disk, .. } => disks.push(DiskObject {
