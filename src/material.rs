@@ -7,7 +7,7 @@
 //! towards the side it is seen from. A dielectric's frame keeps the surface's
 //! outward normal, because which side is inside decides its relative index.
 
-use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, TrowbridgeReitz};
+use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, MeasuredBxdf, TrowbridgeReitz};
 use crate::bssrdf::{Bssrdf, BssrdfTable};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
@@ -191,6 +191,9 @@ pub enum Material {
         beta_n: f32,
         alpha: f32,
     },
+    /// A measured BRDF of the RGL database (pbrt-v4's `measured`): glossy
+    /// reflection read from a tensor file.
+    Measured(MeasuredBxdf),
     /// One of two materials at each shading point, the second with
     /// probability `amount` (a float texture), as pbrt-v4's `mix`: the choice
     /// is a hash of the point and the direction it is seen from, so it is
@@ -417,6 +420,7 @@ impl Material {
                     | Material::CoatedDiffuse { .. }
                     | Material::CoatedConductor { .. }
                     | Material::Subsurface(_)
+                    | Material::Measured(_)
             ),
         }
     }
@@ -498,7 +502,8 @@ impl Material {
             Material::Interface
             | Material::Emissive { .. }
             | Material::ThinDielectric { .. }
-            | Material::Hair { .. } => {}
+            | Material::Hair { .. }
+            | Material::Measured(_) => {}
         }
     }
 
@@ -511,7 +516,8 @@ impl Material {
             Material::Emissive { .. }
             | Material::ThinDielectric { .. }
             | Material::Interface
-            | Material::Hair { .. } => false,
+            | Material::Hair { .. }
+            | Material::Measured(_) => false,
             Material::Conductor { fresnel: f, roughness } => fresnel(f) || roughness.needs_footprint(),
             Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => {
                 roughness.needs_footprint()
@@ -616,6 +622,7 @@ impl Material {
                 return Bsdf::new(Bxdf::dielectric(s.roughness.distribution(&tc), s.eta), sp.ns, sp.dpdu);
             }
             Material::ThinDielectric { eta } => Bxdf::thin_dielectric(*eta),
+            Material::Measured(m) => Bxdf::Measured(*m),
             Material::CoatedDiffuse {
                 reflectance,
                 roughness,

@@ -16,6 +16,7 @@
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`CoatedConductorBxdf`] | `layered` | pbrt-v4's `LayeredBxDF` random walk (Guo et al. 2018) for `f`; a deterministic mixture for sampling |
 //! | [`HairBxdf`] | `hair` | pbrt-v4 9.9 (Chiang et al. 2016) |
+//! | [`MeasuredBxdf`] | `measured` | pbrt-v4's `MeasuredBxDF` (Dupuy & Jakob 2018): the RGL database's tensor files |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
 //! | Fresnel terms | `fresnel` | pbrt-v4 9.3-9.4 |
 //! | named metals | `metals` | pbrt-v4's `metal-*-eta/k` spectra, fitted to RGB |
@@ -39,6 +40,7 @@ mod frame;
 mod fresnel;
 mod hair;
 mod layered;
+mod measured;
 mod metals;
 mod microfacet;
 
@@ -56,6 +58,9 @@ pub use frame::Frame;
 pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric, fresnel_moment1, fresnel_moment2, reflect, refract};
 pub use hair::HairBxdf;
 pub use layered::CoatedConductorBxdf;
+#[cfg(test)]
+pub use measured::test_file as measured_test_file;
+pub use measured::{MeasuredBxdf, MeasuredData};
 pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
 pub use microfacet::TrowbridgeReitz;
 
@@ -242,6 +247,7 @@ pub enum Bxdf {
     CoatedConductor(CoatedConductorBxdf),
     Hair(HairBxdf),
     NormalizedFresnel(NormalizedFresnelBxdf),
+    Measured(MeasuredBxdf),
 }
 
 impl Bxdf {
@@ -314,6 +320,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
             Bxdf::Hair(b) => b.f(wo, wi, mode),
             Bxdf::NormalizedFresnel(b) => b.f(wo, wi, mode),
+            Bxdf::Measured(b) => b.f(wo, wi),
         }
     }
 
@@ -337,6 +344,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::NormalizedFresnel(b) => b.sample_f(wo, u, mode),
+            Bxdf::Measured(b) => b.sample_f(wo, u),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }
@@ -356,6 +364,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
             Bxdf::Hair(b) => b.pdf(wo, wi),
             Bxdf::NormalizedFresnel(b) => b.pdf(wo, wi),
+            Bxdf::Measured(b) => b.pdf(wo, wi),
         }
     }
 
@@ -371,6 +380,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.flags(),
             Bxdf::Hair(b) => b.flags(),
             Bxdf::NormalizedFresnel(_) => BxdfFlags::DIFFUSE_REFLECTION,
+            Bxdf::Measured(b) => b.flags(),
         }
     }
 }
@@ -431,7 +441,7 @@ impl Bsdf {
     /// Whether `sample_f` reads its `uc` (to choose between lobes).
     pub fn uses_lobe_choice(&self) -> bool {
         match self.bxdf {
-            Bxdf::Diffuse(_) | Bxdf::Conductor(_) | Bxdf::NormalizedFresnel(_) => false,
+            Bxdf::Diffuse(_) | Bxdf::Conductor(_) | Bxdf::NormalizedFresnel(_) | Bxdf::Measured(_) => false,
             // Both smooth: one specular reflection, no choice.
             Bxdf::CoatedConductor(b) => b.flags() != BxdfFlags::SPECULAR_REFLECTION,
             _ => true,

@@ -1,7 +1,8 @@
 //! pbrt-v4 scenes through the binary: Bitterli's cornell box against its
 //! reference image (framing, orientation, brightness), and a scene with
-//! a material the renderer lacks (pbrt-v4's measured BSDFs), refused with
-//! one line naming the place, rendered with `--lenient`; a roughness
+//! a material the renderer lacks (pbrt-v3's `plastic`), refused with
+//! one line naming the place, rendered with `--lenient`; a measured BRDF
+//! file read, and a broken one refused at its line; a roughness
 //! texture that does not vary renders as its number does; a thin lens
 //! focuses; a film's crop window renders the pixels `--crop` does.
 //!
@@ -169,13 +170,13 @@ fn cornell_box_overlays_its_reference() {
 #[test]
 fn unsupported_materials_are_refused_in_one_line_unless_lenient() {
     let out = tempfile::tempdir().unwrap();
-    let image = out.path().join("measured.exr");
+    let image = out.path().join("plastic.exr");
     let scene = out.path().join("scene.pbrt");
     std::fs::write(
         &scene,
         "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n\
          WorldBegin\nLightSource \"point\" \"rgb I\" [10 10 10] \"point3 from\" [0 0 -4]\n\
-         Material \"measured\" \"string filename\" \"x.bsdf\"\nShape \"sphere\"\n",
+         Material \"plastic\"\nShape \"sphere\"\n",
     )
     .unwrap();
     let scene = scene.to_str().unwrap();
@@ -189,7 +190,7 @@ fn unsupported_materials_are_refused_in_one_line_unless_lenient() {
     let at = stderr.find("scene.pbrt:").expect("names the file");
     let line = &stderr[at + "scene.pbrt:".len()..];
     assert!(line.starts_with(|c: char| c.is_ascii_digit()), "{stderr}");
-    assert!(stderr.contains("measured") && stderr.contains("--lenient"), "{stderr}");
+    assert!(stderr.contains("plastic") && stderr.contains("--lenient"), "{stderr}");
     assert!(run.stdout.is_empty() && !image.exists());
 
     args.push("--lenient");
@@ -1749,4 +1750,108 @@ fn a_bilinear_patch_without_uv_reads_images_at_the_patchs_own_uv_on_both_halves(
             assert!((white.x - white.z).abs() < 1e-4 && white.x > 0.1, "{shape}: {white}");
         }
     }
+}
+
+/// A field of a tensor file: its name, shape, type code and bytes.
+type TensorField<'a> = (&'a str, Vec<u64>, (u8, Vec<u8>));
+
+/// A tensor file of the RGL database's layout, its tables constant.
+fn flat_bsdf() -> Vec<u8> {
+    let f32s = |n: usize, v: f32| {
+        (
+            10u8,
+            vec![v; n].iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(),
+        )
+    };
+    let fields: Vec<TensorField> = vec![
+        ("description", vec![4], (1, b"flat".to_vec())),
+        ("jacobian", vec![1], (1, vec![1])),
+        (
+            "theta_i",
+            vec![2],
+            (10, [0.0f32, 1.5].iter().flat_map(|x| x.to_le_bytes()).collect()),
+        ),
+        ("phi_i", vec![1], f32s(1, 0.0)),
+        (
+            "wavelengths",
+            vec![2],
+            (10, [400.0f32, 700.0].iter().flat_map(|x| x.to_le_bytes()).collect()),
+        ),
+        ("ndf", vec![2, 2], f32s(4, 1.0 / std::f32::consts::PI)),
+        ("sigma", vec![2, 2], f32s(4, 1.0)),
+        ("vndf", vec![1, 2, 2, 2], f32s(8, 1.0)),
+        ("luminance", vec![1, 2, 2, 2], f32s(8, 1.0)),
+        ("spectra", vec![1, 2, 2, 2, 2], f32s(16, 0.5)),
+    ];
+    let header: usize = 18 + fields.iter().map(|(n, s, _)| 13 + n.len() + 8 * s.len()).sum::<usize>();
+    let (mut head, mut body) = (b"tensor_file\0\x01\x00".to_vec(), Vec::<u8>::new());
+    head.extend((fields.len() as u32).to_le_bytes());
+    for (name, shape, (dtype, data)) in &fields {
+        head.extend((name.len() as u16).to_le_bytes());
+        head.extend(name.as_bytes());
+        head.extend((shape.len() as u16).to_le_bytes());
+        head.push(*dtype);
+        head.extend(((header + body.len()) as u64).to_le_bytes());
+        shape.iter().for_each(|n| head.extend(n.to_le_bytes()));
+        body.extend(data);
+    }
+    head.extend(body);
+    head
+}
+
+#[test]
+fn measured_brdf_files_render_and_broken_ones_are_named_at_their_line() {
+    let out = tempfile::tempdir().unwrap();
+    let file = flat_bsdf();
+    std::fs::write(out.path().join("flat.bsdf"), &file).unwrap();
+    std::fs::write(out.path().join("cut.bsdf"), &file[..file.len() - 8]).unwrap();
+    let scene = |name: &str| {
+        let path = out.path().join(format!("{name}.pbrt"));
+        std::fs::write(
+            &path,
+            format!(
+                "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n\
+                 WorldBegin\nLightSource \"point\" \"rgb I\" [10 10 10] \"point3 from\" [0 0 -4]\n\
+                 Material \"measured\" \"string filename\" \"{name}.bsdf\"\nShape \"sphere\"\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let small = [
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--integrator",
+        "path",
+        "--spp",
+        "4",
+        "--quiet",
+    ];
+    let image = out.path().join("flat.exr");
+    let flat = scene("flat");
+    let mut args = vec!["--scene", flat.to_str().unwrap(), "-o", image.to_str().unwrap()];
+    args.extend(small);
+    let run = raytracer(&args);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let img = read_image(&image).unwrap();
+    // The sphere faces the light: its middle is lit, its corners are not.
+    let mid = img.pixels[12 * 24 + 12];
+    assert!(mid.min_element() > 0.0 && mid.is_finite(), "{mid}");
+    assert_eq!(img.pixels[0], Vec3::ZERO);
+
+    let image = out.path().join("cut.exr");
+    let cut = scene("cut");
+    let mut args = vec!["--scene", cut.to_str().unwrap(), "-o", image.to_str().unwrap()];
+    args.extend(small);
+    let run = raytracer(&args);
+    assert_eq!(run.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("cut.pbrt:5:") && stderr.contains("past the file's end"),
+        "{stderr}"
+    );
+    assert!(!image.exists());
 }

@@ -40,7 +40,7 @@ use super::error::{Loc, PbrtError};
 use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
-use crate::bsdf::HairBxdf;
+use crate::bsdf::{HairBxdf, MeasuredBxdf, MeasuredData};
 use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
@@ -2688,6 +2688,18 @@ fn convert_surface(
             }))
         }
         "hair" => hair(p),
+        "measured" => {
+            let at = place(p, "filename", loc).clone();
+            let Some(file) = p.get_string("filename")? else {
+                return Err(located(loc, "measured: no \"filename\" was given".to_string()));
+            };
+            let Some(path) = scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+                return Err(PbrtError::at(&at, format!("measured: file \"{file}\" not found")).into());
+            };
+            let data = MeasuredData::shared(&path, wavelength_rgb)
+                .map_err(|e| located(&at, format!("measured: {}: {e}", path.display())))?;
+            Ok(Ok(Material::Measured(MeasuredBxdf { data })))
+        }
         "subsurface" => subsurface(scene, p, loc),
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
     }
@@ -3504,6 +3516,39 @@ fn reflectance_rgb(v: &SpectrumValue) -> Option<Vec3> {
         }
         _ => None,
     }
+}
+
+/// The RGB weight of each of a sampled spectrum's wavelengths (ascending,
+/// nm): a spectrum's colour as a reflectance ([`reflectance_rgb`]) is the sum
+/// of its values times these. Between wavelengths the spectrum is linear;
+/// beyond the first and the last it keeps their values (as pbrt-v4
+/// interpolates a measured BRDF's spectra).
+fn wavelength_rgb(wavelengths: &[f32]) -> Vec<Vec3> {
+    let white = xyz_to_linear_srgb(spectrum_to_xyz(|_| 1.0));
+    let n = wavelengths.len();
+    (0..n)
+        .map(|k| {
+            let hat = |l: f32| -> f32 {
+                let i = wavelengths.partition_point(|&x| x <= l);
+                if i == 0 {
+                    (k == 0) as u8 as f32
+                } else if i == n {
+                    (k == n - 1) as u8 as f32
+                } else {
+                    let (l0, l1) = (wavelengths[i - 1], wavelengths[i]);
+                    let t = if l1 > l0 { (l - l0) / (l1 - l0) } else { 0.0 };
+                    if k == i - 1 {
+                        1.0 - t
+                    } else if k == i {
+                        t
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            xyz_to_linear_srgb(spectrum_to_xyz(hat)) / white
+        })
+        .collect()
 }
 
 /// Centre and scale of a transformation that is a rotation (or
@@ -4929,7 +4974,7 @@ mod tests {
     #[test]
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
-            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"measured\"\nNamedMaterial \"cu\"\n{}\
+            "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"plastic\"\nNamedMaterial \"cu\"\n{}\
              Shape \"sphere\" \"float phimax\" 90\nLightSource \"laser\"\nLightSource \"laser\"\nLightSource \"laser\"\n",
             quad(0.0)
         );

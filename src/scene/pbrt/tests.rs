@@ -1725,11 +1725,11 @@ fn mix_materials_convert_with_their_amount_and_refuse_what_they_cannot_hold() {
     assert_eq!(*amount, crate::texture::Texture::from(Vec3::splat(0.25)));
     // A part we lack makes the whole mix unsupported (grey with --lenient).
     let text = "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\
-                MakeNamedMaterial \"h\" \"string type\" \"measured\"\n\
+                MakeNamedMaterial \"h\" \"string type\" \"plastic\"\n\
                 Material \"mix\" \"string materials\" [\"a\" \"h\"]\nShape \"sphere\"\n";
     let e = converted(text, Files::default(), false).unwrap_err();
     assert!(
-        e.starts_with("scene/main.pbrt:4: material (mix: material \"h\": type \"measured\" is not supported)"),
+        e.starts_with("scene/main.pbrt:4: material (mix: material \"h\": type \"plastic\" is not supported)"),
         "{e}"
     );
     // Names that are not two defined materials are errors at the parameter.
@@ -2722,5 +2722,82 @@ fn emitters_keep_a_material_that_reflects() {
         "1 emitting shapes have a bump or normal map",
     ] {
         assert!(c.warnings.iter().any(|x| x.contains(w)), "{w}: {:?}", c.warnings);
+    }
+}
+
+#[test]
+fn measured_materials_read_their_file_and_name_bad_ones_at_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.bsdf");
+    std::fs::write(&good, crate::bsdf::measured_test_file()).unwrap();
+    let bad = dir.path().join("bad.bsdf");
+    std::fs::write(&bad, "not a tensor").unwrap();
+    let scene = |material: &str| {
+        format!(
+            "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n{material}\n\
+             Material \"mix\" \"string materials\" [\"a\" \"m\"]\nShape \"sphere\"\n"
+        )
+    };
+    let named = |params: &str| format!("MakeNamedMaterial \"m\" \"string type\" \"measured\" {params}");
+    let c = converted(
+        &scene(&named(&format!("\"string filename\" \"{}\"", good.display()))),
+        Files::default(),
+        false,
+    )
+    .unwrap();
+    // The mix holds it: a measured material is no longer a reason to refuse one.
+    let measured = |c: &convert::Converted| {
+        c.desc
+            .materials
+            .iter()
+            .find_map(|(_, m)| match m {
+                crate::material::Material::Mix { materials, .. } => Some(materials[1].clone()),
+                _ => None,
+            })
+            .unwrap()
+    };
+    let m = measured(&c);
+    let crate::material::Material::Measured(b) = &m else {
+        panic!("{m:?}")
+    };
+    // Named in the Debug form that scene fingerprints hash: by its file's
+    // name and a hash of its bytes, not its folder.
+    let shown = format!("{b:?}");
+    assert!(shown.contains("\"good.bsdf\"") && shown.contains("hash: "), "{shown}");
+    assert!(!shown.contains(&dir.path().display().to_string()), "{shown}");
+    // The same file named again is read once: the same data.
+    let c2 = converted(
+        &scene(&named(&format!("\"string filename\" \"{}\"", good.display()))),
+        Files::default(),
+        false,
+    )
+    .unwrap();
+    assert_eq!(measured(&c2), m);
+    // A missing file, one that is not a tensor file, and no file at all:
+    // each an error at its line, lenient or not.
+    for lenient in [false, true] {
+        let e = converted(
+            &scene(&named("\"string filename\" \"nope.bsdf\"")),
+            Files::default(),
+            lenient,
+        )
+        .unwrap_err();
+        assert!(
+            e.starts_with("scene/main.pbrt:3:") && e.contains("measured: file \"nope.bsdf\" not found"),
+            "{e}"
+        );
+        let e = converted(
+            &scene(&named(&format!("\"string filename\" \"{}\"", bad.display()))),
+            Files::default(),
+            lenient,
+        )
+        .unwrap_err();
+        assert!(
+            e.starts_with("scene/main.pbrt:3:") && e.contains("bad.bsdf: not a tensor file"),
+            "{e}"
+        );
+        let e = converted(&scene(&named("")), Files::default(), lenient).unwrap_err();
+        assert!(e.starts_with("scene/main.pbrt:3: measured: no \"filename\""), "{e}");
+        assert!(!e.contains('\n'));
     }
 }
