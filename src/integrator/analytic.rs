@@ -256,9 +256,43 @@ pub fn integrating_sphere(a: f32, le: f32, emits: crate::light::Emits) -> Scene 
     Scene::build(d).unwrap()
 }
 
+/// A floor of `material` (the plane z = 0, far wider than the view) under a
+/// sky of constant radiance `sky`, seen by an orthographic camera along
+/// `view` (every pixel sees the floor from that direction): the floor sees
+/// only the sky, so its radiance is `sky` times its directional albedo.
+pub fn floor_under_sky(material: Material, sky: f32, view: Vec3) -> SceneDesc {
+    let camera = CameraDesc {
+        position: -view.normalize() * 5.0,
+        look_at: Vec3::ZERO,
+        up: Vec3::Z,
+        fov_y_deg: 40.0,
+        width: 8,
+        height: 8,
+        window: None,
+        lens: None,
+        orthographic: Some(0.5),
+        spherical: None,
+    };
+    let mut d = SceneDesc::empty("floor under sky", camera);
+    let m = d.material("floor", material);
+    d.triangles.push(TriangleDesc {
+        vertices: [
+            Vec3::new(-50.0, -50.0, 0.0),
+            Vec3::new(50.0, -50.0, 0.0),
+            Vec3::new(0.0, 50.0, 0.0),
+        ],
+        normals: None,
+        uvs: None,
+        material: m,
+    });
+    d.lights
+        .push(Light::infinite(Vec3::splat(sky), None, glam::Mat3::IDENTITY));
+    d
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{ball_in_a_glowing_sphere, glowing_box, integrating_sphere};
+    use super::{ball_in_a_glowing_sphere, floor_under_sky, glowing_box, integrating_sphere};
     use crate::integrator::{render, IntegratorKind, LightSampling, RenderSettings};
     use crate::light::Emits;
     use crate::material::Material;
@@ -347,6 +381,44 @@ mod tests {
                     (mean - expected).abs() / expected < 0.02,
                     "{emits:?} {what}: {mean} vs {expected}"
                 );
+            }
+        }
+    }
+
+    /// A measured BRDF under a constant sky, in every integrator: the floor
+    /// shows the sky times the BRDF's directional albedo, which quadrature
+    /// over the BRDF itself gives.
+    #[test]
+    fn a_measured_brdf_under_a_sky_shows_its_albedo_in_every_integrator() {
+        use crate::bsdf::{Bxdf, MeasuredBxdf, MeasuredData, TransportMode};
+        use crate::math::Vec3;
+        let file = crate::bsdf::measured_test_file();
+        let grey = |l: &[f32]| vec![Vec3::splat(0.5); l.len()];
+        let data: &'static MeasuredData = Box::leak(Box::new(MeasuredData::from_bytes(&file, "test", grey).unwrap()));
+        let b = Bxdf::Measured(MeasuredBxdf { data });
+        let sky = 2.0;
+        let view = Vec3::new(0.0, 0.6, -0.8);
+        let wo = -view;
+        // The albedo towards wo, by quadrature in the local frame (normal +z).
+        let (m, k) = (300, 300);
+        let mut albedo = 0.0;
+        for j in 0..m {
+            let theta = (j as f32 + 0.5) / m as f32 * std::f32::consts::FRAC_PI_2;
+            for i in 0..k {
+                let phi = (i as f32 + 0.5) / k as f32 * std::f32::consts::TAU;
+                let wi = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                albedo += b.f(wo, wi, TransportMode::Radiance).x * wi.z * theta.sin();
+            }
+        }
+        albedo *= std::f32::consts::FRAC_PI_2 / m as f32 * std::f32::consts::TAU / k as f32;
+        // Spectra 0.3 and 0.9, half each: 0.6 times the normals' albedo, under 1.
+        assert!(albedo > 0.5 && albedo < 0.6, "{albedo}");
+        let scene = crate::Scene::build(floor_under_sky(Material::Measured(MeasuredBxdf { data }), sky, view)).unwrap();
+        let expected = sky * albedo;
+        for (what, s) in every_integrator() {
+            let mean = render(&scene, &s, &|| {}).unwrap().film.mean(0, 0, 8, 8);
+            for c in mean.to_array() {
+                assert!((c - expected).abs() / expected < 0.02, "{what}: {mean} vs {expected}");
             }
         }
     }

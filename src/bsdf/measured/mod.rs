@@ -28,9 +28,8 @@ use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Mutex;
-use std::time::SystemTime;
 use tensor::TensorFile;
 
 /// A measured BRDF's tables, in RGB.
@@ -197,25 +196,25 @@ impl MeasuredData {
         })
     }
 
-    /// The data of the file at `path`, read once per process and kept (as
+    /// The data of a file's bytes, parsed once per process and kept (as
     /// pbrt-v4 keeps it): a scene may name one file for many materials, and
-    /// renders hold BSDFs that refer to it. Read again when the file changes.
-    pub fn shared(path: &Path, rgb_of: impl Fn(&[f32]) -> Vec<Vec3>) -> Result<&'static MeasuredData, String> {
-        type Key = (PathBuf, u64, Option<SystemTime>);
-        static LOADED: Mutex<Option<HashMap<Key, &'static MeasuredData>>> = Mutex::new(None);
-        let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
-        let key = (
-            path.canonicalize().unwrap_or_else(|_| path.to_path_buf()),
-            meta.len(),
-            meta.modified().ok(),
-        );
+    /// renders hold BSDFs that refer to it. Files of the same name and bytes
+    /// share their data.
+    pub fn shared(
+        path: &Path,
+        file: &[u8],
+        rgb_of: impl Fn(&[f32]) -> Vec<Vec3>,
+    ) -> Result<&'static MeasuredData, String> {
+        static LOADED: Mutex<Option<HashMap<(String, u64), &'static MeasuredData>>> = Mutex::new(None);
+        let mut digest = crate::state_file::Fnv64::default();
+        digest.bytes(file);
+        let key = (path.display().to_string(), digest.finish());
         let mut loaded = LOADED.lock().unwrap_or_else(|e| e.into_inner());
         let loaded = loaded.get_or_insert_with(HashMap::new);
         if let Some(&d) = loaded.get(&key) {
             return Ok(d);
         }
-        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-        let data = MeasuredData::from_bytes(&bytes, &path.display().to_string(), rgb_of)?;
+        let data = MeasuredData::from_bytes(file, &key.0, rgb_of)?;
         let data: &'static MeasuredData = Box::leak(Box::new(data));
         loaded.insert(key, data);
         Ok(data)

@@ -3,7 +3,7 @@
 //! about: a key of another type, a bad value, an unknown texture name.
 
 use super::Source;
-use crate::bsdf::named_metal;
+use crate::bsdf::{named_metal, MeasuredBxdf, MeasuredData};
 use crate::error::Result;
 use crate::material::{ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
@@ -529,7 +529,7 @@ pub(super) fn materials(
             out.insert(name.clone(), Material::Interface);
             continue;
         }
-        let mut m = material(&k, textures)?;
+        let mut m = material(&k, textures, dir, files)?;
         // A normal map, over any type: an image of normals in the surface's
         // (dp/du, n x dp/du, n) frame, read as linear RGB (pbrt-v4's `normalmap`).
         if let Some(file) = k.string("normal_map")? {
@@ -553,7 +553,12 @@ pub(super) fn materials(
     Ok(out)
 }
 
-fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Material> {
+fn material(
+    k: &Keys,
+    textures: &BTreeMap<String, Arc<Texture>>,
+    dir: &Path,
+    files: &dyn FileSource,
+) -> Result<Material> {
     let mut lookup = |n: &str, span: std::ops::Range<usize>| -> Result<Arc<Texture>> {
         textures.get(n).cloned().ok_or_else(|| {
             let known: Vec<&str> = textures.keys().map(String::as_str).collect();
@@ -906,12 +911,25 @@ fn material(k: &Keys, textures: &BTreeMap<String, Arc<Texture>>) -> Result<Mater
                 table: crate::bssrdf::BssrdfTable::shared(g, eta),
             }))
         }
+        "measured" => {
+            // A measured BRDF of the RGL database (a `.bsdf` tensor file),
+            // its path relative to the scene file.
+            k.only(kind, &["file"])?;
+            let file = k.string("file")?.ok_or_else(|| k.err(None, "missing `file`".into()))?;
+            let path = dir.join(file);
+            let fail = |e: String| k.err(Some("file"), format!("`file`: {}: {e}", path.display()));
+            let bytes = files.read(&path).map_err(|e| fail(e.to_string()))?;
+            let data =
+                MeasuredData::shared(&path, &bytes, crate::scene::pbrt::spectrum::wavelength_rgb).map_err(fail)?;
+            Material::Measured(MeasuredBxdf { data })
+        }
         other => {
             return Err(k.err(
                 Some("type"),
                 format!(
                     "unknown material type '{other}' (diffuse, mirror, glass, conductor, dielectric, \
-                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission, subsurface, interface)"
+                     thindielectric, coateddiffuse, coatedconductor, diffusetransmission, subsurface, measured, \
+                     interface)"
                 ),
             ))
         }

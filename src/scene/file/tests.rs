@@ -1650,3 +1650,42 @@ fn a_sphere_light_wraps_its_emission_image_with_z_up() {
     assert!(down.weight.x > 0.0 && down.weight.z == 0.0, "{:?}", down.weight);
     assert!((crate::math::luminance(l.power()) - 10.0).abs() < 1e-3, "{}", l.power());
 }
+
+#[test]
+fn measured_materials_read_their_file_beside_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("brdfs")).unwrap();
+    std::fs::write(dir.path().join("brdfs/ggx.bsdf"), crate::bsdf::measured_test_file()).unwrap();
+    std::fs::write(dir.path().join("brdfs/bad.bsdf"), b"tensor_file\0\x02\x00").unwrap();
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        fov_y = 40
+        [materials.paint]
+        type = "measured"
+        file = "brdfs/ggx.bsdf"
+        displacement = 0.1
+    "#;
+    let scene = dir.path().join("scene.toml");
+    let d = parse(&scene, text, &LoadOptions::default()).unwrap().desc;
+    let m = d.materials.iter().find(|(k, _)| k == "paint").map(|(_, m)| m).unwrap();
+    let Material::Bumped { base, .. } = m else {
+        panic!("{m:?}")
+    };
+    assert!(matches!(**base, Material::Measured(_)), "{base:?}");
+    // A missing file, a broken one, no file, and a key it does not take:
+    // each at its line.
+    for (from, to, line, what) in [
+        ("ggx.bsdf", "nope.bsdf", 8, "nope.bsdf:"),
+        ("ggx.bsdf", "bad.bsdf", 8, "version 2.0"),
+        ("file = \"brdfs/ggx.bsdf\"", "", 6, "missing `file`"),
+        ("displacement = 0.1", "roughness = 0.1", 9, "`roughness` does not apply"),
+    ] {
+        let e = parse(&scene, &text.replace(from, to), &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("scene.toml:{line}:")) && e.contains(what), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+}

@@ -2696,8 +2696,10 @@ fn convert_surface(
             let Some(path) = scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
                 return Err(PbrtError::at(&at, format!("measured: file \"{file}\" not found")).into());
             };
-            let data = MeasuredData::shared(&path, wavelength_rgb)
-                .map_err(|e| located(&at, format!("measured: {}: {e}", path.display())))?;
+            let in_file = |e: String| located(&at, format!("measured: {}: {e}", path.display()));
+            let bytes = crate::scene::mesh::FileSource::read(&crate::scene::mesh::Disk, &path)
+                .map_err(|e| in_file(e.to_string()))?;
+            let data = MeasuredData::shared(&path, &bytes, super::spectrum::wavelength_rgb).map_err(in_file)?;
             Ok(Ok(Material::Measured(MeasuredBxdf { data })))
         }
         "subsurface" => subsurface(scene, p, loc),
@@ -3516,39 +3518,6 @@ fn reflectance_rgb(v: &SpectrumValue) -> Option<Vec3> {
         }
         _ => None,
     }
-}
-
-/// The RGB weight of each of a sampled spectrum's wavelengths (ascending,
-/// nm): a spectrum's colour as a reflectance ([`reflectance_rgb`]) is the sum
-/// of its values times these. Between wavelengths the spectrum is linear;
-/// beyond the first and the last it keeps their values (as pbrt-v4
-/// interpolates a measured BRDF's spectra).
-fn wavelength_rgb(wavelengths: &[f32]) -> Vec<Vec3> {
-    let white = xyz_to_linear_srgb(spectrum_to_xyz(|_| 1.0));
-    let n = wavelengths.len();
-    (0..n)
-        .map(|k| {
-            let hat = |l: f32| -> f32 {
-                let i = wavelengths.partition_point(|&x| x <= l);
-                if i == 0 {
-                    (k == 0) as u8 as f32
-                } else if i == n {
-                    (k == n - 1) as u8 as f32
-                } else {
-                    let (l0, l1) = (wavelengths[i - 1], wavelengths[i]);
-                    let t = if l1 > l0 { (l - l0) / (l1 - l0) } else { 0.0 };
-                    if k == i - 1 {
-                        1.0 - t
-                    } else if k == i {
-                        t
-                    } else {
-                        0.0
-                    }
-                }
-            };
-            xyz_to_linear_srgb(spectrum_to_xyz(hat)) / white
-        })
-        .collect()
 }
 
 /// Centre and scale of a transformation that is a rotation (or

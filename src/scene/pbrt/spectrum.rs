@@ -331,6 +331,39 @@ pub fn spectrum_to_xyz(s: impl Fn(f32) -> f32) -> Vec3 {
     )
 }
 
+/// The RGB weight of each of a sampled spectrum's wavelengths (ascending,
+/// nm): a spectrum's colour as a reflectance (as the converter's `reflectance_rgb` takes it) is the sum
+/// of its values times these. Between wavelengths the spectrum is linear;
+/// beyond the first and the last it keeps their values (as pbrt-v4
+/// interpolates a measured BRDF's spectra).
+pub fn wavelength_rgb(wavelengths: &[f32]) -> Vec<Vec3> {
+    let white = xyz_to_linear_srgb(spectrum_to_xyz(|_| 1.0));
+    let n = wavelengths.len();
+    (0..n)
+        .map(|k| {
+            let hat = |l: f32| -> f32 {
+                let i = wavelengths.partition_point(|&x| x <= l);
+                if i == 0 {
+                    (k == 0) as u8 as f32
+                } else if i == n {
+                    (k == n - 1) as u8 as f32
+                } else {
+                    let (l0, l1) = (wavelengths[i - 1], wavelengths[i]);
+                    let t = if l1 > l0 { (l - l0) / (l1 - l0) } else { 0.0 };
+                    if k == i - 1 {
+                        1.0 - t
+                    } else if k == i {
+                        t
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            xyz_to_linear_srgb(spectrum_to_xyz(hat)) / white
+        })
+        .collect()
+}
+
 /// CIE XYZ to linear sRGB (D65 white).
 pub fn xyz_to_linear_srgb(xyz: Vec3) -> Vec3 {
     Vec3::new(
