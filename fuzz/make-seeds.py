@@ -615,3 +615,37 @@ type = "quad"
 material = "d"
 vertices = [[-2, -1, -2], [2, -1, -2], [2, -1, 2], [-2, -1, 2]]
 """)
+
+
+# Measured BRDFs (RGL tensor files): a small isotropic one with spectra,
+# and one of RGB values over a quarter of the incident azimuths.
+def tensor(fields):
+    head_len = 18 + sum(13 + len(n) + 8 * len(s) for n, s, _, _ in fields)
+    head, body = bytearray(b"tensor_file\0\x01\x00"), bytearray()
+    head += struct.pack("<I", len(fields))
+    for name, shape, dtype, values in fields:
+        data = bytes(values) if dtype == 1 else struct.pack(f"<{len(values)}f", *values)
+        head += struct.pack("<H", len(name)) + name.encode() + struct.pack("<HBQ", len(shape), dtype, head_len + len(body))
+        head += b"".join(struct.pack("<Q", n) for n in shape)
+        body += data
+    return bytes(head + body)
+
+
+def measured(phis, colours, rgb):
+    n, nt, npi = 3, 2, len(phis)
+    grid = [1.0 + 0.1 * i for i in range(n * n)]
+    fields = [("description", [4], 1, b"seed"), ("jacobian", [1], 1, [1]),
+              ("theta_i", [nt], 10, [0.0, 1.2]), ("phi_i", [npi], 10, phis),
+              ("ndf", [n, n], 10, grid), ("sigma", [n, n], 10, grid),
+              ("vndf", [npi, nt, n, n], 10, grid * npi * nt),
+              ("luminance", [npi, nt, n, n], 10, grid * npi * nt)]
+    if not rgb:
+        fields.append(("wavelengths", [colours], 10, [400.0 + 100 * i for i in range(colours)]))
+    fields.append(("rgb" if rgb else "spectra", [npi, nt, colours, n, n], 10,
+                   [0.5] * (npi * nt * colours * n * n)))
+    return tensor(fields)
+
+
+os.makedirs(os.path.join(here, "seeds", "measured"), exist_ok=True)
+put("measured", "isotropic.bsdf", measured([0.0], 2, False))
+put("measured", "quarter-rgb.bsdf", measured([-3.14159265, -2.35619449, -1.57079633], 3, True))
