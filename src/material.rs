@@ -502,8 +502,9 @@ impl Material {
             Material::Interface
             | Material::Emissive { .. }
             | Material::ThinDielectric { .. }
-            | Material::Hair { .. }
-            | Material::Measured(_) => {}
+            | Material::Hair { .. } => {}
+            // Its azimuths follow the frame's turned handedness back.
+            Material::Measured(m) => m.mirrored = !m.mirrored,
         }
     }
 

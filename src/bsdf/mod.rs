@@ -320,7 +320,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
             Bxdf::Hair(b) => b.f(wo, wi, mode),
             Bxdf::NormalizedFresnel(b) => b.f(wo, wi, mode),
-            Bxdf::Measured(b) => b.f(wo, wi),
+            Bxdf::Measured(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -344,7 +344,7 @@ impl Bxdf {
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::NormalizedFresnel(b) => b.sample_f(wo, u, mode),
-            Bxdf::Measured(b) => b.sample_f(wo, u),
+            Bxdf::Measured(b) => b.sample_f(wo, u, mode),
         }?;
         (bs.pdf > 0.0 && bs.pdf.is_finite() && bs.wi.z != 0.0).then_some(bs)
     }

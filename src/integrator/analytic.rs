@@ -395,7 +395,7 @@ mod tests {
         let file = crate::bsdf::measured_test_file();
         let grey = |l: &[f32]| vec![Vec3::splat(0.5); l.len()];
         let data: &'static MeasuredData = Box::leak(Box::new(MeasuredData::from_bytes(&file, "test", grey).unwrap()));
-        let b = Bxdf::Measured(MeasuredBxdf { data });
+        let b = Bxdf::Measured(MeasuredBxdf::new(data));
         let sky = 2.0;
         let view = Vec3::new(0.0, 0.6, -0.8);
         let wo = -view;
@@ -413,7 +413,8 @@ mod tests {
         albedo *= std::f32::consts::FRAC_PI_2 / m as f32 * std::f32::consts::TAU / k as f32;
         // Spectra 0.3 and 0.9, half each: 0.6 times the normals' albedo, under 1.
         assert!(albedo > 0.5 && albedo < 0.6, "{albedo}");
-        let scene = crate::Scene::build(floor_under_sky(Material::Measured(MeasuredBxdf { data }), sky, view)).unwrap();
+        let scene =
+            crate::Scene::build(floor_under_sky(Material::Measured(MeasuredBxdf::new(data)), sky, view)).unwrap();
         let expected = sky * albedo;
         for (what, s) in every_integrator() {
             let mean = render(&scene, &s, &|| {}).unwrap().film.mean(0, 0, 8, 8);

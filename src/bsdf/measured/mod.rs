@@ -23,7 +23,7 @@ mod warp;
 
 pub use warp::PiecewiseLinear2D;
 
-use super::{BsdfSample, BxdfFlags};
+use super::{BsdfSample, BxdfFlags, TransportMode};
 use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::f32::consts::PI;
@@ -134,6 +134,7 @@ impl MeasuredData {
             ));
         }
         // Densities and areas: a negative value (rounding in a fit) is none.
+        // (Colours are clamped after interpolation, as pbrt-v4 clamps them.)
         let clamp = |v: Vec<f32>| -> Vec<f32> { v.into_iter().map(|x| x.max(0.0)).collect() };
         let (ndf, sigma, vndf, lum) = (clamp(ndf), clamp(sigma), clamp(vndf), clamp(lum));
         let isotropic = np <= 2;
@@ -145,6 +146,10 @@ impl MeasuredData {
                 return Err(format!(
                     "phi_i spans {span} radians: a file covers the full circle, a half or a quarter"
                 ));
+            }
+            // Directions are folded into the azimuths from -pi on.
+            if (phi_i[0] + PI).abs() > 1e-3 {
+                return Err(format!("phi_i starts at {}: files start at -pi", phi_i[0]));
             }
             reduction = r as u8;
         }
@@ -171,7 +176,7 @@ impl MeasuredData {
                 for c in 0..3 {
                     let dst = &mut rgb[(a * 3 + c) * n..(a * 3 + c + 1) * n];
                     for (d, s) in dst.iter_mut().zip(src) {
-                        *d += w[c] * s.max(0.0);
+                        *d += w[c] * s;
                     }
                 }
             }
@@ -226,17 +231,27 @@ impl MeasuredData {
 #[derive(Clone, Copy)]
 pub struct MeasuredBxdf {
     pub data: &'static MeasuredData,
+    /// In a scene reflected as a whole (pbrt-v4's handedness), the shading
+    /// frame's y axis turns round: its azimuths are read mirrored back, so
+    /// that an anisotropic file keeps pbrt-v4's orientation.
+    pub mirrored: bool,
+}
+
+impl MeasuredBxdf {
+    pub fn new(data: &'static MeasuredData) -> Self {
+        MeasuredBxdf { data, mirrored: false }
+    }
 }
 
 impl PartialEq for MeasuredBxdf {
     fn eq(&self, other: &Self) -> bool {
-        std::ptr::eq(self.data, other.data)
+        std::ptr::eq(self.data, other.data) && self.mirrored == other.mirrored
     }
 }
 
 impl fmt::Debug for MeasuredBxdf {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "MeasuredBxdf({:?})", self.data)
+        write!(f, "MeasuredBxdf({:?}, mirrored: {})", self.data, self.mirrored)
     }
 }
 
@@ -304,9 +319,18 @@ impl MeasuredBxdf {
             colour / cos_i
         };
         if f.is_finite() {
-            f
+            f.max(Vec3::ZERO)
         } else {
             Vec3::ZERO
+        }
+    }
+
+    /// A shading-frame direction in the file's frame (and back).
+    fn handed(&self, w: Vec3) -> Vec3 {
+        if self.mirrored {
+            Vec3::new(w.x, -w.y, w.z)
+        } else {
+            w
         }
     }
 
@@ -317,6 +341,7 @@ impl MeasuredBxdf {
         if wo.z * wi.z <= 0.0 {
             return None;
         }
+        let (wo, wi) = (self.handed(wo), self.handed(wi));
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
         let s = self.fold(wo);
         let (wo, wi) = (wo * s, wi * s);
@@ -324,7 +349,17 @@ impl MeasuredBxdf {
         Some((wo, wi, wm))
     }
 
-    pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+    /// The BRDF for light going from `wi` to `wo`; for importance (light
+    /// paths) its adjoint, f(wi, wo): a table need not be reciprocal, and
+    /// light and camera paths then see the same surface.
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        match mode {
+            TransportMode::Radiance => self.eval(wo, wi),
+            TransportMode::Importance => self.eval(wi, wo),
+        }
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         let Some((wo, wi, wm)) = self.upper(wo, wi) else {
             return Vec3::ZERO;
         };
@@ -348,14 +383,25 @@ impl MeasuredBxdf {
         let p = self.pair(wo, wm);
         let (u, vndf_pdf) = d.vndf.invert(p.u_wm, &p.params);
         let pdf = vndf_pdf * d.luminance.evaluate(u, &p.params) / Self::to_solid_angle(wo, wm, p.u_wm);
-        if pdf.is_finite() {
+        if pdf.is_finite() && pdf >= 0.0 {
             pdf
         } else {
             0.0
         }
     }
 
-    pub fn sample_f(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+    /// Samples `wi` by the file's luminance and visible normals, as pbrt-v4
+    /// does, whatever the mode; the value is the mode's ([`Self::f`]).
+    pub fn sample_f(&self, wo: Vec3, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let mut bs = self.sample_radiance(wo, u)?;
+        if mode == TransportMode::Importance {
+            bs.f = self.eval(bs.wi, wo);
+        }
+        Some(bs)
+    }
+
+    fn sample_radiance(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+        let wo = self.handed(wo);
         let flip = if wo.z <= 0.0 { -1.0 } else { 1.0 };
         let s = self.fold(wo * flip);
         let wo = wo * flip * s;
@@ -379,7 +425,7 @@ impl MeasuredBxdf {
         }
         Some(BsdfSample {
             f,
-            wi: wi * s * flip,
+            wi: self.handed(wi * s * flip),
             pdf,
             flags: BxdfFlags::GLOSSY_REFLECTION,
             eta: 1.0,

@@ -6,6 +6,7 @@ use super::*;
 use crate::sampling::Rng;
 
 const ALPHA: f32 = 0.3;
+const RADIANCE: TransportMode = TransportMode::Radiance;
 
 fn ggx_d(cos_m: f32) -> f32 {
     if cos_m <= 0.0 {
@@ -153,9 +154,7 @@ pub(super) fn ggx_file(n: usize) -> Vec<u8> {
 
 fn leak(file: &[u8]) -> MeasuredBxdf {
     let data = MeasuredData::from_bytes(file, "ggx", rgb_of).unwrap();
-    MeasuredBxdf {
-        data: Box::leak(Box::new(data)),
-    }
+    MeasuredBxdf::new(Box::leak(Box::new(data)))
 }
 
 fn bxdf() -> MeasuredBxdf {
@@ -207,14 +206,14 @@ fn a_tabulated_closed_form_evaluates_to_it_on_either_side() {
             let (s, c) = turn.sin_cos();
             let wm = Vec3::new(c * wm.x - s * wm.y, s * wm.x + c * wm.y, wm.z);
             let want = closed_form(wo, wi, R) * colour_of(wm) * wo_factor(wo, b.data.isotropic);
-            let got = b.f(wo, wi);
+            let got = b.f(wo, wi, RADIANCE);
             assert!(
                 (got - want).abs().max_element() < 0.05 * want.max_element() + 1e-3,
                 "{name} {wo} {wi}: {got} against {want}"
             );
             // The lower side mirrors the upper one; opposite sides reflect nothing.
-            assert_eq!(b.f(-wo, -wi), got);
-            assert_eq!(b.f(wo, -wi), Vec3::ZERO);
+            assert_eq!(b.f(-wo, -wi, RADIANCE), got);
+            assert_eq!(b.f(wo, -wi, RADIANCE), Vec3::ZERO);
             assert_eq!(b.pdf(wo, -wi), 0.0);
         }
     }
@@ -234,11 +233,11 @@ fn samples_carry_the_value_and_density_of_their_direction_and_estimate_the_albed
         let n = 60_000;
         let mut estimate = Vec3::ZERO;
         for _ in 0..n {
-            let Some(s) = b.sample_f(wo, rng.next_2d()) else {
+            let Some(s) = b.sample_f(wo, rng.next_2d(), RADIANCE) else {
                 continue;
             };
             assert!(s.wi.z > 0.0 && s.flags == BxdfFlags::GLOSSY_REFLECTION);
-            let (f, pdf) = (b.f(wo, s.wi), b.pdf(wo, s.wi));
+            let (f, pdf) = (b.f(wo, s.wi, RADIANCE), b.pdf(wo, s.wi));
             assert!(
                 (s.f - f).abs().max_element() <= 1e-2 * f.max_element() + 1e-5,
                 "{} {f}",
@@ -256,7 +255,7 @@ fn samples_carry_the_value_and_density_of_their_direction_and_estimate_the_albed
             for i in 0..k {
                 let phi = (i as f32 + 0.5) / k as f32 * 2.0 * PI;
                 let wi = dir(theta, phi);
-                quad += b.f(wo, wi) * wi.z * theta.sin();
+                quad += b.f(wo, wi, RADIANCE) * wi.z * theta.sin();
             }
         }
         let quad = quad * (PI / 2.0 / m as f32) * (2.0 * PI / k as f32);
@@ -288,4 +287,44 @@ fn malformed_files_are_refused_with_a_reason() {
     nan[off..off + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     let e = MeasuredData::from_bytes(&nan, "nan", rgb_of).unwrap_err();
     assert!(e.contains("\"ndf\" holds NaN"), "{e}");
+}
+
+#[test]
+fn light_paths_see_the_adjoint_and_reflected_scenes_the_mirrored_azimuths() {
+    let b = leak(&ggx_file_varied(16, &phis(1), false, true));
+    let flip = |w: Vec3| Vec3::new(w.x, -w.y, w.z);
+    let mirrored = MeasuredBxdf { mirrored: true, ..b };
+    let mut rng = Rng::new(5, 2);
+    for _ in 0..50 {
+        let (wo, wi) = (
+            dir(0.2 + rng.next_f32(), 6.0 * rng.next_f32()),
+            dir(0.1 + rng.next_f32(), 6.0 * rng.next_f32()),
+        );
+        assert_eq!(b.f(wo, wi, TransportMode::Importance), b.f(wi, wo, RADIANCE));
+        assert_eq!(mirrored.f(wo, wi, RADIANCE), b.f(flip(wo), flip(wi), RADIANCE));
+        assert_eq!(mirrored.pdf(wo, wi), b.pdf(flip(wo), flip(wi)));
+        let u = rng.next_2d();
+        if let Some(s) = mirrored.sample_f(wo, u, RADIANCE) {
+            let t = b.sample_f(flip(wo), u, RADIANCE).unwrap();
+            assert_eq!((s.wi, s.f, s.pdf), (flip(t.wi), t.f, t.pdf));
+        }
+        if let Some(s) = b.sample_f(wo, u, TransportMode::Importance) {
+            assert_eq!(s.f, b.f(s.wi, wo, RADIANCE));
+        }
+    }
+    // The scene's reflection turns the flag, twice back.
+    let mut m = crate::material::Material::Measured(b);
+    let r = glam::Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    m.reflect(&r);
+    assert_eq!(m, crate::material::Material::Measured(mirrored));
+    m.reflect(&r);
+    assert_eq!(m, crate::material::Material::Measured(b));
+}
+
+#[test]
+fn reduced_files_must_start_at_minus_pi() {
+    // A half file over [0, pi]: its folded lookups would all clamp to an edge.
+    let shifted: Vec<f32> = phis(2).iter().map(|p| p + PI).collect();
+    let e = MeasuredData::from_bytes(&ggx_file_with(8, &shifted, false), "s", rgb_of).unwrap_err();
+    assert!(e.contains("phi_i starts at"), "{e}");
 }

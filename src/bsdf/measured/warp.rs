@@ -134,7 +134,7 @@ impl PiecewiseLinear2D {
                 marg[y + 1] = sum as f32;
             }
             let total = marg[ny - 1];
-            if !(total > 0.0 && total.is_finite()) {
+            if !(total > 0.0 && total.is_finite() && (1.0 / total).is_finite()) {
                 return Err(format!(
                     "table {} of {slices} integrates to {total}: nothing to sample",
                     s + 1
@@ -199,8 +199,7 @@ impl PiecewiseLinear2D {
     pub fn evaluate(&self, pos: Vec2, param: &[f32]) -> f32 {
         let s = self.slice(param);
         let (nx, ny) = (self.nx, self.ny);
-        let gx = (pos.x * (nx - 1) as f32).max(0.0);
-        let gy = (pos.y * (ny - 1) as f32).max(0.0);
+        let (gx, gy) = grid_position(pos, nx, ny);
         let (ix, iy) = ((gx as usize).min(nx - 2), (gy as usize).min(ny - 2));
         let (wx, wy) = (gx - ix as f32, gy - iy as f32);
         let size = nx * ny;
@@ -257,8 +256,7 @@ impl PiecewiseLinear2D {
         let s = self.slice(param);
         let (nx, ny) = (self.nx, self.ny);
         let size = nx * ny;
-        let gx = (pos.x * (nx - 1) as f32).max(0.0);
-        let gy = (pos.y * (ny - 1) as f32).max(0.0);
+        let (gx, gy) = grid_position(pos, nx, ny);
         let (ix, iy) = ((gx as usize).min(nx - 2), (gy as usize).min(ny - 2));
         let (mut x, mut y) = (gx - ix as f32, gy - iy as f32);
         let i = s.offset * size + iy * nx + ix;
@@ -282,6 +280,14 @@ impl PiecewiseLinear2D {
         y += self.lookup(&self.marginal, &s, s.offset * ny + iy, ny);
         (Vec2::new(x, y), pdf * self.scale)
     }
+}
+
+/// A point of the unit square in grid units, clamped to the grid (a
+/// position a rounding past 1 or NaN would otherwise blend with weights
+/// outside [0, 1], and a density turn negative).
+fn grid_position(pos: Vec2, nx: usize, ny: usize) -> (f32, f32) {
+    let unit = |v: f32| if v > 0.0 { v.min(1.0) } else { 0.0 };
+    (unit(pos.x) * (nx - 1) as f32, unit(pos.y) * (ny - 1) as f32)
 }
 
 /// The t in [0, 1] at which the integral of the linear density from `a` at
@@ -364,6 +370,8 @@ mod tests {
                 assert!((back - u).abs().max_element() < 2e-3, "{u} -> {p} -> {back}");
                 assert!((pdf - pdf2).abs() < 1e-3 * pdf, "{pdf} {pdf2}");
                 assert!((pdf - w.evaluate(p, &param)).abs() < 1e-3 * pdf);
+                // Past the square (rounding), the density stays the edge's.
+                assert!(w.evaluate(Vec2::new(1.0 + 1e-6, p.y), &param) >= 0.0);
             }
             // Samples land in each cell as often as the density says.
             let cells = 4;
@@ -416,6 +424,8 @@ mod tests {
         assert!(PiecewiseLinear2D::new(&[1.0; 3], 3, 1, &[], true).is_err());
         assert!(PiecewiseLinear2D::new(&[1.0; 8], 3, 3, &[], true).is_err());
         assert!(PiecewiseLinear2D::new(&[0.0; 9], 3, 3, &[], true).is_err());
+        // So small that its reciprocal is infinite: nothing to sample either.
+        assert!(PiecewiseLinear2D::new(&[1e-42; 9], 3, 3, &[], true).is_err());
         assert!(PiecewiseLinear2D::new(&[1.0; 18], 3, 3, &[&[1.0, 0.0]], true).is_err());
         assert!(PiecewiseLinear2D::new(&[1.0; 18], 3, 3, &[&[0.0, 1.0]], true).is_ok());
     }

@@ -921,7 +921,7 @@ fn material(
             let bytes = files.read(&path).map_err(|e| fail(e.to_string()))?;
             let data =
                 MeasuredData::shared(&path, &bytes, crate::scene::pbrt::spectrum::wavelength_rgb).map_err(fail)?;
-            Material::Measured(MeasuredBxdf { data })
+            Material::Measured(MeasuredBxdf::new(data))
         }
         other => {
             return Err(k.err(

@@ -2700,7 +2700,7 @@ fn convert_surface(
             let bytes = crate::scene::mesh::FileSource::read(&crate::scene::mesh::Disk, &path)
                 .map_err(|e| in_file(e.to_string()))?;
             let data = MeasuredData::shared(&path, &bytes, super::spectrum::wavelength_rgb).map_err(in_file)?;
-            Ok(Ok(Material::Measured(MeasuredBxdf { data })))
+            Ok(Ok(Material::Measured(MeasuredBxdf::new(data))))
         }
         "subsurface" => subsurface(scene, p, loc),
         other => Ok(Err(format!("type \"{other}\" is not supported"))),
