@@ -32,6 +32,15 @@ use std::path::Path;
 use std::sync::Mutex;
 use tensor::TensorFile;
 
+/// A 64-bit digest of a file's bytes, for telling files apart.
+fn digest(bytes: &[u8]) -> u64 {
+    bytes.chunks(8).fold(bytes.len() as u64, |h, c| {
+        let mut w = [0u8; 8];
+        w[..c.len()].copy_from_slice(c);
+        crate::sampling::mix64(h ^ u64::from_le_bytes(w))
+    })
+}
+
 /// A measured BRDF's tables, in RGB.
 pub struct MeasuredData {
     /// The file it came from, for messages.
@@ -185,11 +194,9 @@ impl MeasuredData {
             if spectral { "spectra" } else { "rgb" },
             PiecewiseLinear2D::new(&rgb, nx, ny, &[&phi_i, &theta_i, &CHANNELS], false),
         )?;
-        let mut digest = crate::state_file::Fnv64::default();
-        digest.bytes(file);
         Ok(MeasuredData {
             name: name.to_string(),
-            digest: digest.finish(),
+            digest: digest(file),
             isotropic,
             reduction,
             jacobian,
@@ -211,9 +218,7 @@ impl MeasuredData {
         rgb_of: impl Fn(&[f32]) -> Vec<Vec3>,
     ) -> Result<&'static MeasuredData, String> {
         static LOADED: Mutex<Option<HashMap<(String, u64), &'static MeasuredData>>> = Mutex::new(None);
-        let mut digest = crate::state_file::Fnv64::default();
-        digest.bytes(file);
-        let key = (path.display().to_string(), digest.finish());
+        let key = (path.display().to_string(), digest(file));
         let mut loaded = LOADED.lock().unwrap_or_else(|e| e.into_inner());
         let loaded = loaded.get_or_insert_with(HashMap::new);
         if let Some(&d) = loaded.get(&key) {
