@@ -195,19 +195,27 @@ impl PiecewiseLinear2D {
         v
     }
 
-    /// The density (or interpolated value) at `pos` in [0, 1]^2.
-    pub fn evaluate(&self, pos: Vec2, param: &[f32]) -> f32 {
-        let s = self.slice(param);
+    /// The values at the corners of the patch whose lower corner is data
+    /// index `i`: (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1).
+    fn corners(&self, s: &Slice, i: usize) -> [f32; 4] {
+        let (nx, size) = (self.nx, self.nx * self.ny);
+        [i, i + 1, i + nx, i + nx + 1].map(|k| self.lookup(&self.data, s, k, size))
+    }
+
+    /// The patch holding `pos` (the data index of its lower corner, in the
+    /// slice) and where in it `pos` lies, in [0, 1]^2.
+    fn cell(&self, s: &Slice, pos: Vec2) -> (usize, f32, f32) {
         let (nx, ny) = (self.nx, self.ny);
         let (gx, gy) = grid_position(pos, nx, ny);
         let (ix, iy) = ((gx as usize).min(nx - 2), (gy as usize).min(ny - 2));
-        let (wx, wy) = (gx - ix as f32, gy - iy as f32);
-        let size = nx * ny;
-        let i = s.offset * size + iy * nx + ix;
-        let v00 = self.lookup(&self.data, &s, i, size);
-        let v10 = self.lookup(&self.data, &s, i + 1, size);
-        let v01 = self.lookup(&self.data, &s, i + nx, size);
-        let v11 = self.lookup(&self.data, &s, i + nx + 1, size);
+        (s.offset * nx * ny + iy * nx + ix, gx - ix as f32, gy - iy as f32)
+    }
+
+    /// The density (or interpolated value) at `pos` in [0, 1]^2.
+    pub fn evaluate(&self, pos: Vec2, param: &[f32]) -> f32 {
+        let s = self.slice(param);
+        let (i, wx, wy) = self.cell(&s, pos);
+        let [v00, v10, v01, v11] = self.corners(&s, i);
         let lower = (1.0 - wx) * v00 + wx * v10;
         let upper = (1.0 - wx) * v01 + wx * v11;
         ((1.0 - wy) * lower + wy * upper) * self.scale
@@ -238,11 +246,7 @@ impl PiecewiseLinear2D {
         };
         let col = find_interval(nx, |k| conditional(k) < ux);
         ux -= conditional(col);
-        let i = base + col;
-        let v00 = self.lookup(&self.data, &s, i, size);
-        let v10 = self.lookup(&self.data, &s, i + 1, size);
-        let v01 = self.lookup(&self.data, &s, i + nx, size);
-        let v11 = self.lookup(&self.data, &s, i + nx + 1, size);
+        let [v00, v10, v01, v11] = self.corners(&s, base + col);
         let c0 = (1.0 - y) * v00 + y * v01;
         let c1 = (1.0 - y) * v10 + y * v11;
         let x = solve_linear_density(c0, c1, ux);
@@ -256,14 +260,9 @@ impl PiecewiseLinear2D {
         let s = self.slice(param);
         let (nx, ny) = (self.nx, self.ny);
         let size = nx * ny;
-        let (gx, gy) = grid_position(pos, nx, ny);
-        let (ix, iy) = ((gx as usize).min(nx - 2), (gy as usize).min(ny - 2));
-        let (mut x, mut y) = (gx - ix as f32, gy - iy as f32);
-        let i = s.offset * size + iy * nx + ix;
-        let v00 = self.lookup(&self.data, &s, i, size);
-        let v10 = self.lookup(&self.data, &s, i + 1, size);
-        let v01 = self.lookup(&self.data, &s, i + nx, size);
-        let v11 = self.lookup(&self.data, &s, i + nx + 1, size);
+        let (i, mut x, mut y) = self.cell(&s, pos);
+        let iy = (i - s.offset * size) / nx;
+        let [v00, v10, v01, v11] = self.corners(&s, i);
         let c0 = (1.0 - y) * v00 + y * v01;
         let c1 = (1.0 - y) * v10 + y * v11;
         let pdf = (1.0 - x) * c0 + x * c1;
