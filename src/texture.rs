@@ -18,6 +18,7 @@ mod procedural;
 
 pub use procedural::{Mapping2D, NoiseTexture, Pattern};
 
+pub(crate) use imagemap::Fnv64;
 pub use imagemap::{
     decode_bytes, load_image, srgb_to_linear, Encoding, ImageOptions, ImageTexture, MipFilter, TexImage, UvMapping,
     WrapMode,

@@ -701,8 +701,10 @@ impl ImageTexture {
     }
 }
 
+/// FNV-1a 64 over bytes fed in order: the content hash of images and of
+/// measured BRDF files, which scene fingerprints see.
 #[derive(Clone, Copy)]
-struct Fnv64(u64);
+pub(crate) struct Fnv64(pub(crate) u64);
 
 impl Default for Fnv64 {
     fn default() -> Self {
@@ -711,7 +713,7 @@ impl Default for Fnv64 {
 }
 
 impl Fnv64 {
-    fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         for &x in b {
             self.0 ^= x as u64;
             self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);

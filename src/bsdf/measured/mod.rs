@@ -32,13 +32,11 @@ use std::path::Path;
 use std::sync::Mutex;
 use tensor::TensorFile;
 
-/// A 64-bit digest of a file's bytes, for telling files apart.
+/// A hash of a file's bytes, for telling files apart.
 fn digest(bytes: &[u8]) -> u64 {
-    bytes.chunks(8).fold(bytes.len() as u64, |h, c| {
-        let mut w = [0u8; 8];
-        w[..c.len()].copy_from_slice(c);
-        crate::sampling::mix64(h ^ u64::from_le_bytes(w))
-    })
+    let mut h = crate::texture::Fnv64::default();
+    h.bytes(bytes);
+    h.0
 }
 
 /// A measured BRDF's tables, in RGB.
