@@ -50,6 +50,7 @@ pub fn place_and_build(mesh: &Mesh) {
             lens: None,
             orthographic: None,
             spherical: None,
+            realistic: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -25,6 +25,7 @@ fn inside_camera(size: u32) -> CameraDesc {
         lens: None,
         orthographic: None,
         spherical: None,
+        realistic: None,
     }
 }
 
@@ -75,6 +76,7 @@ pub fn floor_under_quad() -> SceneDesc {
         lens: None,
         orthographic: None,
         spherical: None,
+        realistic: None,
     };
     let mut d = SceneDesc::empty("floor", camera);
     let grey = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
@@ -272,6 +274,7 @@ pub fn floor_under_sky(material: Material, sky: f32, view: Vec3) -> SceneDesc {
         lens: None,
         orthographic: Some(0.5),
         spherical: None,
+        realistic: None,
     };
     let mut d = SceneDesc::empty("floor under sky", camera);
     let m = d.material("floor", material);

@@ -1144,6 +1144,7 @@ mod tests {
             lens: None,
             orthographic: None,
             spherical: None,
+            realistic: None,
         };
         let mut d = SceneDesc::empty("every-light", camera);
         let floor = d.material("floor", Material::diffuse(0.6, 0.5, 0.4));
@@ -1260,6 +1261,7 @@ mod tests {
             lens: None,
             orthographic: None,
             spherical: None,
+            realistic: None,
         };
         let mut d = SceneDesc::empty("sun-through-a-pane", camera);
         let floor = d.material("floor", Material::diffuse(0.2, 0.2, 0.2));

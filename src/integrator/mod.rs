@@ -461,9 +461,17 @@ pub fn add_pixel_samples(
             hammersley_shifted(s, spp, shift)
         };
         let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
-        let ray = camera_ray(cam, pos, &mut sampler);
+        let (ray, weight) = camera_ray(cam, pos, &mut sampler);
         stats.camera_rays += 1;
-        let l = clamp_sample(est.li(scene, &ray, &mut sampler, stats), settings.max_component);
+        // A ray the lens blocks is a sample of black, as in pbrt-v4.
+        let l = if weight > 0.0 {
+            clamp_sample(
+                est.li(scene, &ray, &mut sampler, stats) * weight,
+                settings.max_component,
+            )
+        } else {
+            Vec3::ZERO
+        };
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
             block.splat((x, y), pos, l);
@@ -501,29 +509,31 @@ pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, 
     }
 }
 
-/// The camera ray through continuous pixel position `pos`. A camera with a
-/// lens takes the next 2D request of `sampler` for the point on the lens
-/// (after the pixel position, as pbrt-v4's camera sample); a pinhole takes
-/// none, so its images are what they were before lenses existed.
-pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> Ray {
+/// The camera ray through continuous pixel position `pos`, and its weight
+/// ([`crate::camera::Camera::sample_ray`]: 1 but for a real lens, 0 where
+/// that blocks the ray). A camera with a lens takes the next 2D request of
+/// `sampler` for the point on the lens (after the pixel position, as
+/// pbrt-v4's camera sample); a pinhole takes none, so its images are what
+/// they were before lenses existed.
+pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> (Ray, f32) {
     camera_ray_at(cam, pos, sampler, None)
 }
 
 /// `camera_ray` at `time` where things move (`None`: a time drawn from
 /// `sampler`, uniform over the shutter).
-pub fn camera_ray_at(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler, time: Option<f32>) -> Ray {
-    let ray = if cam.has_lens() {
-        cam.generate_ray_through_lens(pos.x, pos.y, sampler.next_2d())
+pub fn camera_ray_at(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler, time: Option<f32>) -> (Ray, f32) {
+    let (ray, weight) = if cam.has_lens() {
+        cam.sample_ray(pos.x, pos.y, sampler.next_2d())
     } else {
-        cam.generate_ray(pos.x, pos.y)
+        (cam.generate_ray(pos.x, pos.y), 1.0)
     };
     // Its time, uniform over the shutter's, when anything moves: the request
     // after the lens's, so that still scenes draw the samples they drew.
     let Some([open, close]) = cam.shutter else {
-        return ray;
+        return (ray, weight);
     };
     let time = time.unwrap_or_else(|| open + (close - open) * sampler.next_f32());
-    match &cam.motion {
+    let ray = match &cam.motion {
         Some(m) => {
             let to = m.relative(time);
             Ray::timed(
@@ -533,7 +543,8 @@ pub fn camera_ray_at(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampl
             )
         }
         None => Ray { time, ..ray },
-    }
+    };
+    (ray, weight)
 }
 
 /// A 2D sample for light sampling that is shifted per shading point.

@@ -249,9 +249,9 @@ impl checkpoint::Progressive for Progressive<'_> {
                         super::camera_sampler(settings.sampler, settings.seed, x, y, cam.width, settings.passes, pass);
                     let off = settings.filter.sample(sampler.next_2d());
                     let pos = crate::math::Vec2::new(x as f32 + 0.5 + off.x, y as f32 + 0.5 + off.y);
-                    let ray = super::camera_ray_at(cam, pos, &mut sampler, time);
+                    let (ray, weight) = super::camera_ray_at(cam, pos, &mut sampler, time);
                     st.camera_rays += 1;
-                    if let Some(vp) = visible_point(scene, settings, ray, &mut sampler, &mut st, px) {
+                    if let Some(vp) = visible_point(scene, settings, ray, weight, &mut sampler, &mut st, px) {
                         update(px, &vp, &map, admit, alpha);
                     }
                 }
@@ -346,17 +346,22 @@ fn visible_point(
     scene: &Scene,
     settings: &RenderSettings,
     ray: crate::math::Ray,
+    weight: f32,
     sampler: &mut Sampler,
     stats: &mut RayStats,
     px: &mut PixelState,
 ) -> Option<VisiblePoint> {
+    // A ray the lens blocks sees nothing.
+    if weight <= 0.0 {
+        return None;
+    }
     let mut vp = None;
     let l = walk_camera_path(scene, ray, sampler, stats, |v, sampler, stats| {
         vp = Some(VisiblePoint {
             p: v.hit.p,
             wo: v.wo,
             bsdf: v.bsdf,
-            beta: v.beta,
+            beta: v.beta * weight,
         });
         // pbrt-v4's SPPM: the path ends at its visible point.
         (
@@ -365,6 +370,7 @@ fn visible_point(
         )
     });
     // A NaN or infinite sample would poison the pixel; drop it.
+    let l = l * weight;
     if l.is_finite() {
         px.direct += l;
     }

@@ -639,6 +639,7 @@ mod tests {
             lens: None,
             orthographic: None,
             spherical: None,
+            realistic: None,
         }
     }
 

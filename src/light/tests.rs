@@ -627,6 +627,7 @@ fn shadow_rays_reach_lights_at_infinity_unless_blocked() {
         lens: None,
         orthographic: None,
         spherical: None,
+        realistic: None,
     };
     let quad = |desc: &mut SceneDesc, [a, b, c, d]: [Vec3; 4]| {
         for vertices in [[a, b, c], [a, c, d]] {

@@ -168,6 +168,9 @@ pub struct CameraDesc {
     /// A spherical camera (pbrt-v4's `spherical`): the whole sphere of
     /// directions in this layout (`fov_y_deg`, `window` and `lens` unused).
     pub spherical: Option<crate::camera::SphericalMapping>,
+    /// A real lens (pbrt-v4's `realistic` camera): rays are traced through
+    /// it (`fov_y_deg`, `window`, `lens` and `orthographic` unused).
+    pub realistic: Option<crate::camera::SharedLens>,
 }
 
 impl CameraDesc {
@@ -197,6 +200,9 @@ impl CameraDesc {
     /// with `up` (the preview's moves).
     pub fn camera_at(&self, position: Vec3, look_at: Vec3, up: Vec3) -> Option<Camera> {
         let (w, h) = (self.width, self.height);
+        if let Some(lens) = &self.realistic {
+            return Camera::realistic(position, look_at, up, lens.clone(), w, h);
+        }
         if let Some(mapping) = self.spherical {
             return Camera::spherical(position, look_at, up, mapping, w, h);
         }

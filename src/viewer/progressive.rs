@@ -339,8 +339,12 @@ pub fn low_res_pass(
                     // Keyed apart from the accumulation passes' sample indices.
                     let rng = Rng::keyed(settings.seed, (by * bw + bx) as u64, u64::MAX);
                     let mut sampler = Sampler::independent(rng);
-                    let ray = crate::integrator::camera_ray(cam, Vec2::new(cx, cy), &mut sampler);
-                    let l = est.li(scene, &ray, &mut sampler, &mut stats);
+                    let (ray, weight) = crate::integrator::camera_ray(cam, Vec2::new(cx, cy), &mut sampler);
+                    let l = if weight > 0.0 {
+                        est.li(scene, &ray, &mut sampler, &mut stats) * weight
+                    } else {
+                        Vec3::ZERO
+                    };
                     if l.is_finite() {
                         l
                     } else {

@@ -1855,3 +1855,75 @@ fn measured_brdf_files_render_and_broken_ones_are_named_at_their_line() {
     );
     assert!(!image.exists());
 }
+
+#[test]
+fn a_realistic_camera_sees_a_white_sky_as_its_stop_admits_it_in_every_integrator() {
+    // A singlet with its stop behind it: the stop (radius a, z before the
+    // film) is the exit pupil, so the film's centre under a sky of unit
+    // radiance receives pi a^2 / (a^2 + z^2).
+    let out = tempfile::tempdir().unwrap();
+    let prescription = "50 5 1.5 40\n-50 2 1 40\n0 40 0 8\n";
+    std::fs::write(out.path().join("singlet.dat"), prescription).unwrap();
+    let rows = raytracer::camera::lens_system::parse_prescription(prescription).unwrap();
+    let (lens, _) = raytracer::camera::LensSystem::new("singlet", &rows, 6.0, 3.0, 35.0, None).unwrap();
+    let (a, z) = (0.003, lens.rear_z());
+    let want = (std::f64::consts::PI * a * a / (a * a + z * z)) as f32;
+    let scene = out.path().join("sky.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"realistic\" \"string lensfile\" \"singlet.dat\" \
+         \"float aperturediameter\" 6 \"float focusdistance\" 3\n\
+         WorldBegin\nLightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n",
+    )
+    .unwrap();
+    for integrator in ["path", "bdpt", "photon", "sppm"] {
+        let image = out.path().join(format!("{integrator}.pfm"));
+        let run = raytracer(&[
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "64",
+            "--integrator",
+            integrator,
+            "--quiet",
+            "-o",
+            image.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let img = read_image(&image).unwrap();
+        let centre = [(7, 7), (8, 7), (7, 8), (8, 8)]
+            .iter()
+            .map(|&(x, y)| luminance(img.pixels[y * 16 + x]))
+            .sum::<f32>()
+            / 4.0;
+        assert!(
+            (centre / want - 1.0).abs() < 0.02,
+            "{integrator}: {centre} against {want}"
+        );
+        // The corners get less: cos^4 and the lens' vignetting.
+        assert!(luminance(img.pixels[0]) < 0.9 * centre, "{integrator}");
+    }
+    // A lens file that is not one: one line naming it and its line, exit 2,
+    // no image.
+    std::fs::write(out.path().join("singlet.dat"), "50 5 1.5 40\n-50 2 1\n").unwrap();
+    let image = out.path().join("broken.exr");
+    let run = raytracer(&[
+        "--scene",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("sky.pbrt:2:") && stderr.contains("singlet.dat:2:") && stderr.contains("multiple of four"),
+        "{stderr}"
+    );
+    assert!(!image.exists());
+}

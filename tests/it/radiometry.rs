@@ -30,6 +30,7 @@ fn plane_scene(light: Light) -> SceneDesc {
             lens: None,
             orthographic: None,
             spherical: None,
+            realistic: None,
         },
         materials: vec![],
         triangles: vec![],

@@ -22,6 +22,7 @@ fn camera() -> CameraDesc {
         lens: None,
         orthographic: None,
         spherical: None,
+        realistic: None,
     }
 }
 

@@ -234,6 +234,7 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
         lens: None,
         orthographic: None,
         spherical,
+        realistic: None,
     };
     if spherical.is_some() && cam.lens_radius.is_some_and(|r| r.0 != 0.0) {
         return Err(src.error(cam_span, "camera: a spherical camera has no lens".to_string()));

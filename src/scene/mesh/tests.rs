@@ -496,6 +496,7 @@ fn hit_uv(mesh: &Mesh, x: f32, y: f32) -> crate::math::Vec2 {
         lens: None,
         orthographic: None,
         spherical: None,
+        realistic: None,
     };
     let mut desc = SceneDesc::empty("uv", camera);
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));

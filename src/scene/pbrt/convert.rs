@@ -526,7 +526,8 @@ impl<'a> Conv<'a> {
         crate::limits::check_resolution(width, height).map_err(|m| located(&film_loc, format!("Film: {m}")))?;
         fp.mark_used("filename", super::ParamType::String);
         fp.mark_used("savefp16", super::ParamType::Bool);
-        fp.mark_used("diagonal", super::ParamType::Float);
+        // The film's size in millimetres: only a real lens sees it.
+        let diagonal = fp.get_float("diagonal", 35.0)?;
         let crop = self.film_crop(fp, &film_loc, width, height)?;
         // pbrt-v4's imaging ratio: the sensor's sensitivity times the
         // shutter's open time (the camera's), 1 by default.
@@ -542,17 +543,23 @@ impl<'a> Conv<'a> {
         let cam = &scene.camera;
         let cam_loc = cam.loc.clone().unwrap_or_else(|| self.default_loc());
         let orthographic = cam.ty == "orthographic";
-        if !["perspective", "orthographic", "spherical"].contains(&cam.ty.as_str()) {
+        let realistic = cam.ty == "realistic";
+        if !["perspective", "orthographic", "spherical", "realistic"].contains(&cam.ty.as_str()) {
             self.problem(
                 Kind::Other,
                 &cam_loc,
                 format!(
-                    "Camera \"{}\" is not supported (only \"perspective\", \"orthographic\" and \"spherical\")",
+                    "Camera \"{}\" is not supported (\"perspective\", \"orthographic\", \"spherical\" and \"realistic\" are)",
                     cam.ty
                 ),
             );
         }
         let cp = &cam.params;
+        let lens_system = if realistic {
+            Some(self.lens_system(cp, &cam_loc, diagonal)?)
+        } else {
+            None
+        };
         let spherical = if cam.ty == "spherical" {
             let name = cp.get_string_or("mapping", "equalarea")?;
             let Some(m) = crate::camera::SphericalMapping::parse(&name) else {
@@ -565,9 +572,9 @@ impl<'a> Conv<'a> {
         } else {
             None
         };
-        // Orthographic and spherical cameras have no field of view (pbrt-v4
-        // reads none).
-        let fov = if orthographic || spherical.is_some() {
+        // Orthographic, spherical and realistic cameras have no field of
+        // view (pbrt-v4 reads none).
+        let fov = if orthographic || spherical.is_some() || realistic {
             90.0
         } else {
             cp.get_float("fov", 90.0)?
@@ -587,8 +594,10 @@ impl<'a> Conv<'a> {
         };
         // A window of the file's own (an off-centre or stretched projection),
         // else the film's, which follows the image's shape when resized.
-        // pbrt-v4's spherical camera reads a window and ignores it.
+        // pbrt-v4's spherical camera reads a window and ignores it; a real
+        // lens has none.
         let own_window = spherical.is_none()
+            && !realistic
             && window
                 .iter()
                 .zip(default)
@@ -604,8 +613,11 @@ impl<'a> Conv<'a> {
                 format!("Camera: the screen window {window:?} is empty or not finite"),
             ));
         }
-        let lens_radius = cp.get_float("lensradius", 0.0)?;
-        let focal_distance = cp.get_float("focaldistance", 1e6)?;
+        let (lens_radius, focal_distance) = if realistic {
+            (0.0, 1e6)
+        } else {
+            (cp.get_float("lensradius", 0.0)?, cp.get_float("focaldistance", 1e6)?)
+        };
         if orthographic && lens_radius > 0.0 {
             // pbrt-v4's orthographic lens starts every ray about the camera's
             // centre instead of its point of the image plane: refused rather
@@ -714,6 +726,20 @@ impl<'a> Conv<'a> {
             ));
         }
         let mirror = forward.cross(up).dot(x) < 0.0;
+        let realistic = match lens_system {
+            Some(mut l) => {
+                // The lens' metres are camera space's units: lx world units.
+                if (lz - lx).abs() > 1e-4 * lx.max(lz) {
+                    return Err(located(
+                        &cam_loc,
+                        "Camera \"realistic\": the camera transformation scales z apart from x and y: not supported",
+                    ));
+                }
+                l.scale = lx as f64;
+                Some(std::sync::Arc::new(l))
+            }
+            None => None,
+        };
         Ok((
             CameraDesc {
                 position,
@@ -726,10 +752,84 @@ impl<'a> Conv<'a> {
                 lens,
                 orthographic,
                 spherical,
+                realistic,
             },
             mirror,
             crop,
         ))
+    }
+
+    /// pbrt-v4's `RealisticCamera`: the prescription in `lensfile` (found
+    /// as other files are), stopped to `aperturediameter` mm (1), focused at
+    /// `focusdistance` (10), over a film `diagonal` mm across, with a
+    /// diaphragm of `aperture`'s shape (a built-in name or a grey image).
+    fn lens_system(&mut self, cp: &Params, cam_loc: &Loc, diagonal: f32) -> Result<crate::camera::LensSystem> {
+        use crate::camera::{Aperture, LensSystem};
+        let scene = self.scene;
+        let at = place(cp, "lensfile", cam_loc).clone();
+        let Some(file) = cp.get_string("lensfile")? else {
+            return Err(located(
+                cam_loc,
+                "Camera \"realistic\": no \"lensfile\" was given".to_string(),
+            ));
+        };
+        let Some(path) = scene.candidates(&at, &file).into_iter().find(|c| c.is_file()) else {
+            return Err(located(
+                &at,
+                format!("Camera \"realistic\": lens file \"{file}\" not found"),
+            ));
+        };
+        let bytes = crate::scene::mesh::FileSource::read(&crate::scene::mesh::Disk, &path)
+            .map_err(|e| located(&at, format!("Camera \"realistic\": {e}")))?;
+        let text = String::from_utf8_lossy(&bytes);
+        let rows = crate::camera::lens_system::parse_prescription(&text)
+            .map_err(|(line, m)| located(&at, format!("Camera \"realistic\": {}:{line}: {m}", path.display())))?;
+        let aperture_diameter = cp.get_float("aperturediameter", 1.0)?;
+        let focus_distance = cp.get_float("focusdistance", 10.0)?;
+        let aperture = match cp.get_string("aperture")? {
+            None => None,
+            Some(name) if name.is_empty() => None,
+            Some(name) => {
+                let at = place(cp, "aperture", cam_loc).clone();
+                let a = match Aperture::builtin(&name) {
+                    Some(a) => Some(a),
+                    None => {
+                        let Some(path) = scene.candidates(&at, &name).into_iter().find(|c| c.is_file()) else {
+                            return Err(located(
+                                &at,
+                                format!(
+                                    "Camera \"realistic\": aperture \"{name}\" is neither a built-in shape (gaussian, square, pentagon, star) nor a file found"
+                                ),
+                            ));
+                        };
+                        let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb)
+                            .map_err(|e| located(&at, format!("Camera \"realistic\": aperture: {e}")))?;
+                        let grey = img.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+                        Aperture::normalized(&name, img.width as usize, img.height as usize, grey)
+                    }
+                };
+                Some(a.ok_or_else(|| {
+                    located(
+                        &at,
+                        format!("Camera \"realistic\": aperture \"{name}\" lets no light through"),
+                    )
+                })?)
+            }
+        };
+        let name = path
+            .file_name()
+            .map_or(file.clone(), |n| n.to_string_lossy().into_owned());
+        let (lens, clamped) = LensSystem::new(&name, &rows, aperture_diameter, focus_distance, diagonal, aperture)
+            .map_err(|m| located(&at, format!("Camera \"realistic\": {}: {m}", path.display())))?;
+        if let Some(max) = clamped {
+            self.warn(
+                place(cp, "aperturediameter", cam_loc),
+                format!(
+                    "Camera \"realistic\": aperturediameter {aperture_diameter} mm is larger than the lens' stop ({max} mm): the stop's is used"
+                ),
+            );
+        }
+        Ok(lens)
     }
 
     /// The part of the frame the film asks for: `cropwindow` (fractions of
@@ -3817,6 +3917,78 @@ mod tests {
             quad(0.0)
         ));
         assert!(seen(&c, 10.0, 8.0).is_some() && seen(&c, 10.0, 12.0).is_none());
+    }
+
+    #[test]
+    fn a_realistic_camera_sees_pbrts_picture_and_names_bad_lens_files_at_their_line() {
+        let dir = tempfile::tempdir().unwrap();
+        // A biconvex singlet, f 50.85 mm, with its stop behind it.
+        let lens = dir.path().join("singlet.dat");
+        std::fs::write(
+            &lens,
+            "# radius thickness eta aperture\n50 5 1.5 40\n-50 2 1 40\n0 40 0 8\n",
+        )
+        .unwrap();
+        let bad = dir.path().join("bad.dat");
+        std::fs::write(&bad, "50 5 1.5 40\n-50 2 1 40\n0 40 zero 8\n").unwrap();
+        let scene = |pre: &str, camera: &str| {
+            let text = format!(
+                "{pre}LookAt 0 0 -5  0 0 0  0 1 0\n{camera}\n\
+                 Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
+                 MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
+                 MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
+                 NamedMaterial \"red\"\n{}NamedMaterial \"green\"\n{}",
+                quad(0.5),
+                quad(-1.5)
+            );
+            convert_text(&text, false).map_err(|e| e.to_string())
+        };
+        let realistic = format!(
+            "Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" 4 \"float focusdistance\" 5",
+            lens.display()
+        );
+        for (pre, right, left) in [("", "red", "green"), ("Scale -1 1 1\n", "green", "red")] {
+            let c = scene(pre, &realistic).unwrap();
+            let l = c.desc.camera.realistic.as_ref().expect("a lens system");
+            assert!((l.focal_length - 0.05085).abs() < 5e-5, "{}", l.focal_length);
+            assert_eq!(seen(&c, 27.0, 10.0).as_deref(), Some(right), "{pre}");
+            assert_eq!(seen(&c, 13.0, 10.0).as_deref(), Some(left), "{pre}");
+            // Rays through the lens carry its weight; the middle one leaves
+            // the front of the lens, about 5 cm before the film, straight on.
+            let cam = Scene::build(c.desc.clone()).unwrap().camera;
+            let (ray, w) = cam.sample_ray(20.0, 10.0, glam::Vec2::splat(0.5));
+            assert!(w > 0.0 && w < 0.1, "{w}");
+            assert!(
+                (ray.d - Vec3::Z).length() < 0.01 && (ray.o.z + 5.0 - 0.047).abs() < 0.01,
+                "{ray:?}"
+            );
+        }
+        // A bigger stop than the lens has: the lens' own, with a warning.
+        let c = scene("", &realistic.replace("aperturediameter\" 4", "aperturediameter\" 40")).unwrap();
+        assert!(
+            c.warnings
+                .iter()
+                .any(|w| w.contains("larger than the lens' stop (8 mm)")),
+            "{:?}",
+            c.warnings
+        );
+        let e = scene("", &realistic.replace("singlet.dat", "nope.dat")).unwrap_err();
+        assert!(
+            e.contains("main.pbrt:2") && e.contains("lens file \"") && e.contains("nope.dat\" not found"),
+            "{e}"
+        );
+        let e = scene("", &realistic.replace("singlet.dat", "bad.dat")).unwrap_err();
+        assert!(
+            e.contains("main.pbrt:2") && e.contains("bad.dat:3: \"zero\" is not a number"),
+            "{e}"
+        );
+        let e = scene("", "Camera \"realistic\"").unwrap_err();
+        assert!(e.contains("main.pbrt:2") && e.contains("no \"lensfile\""), "{e}");
+        let e = scene("", &realistic.replace("focusdistance\" 5", "focusdistance\" 0.05")).unwrap_err();
+        assert!(e.contains("main.pbrt:2") && e.contains("too close"), "{e}");
+        let e = scene("", &format!("{realistic} \"string aperture\" \"hexagon\"")).unwrap_err();
+        assert!(e.contains("main.pbrt:2") && e.contains("aperture \"hexagon\""), "{e}");
+        assert!(scene("", &format!("{realistic} \"string aperture\" \"pentagon\"")).is_ok());
     }
 
     #[test]

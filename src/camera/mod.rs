@@ -3,7 +3,13 @@
 //! `PerspectiveCamera`, when it has one) or orthographic (pbrt-v4's
 //! `OrthographicCamera`: parallel rays from the image plane) or spherical
 //! (pbrt-v4's `SphericalCamera`: the whole sphere of directions about a
-//! point, in an equal-area or an equirectangular image).
+//! point, in an equal-area or an equirectangular image) or realistic
+//! (pbrt-v4's `RealisticCamera`: rays traced through a lens prescription,
+//! [`lens_system`]).
+
+pub mod lens_system;
+
+pub use lens_system::{Aperture, LensSystem, SharedLens};
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::{concentric_disk, equal_area_sphere_to_square, equal_area_square_to_sphere};
@@ -77,6 +83,10 @@ pub struct Camera {
     orthographic: bool,
     /// Rays from `position` in every direction, the image a map of the sphere.
     spherical: Option<SphericalMapping>,
+    /// Rays traced through a real lens. The pinhole of the other fields then
+    /// has the lens' focal length: it stands in where a single ray a pixel
+    /// is wanted (texture footprints, projections).
+    realistic: Option<SharedLens>,
     pub width: u32,
     pub height: u32,
     /// When the shutter opens and closes, where the scene has moving shapes
@@ -111,6 +121,7 @@ impl Camera {
             lens: None,
             orthographic: false,
             spherical: None,
+            realistic: None,
             width,
             height,
             shutter: None,
@@ -156,6 +167,26 @@ impl Camera {
         Some(c)
     }
 
+    /// A camera with a real lens at `position`, its image's top-left corner
+    /// towards `up` and left of `look_at`; `None` as [`Camera::new`].
+    pub fn realistic(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        lens: SharedLens,
+        width: u32,
+        height: u32,
+    ) -> Option<Camera> {
+        if width == 0 || height == 0 {
+            return None;
+        }
+        let half = lens.half_film(Vec2::new(width as f32, height as f32));
+        let fov = 2.0 * (half.y / lens.focal_length).atan().to_degrees() as f32;
+        let mut c = Camera::new(position, look_at, up, fov, width, height)?;
+        c.realistic = Some(lens);
+        Some(c)
+    }
+
     /// The camera with another image window (`fov_y_deg` now sets the unit
     /// of the window, not the vertical field of view); `None` for an empty
     /// or non-finite window.
@@ -174,7 +205,7 @@ impl Camera {
     /// an orthographic camera (pbrt-v4's orthographic lens starts every ray
     /// about the camera's centre, a model we do not copy).
     pub fn with_lens(mut self, lens: ThinLens) -> Option<Camera> {
-        if !lens.is_valid() || self.orthographic || self.spherical.is_some() {
+        if !lens.is_valid() || self.orthographic || self.spherical.is_some() || self.realistic.is_some() {
             return None;
         }
         self.lens = Some(lens);
@@ -193,9 +224,43 @@ impl Camera {
         }
     }
 
-    /// Whether rays need a lens sample ([`Camera::generate_ray_through_lens`]).
+    /// Whether rays need a lens sample ([`Camera::sample_ray`]).
     pub fn has_lens(&self) -> bool {
-        self.lens.is_some()
+        self.lens.is_some() || self.realistic.is_some()
+    }
+
+    /// The real lens rays are traced through, if any.
+    pub fn lens_system(&self) -> Option<&LensSystem> {
+        self.realistic.as_deref()
+    }
+
+    /// The ray through (x, y) and the lens point `u`, with its weight
+    /// (pbrt-v4's `CameraRay`): 1 but for a real lens, whose rays carry its
+    /// radiometry (the fall-off towards the corners, the stop's
+    /// transmission) and are 0 where the lens blocks them (then the ray is
+    /// the pinhole's, and its radiance is not wanted).
+    pub fn sample_ray(&self, x: f32, y: f32, u: Vec2) -> (Ray, f32) {
+        let Some(lens) = &self.realistic else {
+            return (self.generate_ray_through_lens(x, y, u), 1.0);
+        };
+        match self.realistic_ray(lens, x, y, u) {
+            Some(r) => r,
+            None => (self.pinhole_ray(x, y), 0.0),
+        }
+    }
+
+    /// A ray of a real lens, in world space, and its weight.
+    fn realistic_ray(&self, lens: &LensSystem, x: f32, y: f32, u: Vec2) -> Option<(Ray, f32)> {
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let (o, d, w) = lens.ray(Vec2::new(x, y), size, u)?;
+        let o = self.position + self.camera_to_world(o) * lens.scale as f32;
+        let d = self.camera_to_world(d).try_normalize()?;
+        Some((Ray::new(o, d), w))
+    }
+
+    /// The ray of a pinhole at the camera's position through (x, y).
+    fn pinhole_ray(&self, x: f32, y: f32) -> Ray {
+        Ray::new(self.position, self.direction(x, y).normalize())
     }
 
     pub fn forward(&self) -> Vec3 {
@@ -204,8 +269,16 @@ impl Camera {
 
     /// The ray through continuous pixel coordinates (x, y), with (0, 0) the
     /// top-left corner of the image and (width, height) the bottom-right one.
-    /// The ray leaves the lens' centre (the pinhole's ray).
+    /// The ray leaves the lens' centre (the pinhole's ray); a real lens'
+    /// ray through the middle of its exit pupil, or where none passes there
+    /// the pinhole's of the lens' focal length.
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
+        if let Some(lens) = &self.realistic {
+            return match self.realistic_ray(lens, x, y, Vec2::splat(0.5)) {
+                Some((r, _)) => r,
+                None => self.pinhole_ray(x, y),
+            };
+        }
         if let Some(mapping) = self.spherical {
             let c = spherical_direction(mapping, Vec2::new(x / self.width as f32, y / self.height as f32));
             return Ray::new(self.position, self.camera_to_world(c).normalize());
@@ -357,7 +430,7 @@ impl Camera {
     /// A perspective camera without a lens: one point every ray leaves,
     /// which light tracing can connect to.
     pub fn is_pinhole(&self) -> bool {
-        !self.orthographic && self.spherical.is_none() && self.lens.is_none()
+        !self.orthographic && self.spherical.is_none() && self.lens.is_none() && self.realistic.is_none()
     }
 
     /// For a pinhole: the solid-angle density of camera rays towards the
