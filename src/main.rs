@@ -481,6 +481,15 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     }
     println!("lights: {} ({})", scene.lights.len(), kinds.join(", "));
     println!("materials: {}", scene.materials.len());
+    if let Some(lens) = scene.camera.lens_system() {
+        let (n, stop) = lens.summary();
+        let stop = stop.map_or("no stop".to_string(), |d| format!("stop {d:.1} mm"));
+        println!(
+            "camera: realistic, lens {} ({n} interfaces, focal length {:.1} mm, {stop})",
+            lens.name,
+            lens.focal_length * 1000.0
+        );
+    }
     println!("bvh nodes: {} ({} leaves), depth {}", s.nodes, s.leaves, s.depth);
     let hist: Vec<String> = s
         .leaf_sizes

@@ -208,6 +208,12 @@ pub fn parse_prescription(text: &str) -> Result<Vec<[f32; 4]>, (usize, String)> 
             "no lens interfaces (four numbers each: radius, thickness, eta, aperture)".into(),
         ));
     }
+    if values.len() > 4 * MAX_INTERFACES {
+        return Err((
+            text.lines().count().max(1),
+            format!("{} interfaces; a lens has at most {MAX_INTERFACES}", values.len() / 4),
+        ));
+    }
     if values.len() % 4 != 0 {
         return Err((
             text.lines().count().max(1),
@@ -219,6 +225,10 @@ pub fn parse_prescription(text: &str) -> Result<Vec<[f32; 4]>, (usize, String)> 
     }
     Ok(values.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect())
 }
+
+/// The most interfaces a prescription may have (real lenses have a few
+/// dozen at most; each costs every camera ray a sphere test).
+pub const MAX_INTERFACES: usize = 256;
 
 /// How many radial bands of the film have their own exit pupil bounds.
 const PUPIL_BANDS: usize = 64;
@@ -349,6 +359,13 @@ impl LensSystem {
         let aspect = size.y as f64 / size.x as f64;
         let x = (self.film_diagonal * self.film_diagonal / (1.0 + aspect * aspect)).sqrt();
         DVec2::new(x / 2.0, aspect * x / 2.0)
+    }
+
+    /// How many interfaces the prescription has, and the stop's diameter
+    /// (mm) as set, if it has a stop.
+    pub fn summary(&self) -> (usize, Option<f64>) {
+        let stop = self.interfaces.iter().find(|e| e.curvature_radius == 0.0);
+        (self.interfaces.len(), stop.map(|e| e.aperture_radius * 2000.0))
     }
 
     /// The film-to-rear-element distance, metres.

@@ -35,6 +35,10 @@ fn prescriptions_are_read_as_pbrt_reads_them_and_errors_name_their_line() {
     assert_eq!(line, 2);
     assert!(parse_prescription("# nothing\n").is_err());
     assert!(parse_prescription("1 2 3 inf\n").is_err());
+    let huge = "50 1 1.5 20\n".repeat(MAX_INTERFACES + 1);
+    let (_, m) = parse_prescription(&huge).unwrap_err();
+    assert!(m.contains("at most"), "{m}");
+    assert!(parse_prescription(&"50 1 1.5 20\n".repeat(MAX_INTERFACES)).is_ok());
 }
 
 #[test]

@@ -89,7 +89,8 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
         }
     })?;
 
-    let camera = camera(&src, &file.camera)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let camera = camera(&src, &file.camera, &dir, files)?;
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -118,7 +119,6 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
 
     // Textures, then materials, checked here; materials are numbered in
     // order of first use.
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let textures = materials::textures(&src, &file.textures, &dir, files)?;
     let materials = materials::materials(&src, &file.materials, &textures, &dir, files)?;
     for l in &file.lights {
@@ -205,7 +205,7 @@ pub fn parse_with(path: &Path, text: &str, opts: &LoadOptions, files: &dyn FileS
 }
 
 /// The `[camera]` table.
-fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
+fn camera(src: &Source, spanned: &Spanned<CameraSpec>, dir: &Path, files: &dyn FileSource) -> Result<CameraDesc> {
     let cam_span = spanned.span();
     let cam = spanned.get_ref();
     let spherical = match &cam.spherical {
@@ -217,10 +217,22 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
             )
         })?),
     };
+    let realistic = match &cam.lens_file {
+        Some(file) => Some(lens_system(src, cam, file, dir, files)?),
+        None => None,
+    };
+    if realistic.is_some() && (spherical.is_some() || cam.lens_radius.is_some() || cam.fov_y.is_some()) {
+        return Err(src.error(
+            cam_span,
+            "camera: a `lens_file` camera has no `fov_y`, `lens_radius` or `spherical` (its lens sets them)"
+                .to_string(),
+        ));
+    }
     let fov_y = match (cam.fov_y, spherical) {
         (Some(f), _) => f.0,
-        // Unused: the camera sees every direction.
+        // Unused: the camera sees every direction, or the lens says.
         (None, Some(_)) => 90.0,
+        (None, None) if realistic.is_some() => 90.0,
         (None, None) => return Err(src.error(cam_span, "camera: missing `fov_y`".to_string())),
     };
     let camera = CameraDesc {
@@ -234,7 +246,7 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
         lens: None,
         orthographic: None,
         spherical,
-        realistic: None,
+        realistic,
     };
     if spherical.is_some() && cam.lens_radius.is_some_and(|r| r.0 != 0.0) {
         return Err(src.error(cam_span, "camera: a spherical camera has no lens".to_string()));
@@ -274,6 +286,41 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>) -> Result<CameraDesc> {
         return Err(src.error(cam_span, camera.problem()));
     }
     Ok(camera)
+}
+
+/// The camera's real lens (`lens_file` and what goes with it).
+fn lens_system(
+    src: &Source,
+    cam: &CameraSpec,
+    file: &Spanned<String>,
+    dir: &Path,
+    files: &dyn FileSource,
+) -> Result<crate::camera::SharedLens> {
+    use crate::camera::{lens_system::parse_prescription, Aperture, LensSystem};
+    let path = dir.join(file.get_ref());
+    let fail = |m: String| src.error(file.span(), format!("camera lens_file: {}: {m}", path.display()));
+    let bytes = files.read(&path).map_err(|e| fail(e.to_string()))?;
+    let rows =
+        parse_prescription(&String::from_utf8_lossy(&bytes)).map_err(|(line, m)| fail(format!("line {line}: {m}")))?;
+    let shape = match &cam.aperture_shape {
+        None => None,
+        Some(name) => Some(Aperture::builtin(name).ok_or_else(|| {
+            fail(format!(
+                "unknown aperture_shape '{name}' (gaussian, square, pentagon, star)"
+            ))
+        })?),
+    };
+    // Wide open unless stopped down: the lens' own stop.
+    let aperture = cam.aperture.map_or(f32::MAX, |a| a.0);
+    let focus = cam
+        .focus_distance
+        .map_or((cam.look_at.0 - cam.position.0).length(), |f| f.0);
+    let diagonal = cam.film_diagonal.map_or(35.0, |d| d.0);
+    let name = path
+        .file_name()
+        .map_or_else(|| file.get_ref().clone(), |n| n.to_string_lossy().into_owned());
+    let (lens, _) = LensSystem::new(&name, &rows, aperture, focus, diagonal, shape).map_err(fail)?;
+    Ok(std::sync::Arc::new(lens))
 }
 
 /// The `[[shapes]]` tables, added to `desc`; returns what loading each mesh took.

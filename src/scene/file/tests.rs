@@ -1689,3 +1689,57 @@ fn measured_materials_read_their_file_beside_the_scene() {
         assert!(!e.contains('\n'), "{e}");
     }
 }
+
+#[test]
+fn a_lens_file_makes_a_realistic_camera_focused_at_what_it_looks_at() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("lenses")).unwrap();
+    // A singlet (f 50.85 mm) with its stop behind it.
+    std::fs::write(
+        dir.path().join("lenses/singlet.dat"),
+        "50 5 1.5 40\n-50 2 1 40\n0 40 0 8\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("lenses/bad.dat"), "50 5 1.5 40\n-50 2 1\n").unwrap();
+    let text = r#"
+        [camera]
+        position = [0, 0, -3]
+        look_at = [0, 0, 0]
+        lens_file = "lenses/singlet.dat"
+        aperture = 4
+        aperture_shape = "pentagon"
+        width = 48
+        height = 32
+    "#;
+    let scene = dir.path().join("scene.toml");
+    let d = parse(&scene, text, &LoadOptions::default()).unwrap().desc;
+    let lens = d.camera.realistic.clone().expect("a lens");
+    assert!((lens.focal_length - 0.05085).abs() < 5e-5);
+    assert_eq!(lens.summary(), (3, Some(4.0)));
+    // Focused at look_at: rays from the film's centre meet there.
+    let cam = d.camera.camera().unwrap();
+    let hits: Vec<Vec3> = [(0.3, 0.5), (0.7, 0.5), (0.5, 0.3), (0.5, 0.7)]
+        .iter()
+        .filter_map(|&(u, v)| {
+            let (r, w) = cam.sample_ray(24.0, 16.0, Vec2::new(u, v));
+            (w > 0.0).then(|| r.o + r.d * (-r.o.z / r.d.z))
+        })
+        .collect();
+    assert!(hits.len() >= 3);
+    for h in &hits {
+        assert!(h.truncate().length() < 2e-3, "{h}");
+    }
+    for (from, to, line, what) in [
+        ("singlet.dat", "nope.dat", 5, "nope.dat:"),
+        ("singlet.dat", "bad.dat", 5, "line 2: 7 numbers"),
+        ("\"pentagon\"", "\"hexagon\"", 5, "unknown aperture_shape 'hexagon'"),
+        ("aperture = 4", "fov_y = 40", 2, "has no `fov_y`"),
+        ("aperture = 4", "focus_distance = 0.01", 5, "too close"),
+    ] {
+        let e = parse(&scene, &text.replace(from, to), &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("scene.toml:{line}:")) && e.contains(what), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+}

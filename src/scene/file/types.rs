@@ -124,6 +124,15 @@ pub(super) struct CameraSpec {
     pub(super) medium: Option<Spanned<String>>,
     /// A spherical camera's layout: "equalarea" or "equirectangular".
     pub(super) spherical: Option<String>,
+    /// A real lens: a prescription in pbrt-v4's format, relative to the
+    /// scene file, with its stop's diameter (mm; the lens' own by default),
+    /// the distance in focus (that to `look_at` by default), the film's
+    /// diagonal (mm, 35) and the diaphragm's shape (round by default).
+    pub(super) lens_file: Option<Spanned<String>>,
+    pub(super) aperture: Option<Num>,
+    pub(super) focus_distance: Option<Num>,
+    pub(super) film_diagonal: Option<Num>,
+    pub(super) aperture_shape: Option<String>,
     /// When the shutter opens and closes, as fractions of shapes'
     /// `motion` (which runs from 0 to 1).
     pub(super) shutter: Option<Spanned<Vec<Num>>>,
