@@ -27,6 +27,24 @@ struct Interface {
     aperture_radius: f64,
 }
 
+impl Interface {
+    /// Where the ray (lens space) meets this interface, whose vertex is at
+    /// `z` on the axis, and the surface normal there facing the ray (zero
+    /// on the stop's plane); `None` when it misses or lies behind.
+    fn hit(&self, z: f64, o: DVec3, d: DVec3) -> Option<(DVec3, DVec3)> {
+        let (t, n) = if self.curvature_radius == 0.0 {
+            let t = (z - o.z) / d.z;
+            if t.is_nan() || t < 0.0 {
+                return None;
+            }
+            (t, DVec3::ZERO)
+        } else {
+            intersect_element(self.curvature_radius, z + self.curvature_radius, o, d)?
+        };
+        Some((o + d * t, n))
+    }
+}
+
 /// A bounding box on the plane of the rear element.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bounds {
@@ -393,16 +411,7 @@ impl LensSystem {
             let e = self.interfaces[i];
             z -= e.thickness;
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - o.z) / d.z;
-                if t.is_nan() || t < 0.0 {
-                    return None;
-                }
-                (t, DVec3::ZERO)
-            } else {
-                intersect_element(e.curvature_radius, z + e.curvature_radius, o, d)?
-            };
-            let p = o + d * t;
+            let (p, n) = e.hit(z, o, d)?;
             match (&self.aperture, stop) {
                 (Some(a), true) => {
                     weight = a.at(
@@ -441,16 +450,7 @@ impl LensSystem {
         let mut d = DVec3::new(d.x, d.y, -d.z);
         for (i, e) in self.interfaces.iter().enumerate() {
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - o.z) / d.z;
-                if t.is_nan() || t < 0.0 {
-                    return None;
-                }
-                (t, DVec3::ZERO)
-            } else {
-                intersect_element(e.curvature_radius, z + e.curvature_radius, o, d)?
-            };
-            let p = o + d * t;
+            let (p, n) = e.hit(z, o, d)?;
             if p.x * p.x + p.y * p.y > e.aperture_radius * e.aperture_radius {
                 return None;
             }
