@@ -11,7 +11,8 @@
 #   LENS=file.dat uses that prescription (pbrt-v4's format: radius,
 #   thickness, eta, aperture in mm a row, scene side first) instead of the
 #   landscape lens below; APERTURE (mm, 8) and FOCUS (m, 5.5) set the stop
-#   and the focus. Scenes go to target/realistic-bench/, renders to
+#   and the focus, ISO the film's sensitivity for the box (100: a lens'
+#   picture is dim). Scenes go to target/realistic-bench/, renders to
 #   target/against-pbrt/.
 set -euo pipefail
 : "${PBRT:?set PBRT to a pbrt-v4 binary}"
@@ -37,7 +38,7 @@ cb=$root/../shared/bitterli/cornell-box/scene-v4.pbrt
 camera="Camera \"realistic\" \"string lensfile\" \"lens.dat\" \"float aperturediameter\" ${APERTURE:-8} \"float focusdistance\" ${FOCUS:-5.5}"
 # The cornell box with its own camera and with the lens; meshes are inline.
 sed 's|^Camera .*|Camera "perspective" "float fov" [ 19.5 ]|' "$cb" > "$out/pinhole.pbrt"
-sed "s|^Camera .*|$camera|" "$cb" > "$out/lens.pbrt"
+sed -e "s|^Camera .*|$camera|" -e "s|^Film \"rgb\"|Film \"rgb\" \"float iso\" [ ${ISO:-100} ]|" "$cb" > "$out/lens.pbrt"
 cat > "$out/sky.pbrt" <<PBRT
 LookAt 0 0 0  0 0 1  0 1 0
 Sampler "sobol" "integer pixelsamples" [ 64 ]
