@@ -346,7 +346,10 @@ impl LensSystem {
                 f
             ));
         }
-        let delta = (pz[1] - z + pz[0] - c.sqrt()) / 2.0;
+        // pbrt-v4's (pz1 - z + pz0 - sqrt(c)) / 2, without its cancellation
+        // for a far focus.
+        let a = pz[1] - z - pz[0];
+        let delta = pz[0] + 2.0 * f * a / (a + c.sqrt());
         let last = lens.interfaces.len() - 1;
         lens.interfaces[last].thickness += delta;
         if !(lens.interfaces[last].thickness > 0.0 && delta.is_finite()) {
@@ -402,7 +405,11 @@ impl LensSystem {
     /// A ray from the film (camera space) through every interface to the
     /// scene: the ray leaving the front element, and the stop's
     /// transmission (1 for a round stop); `None` when it is blocked.
-    fn trace_from_film(&self, o: DVec3, d: DVec3) -> Option<(DVec3, DVec3, f64)> {
+    /// `covering`: a shaped stop is taken as the round one about its
+    /// image's square (transmission 1), which passes every ray the shape
+    /// passes and looks the same from every film point at one distance
+    /// from the centre, as the exit pupil's bands need.
+    fn trace_from_film(&self, o: DVec3, d: DVec3, covering: bool) -> Option<(DVec3, DVec3, f64)> {
         let mut o = DVec3::new(o.x, o.y, -o.z);
         let mut d = DVec3::new(d.x, d.y, -d.z);
         let mut z = 0.0;
@@ -413,6 +420,12 @@ impl LensSystem {
             let stop = e.curvature_radius == 0.0;
             let (p, n) = e.hit(z, o, d)?;
             match (&self.aperture, stop) {
+                (Some(_), true) if covering => {
+                    let r = e.aperture_radius;
+                    if p.x * p.x + p.y * p.y > 2.0 * r * r {
+                        return None;
+                    }
+                }
                 (Some(a), true) => {
                     weight = a.at(
                         (p.x / e.aperture_radius + 1.0) / 2.0,
@@ -482,7 +495,7 @@ impl LensSystem {
         let (p0, f0) = cardinal_points(o_scene, o, d);
         let o_film = DVec3::new(x, 0.0, self.rear_z() - 1.0);
         let (o, d, _) = self
-            .trace_from_film(o_film, DVec3::new(0.0, 0.0, 1.0))
+            .trace_from_film(o_film, DVec3::new(0.0, 0.0, 1.0), false)
             .ok_or_else(blocked)?;
         let (p1, f1) = cardinal_points(o_film, o, d);
         let all = [p0, f0, p1, f1];
@@ -506,7 +519,7 @@ impl LensSystem {
             if b.is_some_and(|b| p.cmpge(b.min).all() && p.cmple(b.max).all()) {
                 continue;
             }
-            if self.trace_from_film(film, p.extend(rear_z) - film).is_some() {
+            if self.trace_from_film(film, p.extend(rear_z) - film, true).is_some() {
                 b = Some(match b {
                     Some(b) => Bounds {
                         min: b.min.min(p),
@@ -543,7 +556,7 @@ impl LensSystem {
         let (sin, cos) = if r != 0.0 { (film.y / r, film.x / r) } else { (0.0, 1.0) };
         let pupil = DVec3::new(cos * l.x - sin * l.y, sin * l.x + cos * l.y, self.rear_z());
         let d = pupil - film;
-        let (o, dir, weight) = self.trace_from_film(film, d)?;
+        let (o, dir, weight) = self.trace_from_film(film, d, false)?;
         let cos_theta = d.normalize().z;
         let rear = self.rear_z();
         let w = weight * cos_theta.powi(4) / (pdf * rear * rear);

@@ -221,6 +221,15 @@ fn camera(src: &Source, spanned: &Spanned<CameraSpec>, dir: &Path, files: &dyn F
         Some(file) => Some(lens_system(src, cam, file, dir, files)?),
         None => None,
     };
+    let lens_keys = [
+        ("aperture", cam.aperture.is_some()),
+        ("focus_distance", cam.focus_distance.is_some()),
+        ("film_diagonal", cam.film_diagonal.is_some()),
+        ("aperture_shape", cam.aperture_shape.is_some()),
+    ];
+    if let (None, Some((key, _))) = (&realistic, lens_keys.iter().find(|(_, given)| *given)) {
+        return Err(src.error(cam_span, format!("camera: `{key}` needs a `lens_file`")));
+    }
     if realistic.is_some() && (spherical.is_some() || cam.lens_radius.is_some() || cam.fov_y.is_some()) {
         return Err(src.error(
             cam_span,

@@ -1735,6 +1735,12 @@ fn a_lens_file_makes_a_realistic_camera_focused_at_what_it_looks_at() {
         ("\"pentagon\"", "\"hexagon\"", 5, "unknown aperture_shape 'hexagon'"),
         ("aperture = 4", "fov_y = 40", 2, "has no `fov_y`"),
         ("aperture = 4", "focus_distance = 0.01", 5, "too close"),
+        (
+            "lens_file = \"lenses/singlet.dat\"",
+            "fov_y = 40",
+            2,
+            "`aperture` needs a `lens_file`",
+        ),
     ] {
         let e = parse(&scene, &text.replace(from, to), &LoadOptions::default())
             .unwrap_err()
