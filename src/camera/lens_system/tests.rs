@@ -7,6 +7,18 @@ fn singlet(stop: f32) -> Vec<[f32; 4]> {
     vec![[50.0, 5.0, 1.5, 40.0], [-50.0, 2.0, 1.0, 40.0], [0.0, 40.0, 0.0, stop]]
 }
 
+/// A lens that vignettes: small elements on both sides of the stop, far
+/// from it.
+fn vignetting() -> Vec<[f32; 4]> {
+    vec![
+        [40.0, 6.0, 1.6, 18.0],
+        [-120.0, 10.0, 1.0, 18.0],
+        [0.0, 8.0, 0.0, 10.0],
+        [-30.0, 3.0, 1.7, 14.0],
+        [-60.0, 30.0, 1.0, 14.0],
+    ]
+}
+
 fn lens(rows: &[[f32; 4]], focus: f32) -> LensSystem {
     LensSystem::new("test", rows, 100.0, focus, 35.0, None).unwrap().0
 }
@@ -105,14 +117,7 @@ fn every_ray_that_passes_the_lens_lies_within_its_bands_pupil_bounds() {
     // beyond the pupil: those the lens lets through must be inside the
     // bounds (else sampling the bounds would miss light), here for a lens
     // that vignettes (small front elements far from the stop).
-    let rows = vec![
-        [40.0, 6.0, 1.6, 18.0],
-        [-120.0, 10.0, 1.0, 18.0],
-        [0.0, 8.0, 0.0, 10.0],
-        [-30.0, 3.0, 1.7, 14.0],
-        [-60.0, 30.0, 1.0, 14.0],
-    ];
-    let l = lens(&rows, 3.0);
+    let l = lens(&vignetting(), 3.0);
     let size = Vec2::new(60.0, 40.0);
     let half = l.half_film(size);
     let rear = 1.5 * l.rear_radius();
@@ -250,13 +255,6 @@ fn a_lopsided_stop_loses_no_light_to_the_pupils_bounds() {
     // from every film point at one distance from the centre, so bounds
     // found along +x and turned would cut light off (pbrt-v4 loses it).
     // Against sampling the whole square before the rear element.
-    let rows = vec![
-        [40.0, 6.0, 1.6, 18.0],
-        [-120.0, 10.0, 1.0, 18.0],
-        [0.0, 8.0, 0.0, 10.0],
-        [-30.0, 3.0, 1.7, 14.0],
-        [-60.0, 30.0, 1.0, 14.0],
-    ];
     let res = 64;
     let values = (0..res * res)
         .map(|i| {
@@ -268,7 +266,7 @@ fn a_lopsided_stop_loses_no_light_to_the_pupils_bounds() {
         })
         .collect();
     let quadrant = Aperture::normalized("quadrant", res, res, values).unwrap();
-    let l = LensSystem::new("test", &rows, 100.0, 3.0, 35.0, Some(quadrant))
+    let l = LensSystem::new("test", &vignetting(), 100.0, 3.0, 35.0, Some(quadrant))
         .unwrap()
         .0;
     let size = Vec2::new(60.0, 40.0);

@@ -3805,15 +3805,24 @@ mod tests {
     /// A red quad at world x in [0.5, 1.5] and a green one at [-1.5, -0.5],
     /// seen from z = -5 looking at the origin; `pre` comes before LookAt.
     fn two_quads(pre: &str) -> Converted {
-        ok(&format!(
-            "{pre}LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 40 ]\n\
+        convert_text(
+            &two_quads_text(pre, "Camera \"perspective\" \"float fov\" [ 40 ]"),
+            false,
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`two_quads`]' file, seen by `camera`.
+    fn two_quads_text(pre: &str, camera: &str) -> String {
+        format!(
+            "{pre}LookAt 0 0 -5  0 0 0  0 1 0\n{camera}\n\
              Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
              MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
              MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
              NamedMaterial \"red\"\n{}NamedMaterial \"green\"\n{}",
             quad(0.5),
             quad(-1.5)
-        ))
+        )
     }
 
     #[test]
@@ -3931,18 +3940,8 @@ mod tests {
         .unwrap();
         let bad = dir.path().join("bad.dat");
         std::fs::write(&bad, "50 5 1.5 40\n-50 2 1 40\n0 40 zero 8\n").unwrap();
-        let scene = |pre: &str, camera: &str| {
-            let text = format!(
-                "{pre}LookAt 0 0 -5  0 0 0  0 1 0\n{camera}\n\
-                 Film \"rgb\" \"integer xresolution\" [ 40 ] \"integer yresolution\" [ 20 ]\nWorldBegin\n\
-                 MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n\
-                 MakeNamedMaterial \"green\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0.8 0 ]\n\
-                 NamedMaterial \"red\"\n{}NamedMaterial \"green\"\n{}",
-                quad(0.5),
-                quad(-1.5)
-            );
-            convert_text(&text, false).map_err(|e| e.to_string())
-        };
+        let scene =
+            |pre: &str, camera: &str| convert_text(&two_quads_text(pre, camera), false).map_err(|e| e.to_string());
         let realistic = format!(
             "Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" 4 \"float focusdistance\" 5",
             lens.display()
