@@ -157,7 +157,7 @@ impl Aperture {
     }
 
     /// Bilinear transmission at (u, v) in [0, 1]^2 (v up), black outside.
-    fn at(&self, u: f64, v: f64) -> f64 {
+    pub fn at(&self, u: f64, v: f64) -> f64 {
         // Image space: rows down from the top.
         let x = u * self.width as f64 - 0.5;
         let y = (1.0 - v) * self.height as f64 - 0.5;
@@ -380,6 +380,11 @@ impl LensSystem {
         let aspect = size.y as f64 / size.x as f64;
         let x = (self.film_diagonal * self.film_diagonal / (1.0 + aspect * aspect)).sqrt();
         DVec2::new(x / 2.0, aspect * x / 2.0)
+    }
+
+    /// The stop's shape, if it is not round.
+    pub fn aperture(&self) -> Option<&Aperture> {
+        self.aperture.as_ref()
     }
 
     /// How many interfaces the prescription has, and the stop's diameter

@@ -3988,6 +3988,30 @@ mod tests {
         let e = scene("", &format!("{realistic} \"string aperture\" \"hexagon\"")).unwrap_err();
         assert!(e.contains("main.pbrt:2") && e.contains("aperture \"hexagon\""), "{e}");
         assert!(scene("", &format!("{realistic} \"string aperture\" \"pentagon\"")).is_ok());
+        // Aperture images stand upright on the stop (the picture's top at
+        // the stop's +y, as pbrt-v4 reads them) and pass what the round stop
+        // passes, grey 8-bit ones too (pbrt-v4 clamps those in their 8 bits).
+        let top_half = |x: u32, y: u32| y < 8 && (x as i32 - 8).pow(2) + (y as i32 - 8).pow(2) < 64;
+        let grey = dir.path().join("grey.png");
+        ::image::GrayImage::from_fn(16, 16, |x, y| ::image::Luma([if top_half(x, y) { 255 } else { 0 }]))
+            .save(&grey)
+            .unwrap();
+        let rgb = dir.path().join("rgb.png");
+        ::image::RgbImage::from_fn(16, 16, |x, y| {
+            ::image::Rgb(if top_half(x, y) { [255; 3] } else { [0; 3] })
+        })
+        .save(&rgb)
+        .unwrap();
+        for file in [&grey, &rgb] {
+            let c = scene("", &format!("{realistic} \"string aperture\" \"{}\"", file.display())).unwrap();
+            let lens = c.desc.camera.realistic.as_ref().unwrap();
+            let a = lens.aperture().expect("a shaped stop");
+            let mean = a.values.iter().map(|&v| v as f64).sum::<f64>() / a.values.len() as f64;
+            assert!((mean - std::f64::consts::FRAC_PI_4).abs() < 1e-5, "{mean}");
+            assert!(a.at(0.5, 0.75) > 1.0 && a.at(0.5, 0.25) == 0.0, "{file:?}");
+        }
+        let e = scene("", &format!("{realistic} \"string aperture\" \"none.png\"")).unwrap_err();
+        assert!(e.contains("main.pbrt:2") && e.contains("aperture \"none.png\""), "{e}");
     }
 
     #[test]
