@@ -187,13 +187,30 @@ pub fn sample_direct(
     stats: &mut RayStats,
 ) -> Vec3 {
     let u = sampler.next_2d();
+    sample_direct_with(scene, hit, wo, bsdf, mis, u, stats)
+}
+
+/// [`sample_direct`] with its sample `u` already drawn (the light's choice in
+/// `u.x`, reused for the point on it).
+pub fn sample_direct_with(
+    scene: &Scene,
+    hit: &Hit,
+    wo: Vec3,
+    bsdf: &Bsdf,
+    mis: bool,
+    u: Vec2,
+    stats: &mut RayStats,
+) -> Vec3 {
     let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
         return Vec3::ZERO;
     };
     let u = Vec2::new(ux, u.y);
-    let Some(ls) = unoccluded_light_sample(scene, hit, wo, bsdf, li, u, stats) else {
+    let Some(ls) = light_sample_towards(scene, hit, wo, bsdf, li, u) else {
         return Vec3::ZERO;
     };
+    // What the light brings if nothing blocks it, reckoned before the shadow
+    // ray is traced: this work does not depend on the ray, so the processor
+    // overlaps it with the traversal rather than waiting for both in turn.
     let (f, w) = if mis && !scene.lights[li].is_delta() {
         let (f, pdf_bsdf) = bsdf.f_pdf(wo, ls.wi, TransportMode::Radiance);
         (f, power_heuristic(pmf * ls.pdf, pdf_bsdf))
@@ -201,7 +218,11 @@ pub fn sample_direct(
         (bsdf.f(wo, ls.wi, TransportMode::Radiance), 1.0)
     };
     let f = f * ls.wi.dot(bsdf.frame.z).abs();
-    f * ls.weight * (w / pmf)
+    let l = f * ls.weight * (w / pmf);
+    if shadow_ray_blocked(scene, hit, &ls, li, stats) {
+        return Vec3::ZERO;
+    }
+    l
 }
 
 /// Direct light reflected towards the vertex's `wo` from every light, `n`
@@ -254,16 +275,28 @@ pub fn unoccluded_light_sample(
     u: Vec2,
     stats: &mut RayStats,
 ) -> Option<LightSample> {
+    let ls = light_sample_towards(scene, hit, wo, bsdf, li, u)?;
+    (!shadow_ray_blocked(scene, hit, &ls, li, stats)).then_some(ls)
+}
+
+/// The sample of light `li` drawn with `u` from a hit seen from `wo`, when
+/// the BSDF can scatter light arriving along it towards `wo`; no shadow ray.
+#[inline(always)]
+fn light_sample_towards(scene: &Scene, hit: &Hit, wo: Vec3, bsdf: &Bsdf, li: usize, u: Vec2) -> Option<LightSample> {
     let ls = scene.lights[li].sample_li(hit.p, u)?;
-    if !scatters_towards(hit, wo, bsdf, ls.wi) {
-        return None;
-    }
+    scatters_towards(hit, wo, bsdf, ls.wi).then_some(ls)
+}
+
+/// Whether anything blocks the shadow ray from `hit` to the light sample
+/// `ls` of light `li`.
+#[inline(always)]
+fn shadow_ray_blocked(scene: &Scene, hit: &Hit, ls: &LightSample, li: usize, stats: &mut RayStats) -> bool {
     // Aim from the offset origin at the sampled point itself: a ray parallel
     // to wi would meet a sphere light short of it and the light would shadow
     // itself.
     let o = offset_origin(hit.p, hit.ng, ls.wi);
     stats.shadow_rays += 1;
-    let blocked = if ls.dist.is_finite() {
+    if ls.dist.is_finite() {
         let to_light = hit.p + ls.wi * ls.dist - o;
         let dist = to_light.length();
         scene.occluded_before_light(
@@ -274,8 +307,7 @@ pub fn unoccluded_light_sample(
         )
     } else {
         scene.occluded(&Ray::timed(o, ls.wi, hit.time), 0.0, f32::INFINITY)
-    };
-    (!blocked).then_some(ls)
+    }
 }
 
 #[cfg(test)]

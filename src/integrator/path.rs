@@ -37,7 +37,7 @@
 
 use super::bdpt::{trace_light_pass, Bdpt};
 use super::checkpoint::{self, Buffer};
-use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, sample_direct};
+use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, sample_direct_with};
 use super::{accumulate_tiles, merge_sums, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::math::{offset_origin, Ray, Vec3};
@@ -122,11 +122,19 @@ impl RadianceEstimator for PathTracer {
             if flags.is_empty() {
                 break;
             }
-            if flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf {
+            // The light sample's numbers are drawn first, as always, but the
+            // BSDF is sampled before the shadow ray is traced: the next
+            // direction's chain of divisions and square roots then runs while
+            // the processor works through the light sample, which does not
+            // depend on it, instead of holding up the next ray.
+            let nee = flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf;
+            let u_light = nee.then(|| sampler.next_2d());
+            let bs = sample_bsdf(&bsdf, wo, sampler);
+            if let Some(u) = u_light {
                 let mis = self.light_sampling == LightSampling::Mis;
-                l += beta * sample_direct(scene, &hit, wo, &bsdf, mis, sampler, stats);
+                l += beta * sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats);
             }
-            let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
+            let Some(bs) = bs else {
                 break;
             };
             if !hit.keeps_side(wo, bs.wi, bs.flags) {
