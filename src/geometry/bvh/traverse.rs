@@ -60,18 +60,57 @@ impl<F: Fn(u32, &TriHit) -> bool> Accept for Where<F> {
     }
 }
 
+/// A closest-hit query's answer as it leaves the traversal: the triangle's
+/// slot (`NO_HIT` for none) and the hit's distance and barycentrics, packed
+/// into one `u128`, which comes back in two registers. Returned through
+/// memory as an `Option<(u32, TriHit)>`, it was stored field by field and
+/// read back with wider loads, which the processor cannot forward from the
+/// stores: the caller waited for them to reach the cache, on every query.
+#[derive(Clone, Copy)]
+struct Closest(u128);
+
+const NO_HIT: u32 = u32::MAX;
+
+impl Closest {
+    const NONE: Closest = Closest(NO_HIT as u128);
+
+    #[inline(always)]
+    fn new(slot: u32, h: TriHit) -> Closest {
+        let [t, u, v] = [h.t, h.u, h.v].map(|x| x.to_bits() as u128);
+        Closest(slot as u128 | t << 32 | u << 64 | v << 96)
+    }
+
+    #[inline(always)]
+    fn found(self) -> Option<(u32, TriHit)> {
+        let slot = self.0 as u32;
+        let f = |k: u32| f32::from_bits((self.0 >> (32 * k)) as u32);
+        (slot != NO_HIT).then(|| {
+            (
+                slot,
+                TriHit {
+                    t: f(1),
+                    u: f(2),
+                    v: f(3),
+                },
+            )
+        })
+    }
+}
+
 impl Bvh {
     /// Closest hit in (t_min, t_max): the slot of the triangle and the hit.
     /// Where the CPU has AVX, nodes test their eight boxes at once; the
     /// result is the same bit for bit.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
-        self.closest_dispatch(ray, t_min, t_max, &All)
+        self.closest_dispatch(ray, t_min, t_max, &All).found()
     }
 
     /// The closest hit in (t_min, t_max) that `accept` accepts (given the
     /// triangle's slot and the hit): what a loop over all triangles keeping
     /// the nearest accepted hit finds. Hits are offered in no particular
     /// order, some that a nearer accepted hit hides among them.
+    #[inline]
     pub fn intersect_where(
         &self,
         ray: &Ray,
@@ -79,23 +118,28 @@ impl Bvh {
         t_max: f32,
         accept: impl Fn(u32, &TriHit) -> bool,
     ) -> Option<(u32, TriHit)> {
-        self.closest_dispatch(ray, t_min, t_max, &Where(accept))
+        self.closest_dispatch(ray, t_min, t_max, &Where(accept)).found()
     }
 
     #[inline(always)]
-    fn closest_dispatch<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
+    fn closest_dispatch<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Closest {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU has AVX.
             return unsafe { self.intersect_avx(ray, t_min, t_max, accept) };
         }
+        self.intersect_sse(ray, t_min, t_max, accept)
+    }
+
+    #[inline(never)]
+    fn intersect_sse<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Closest {
         self.closest::<Sse, A>(ray, t_min, t_max, accept)
     }
 
     /// [`Bvh::intersect`] with nodes tested four boxes at a time (SSE2, every
     /// x86-64 CPU's), whatever the CPU: for checking that both agree.
     pub fn intersect_baseline(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, TriHit)> {
-        self.closest::<Sse, All>(ray, t_min, t_max, &All)
+        self.closest::<Sse, All>(ray, t_min, t_max, &All).found()
     }
 
     /// Whether any triangle blocks the ray in (t_min, t_max); AVX as in
@@ -126,7 +170,7 @@ impl Bvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    fn intersect_avx<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
+    fn intersect_avx<A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Closest {
         self.closest::<Avx, A>(ray, t_min, t_max, accept)
     }
 
@@ -137,10 +181,10 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn closest<B: BoxTest, A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Option<(u32, TriHit)> {
+    fn closest<B: BoxTest, A: Accept>(&self, ray: &Ray, t_min: f32, t_max: f32, accept: &A) -> Closest {
         let r = TraversalRay::new(ray, t_min);
         let mut t_max = t_max;
-        let mut best: Option<(u32, TriHit)> = None;
+        let mut best = Closest::NONE;
         // An ArrayVec starts uninitialised; zeroing a fixed array per ray
         // took a tenth of the traversal time.
         let mut stack: ArrayVec<(u32, f32), STACK> = ArrayVec::new();
@@ -191,13 +235,13 @@ impl Bvh {
             } else {
                 for p in self.leaf_packets(cur) {
                     if A::ALL {
-                        if let Some((slot, h)) = r.hit_triangles(p, t_max) {
-                            t_max = h.t;
-                            best = Some((slot, h));
+                        if let Some((slot, hit)) = r.hit_triangles(p, t_max) {
+                            t_max = hit.t;
+                            best = Closest::new(slot, hit);
                         }
-                    } else if let Some((slot, h)) = r.hit_accepted_triangles(p, t_max, accept) {
-                        t_max = h.t;
-                        best = Some((slot, h));
+                    } else if let Some((slot, hit)) = r.hit_accepted_triangles(p, t_max, accept) {
+                        t_max = hit.t;
+                        best = Closest::new(slot, hit);
                     }
                 }
             }
