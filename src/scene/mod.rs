@@ -1401,7 +1401,26 @@ impl Scene {
     }
 
     /// Closest hit along the ray in (t_min, t_max).
+    #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        // Scenes of still, solid triangles alone build the hit in the
+        // caller: returned from a call, the record comes back through memory,
+        // written field by field and read back whole, which stalls the
+        // caller until the stores reach the cache.
+        if self.movers.is_empty() && self.alphas.is_empty() && self.shapes.is_empty() {
+            let (slot, h) = self.bvh.intersect(ray, t_min, t_max)?;
+            let tri = &self.triangles[slot as usize];
+            let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
+            let mut hit = self.triangle_hit(slot as usize, h.u, h.v, h.t, p);
+            hit.time = ray.time;
+            return Some(hit);
+        }
+        self.intersect_any(ray, t_min, t_max)
+    }
+
+    /// [`Scene::intersect`] in any scene.
+    #[inline(never)]
+    fn intersect_any(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut hit = self.intersect_still(ray, t_min, t_max);
         if !self.movers.is_empty() {
             hit = self.intersect_movers(ray, t_min, hit.map_or(t_max, |h| h.t)).or(hit);
