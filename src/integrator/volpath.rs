@@ -159,17 +159,23 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         if flags.is_empty() {
             break;
         }
-        if flags.is_non_specular() && pt.light_sampling != LightSampling::Bsdf {
+        // As in the path tracer: the light sample's numbers first, then the
+        // BSDF sampled before the shadow ray is traced, so that the two
+        // chains of arithmetic overlap.
+        let nee = flags.is_non_specular() && pt.light_sampling != LightSampling::Bsdf;
+        let u_light = nee.then(|| sampler.next_2d());
+        let bs = sample_bsdf(&bsdf, wo, sampler);
+        if let Some(u) = u_light {
             let v = Vertex::Surface {
                 hit: &hit,
                 wo,
                 bsdf: &bsdf,
                 medium,
             };
-            l +=
-                weight(beta, ratio) * sample_direct(scene, &v, pt.light_sampling == LightSampling::Mis, sampler, stats);
+            let mis = pt.light_sampling == LightSampling::Mis;
+            l += weight(beta, ratio) * sample_direct_with(scene, &v, mis, u, stats);
         }
-        let Some(bs) = sample_bsdf(&bsdf, wo, sampler) else {
+        let Some(bs) = bs else {
             break;
         };
         if !hit.keeps_side(wo, bs.wi, bs.flags) {
@@ -320,6 +326,11 @@ fn roulette(beta: &mut Vec3, scale: f32, depth: u32, sampler: &mut Sampler) -> b
 /// against sampling the BSDF or phase function when `mis`.
 fn sample_direct(scene: &Scene, v: &Vertex, mis: bool, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
     let u = sampler.next_2d();
+    sample_direct_with(scene, v, mis, u, stats)
+}
+
+/// [`sample_direct`] with its sample `u` already drawn.
+fn sample_direct_with(scene: &Scene, v: &Vertex, mis: bool, u: Vec2, stats: &mut RayStats) -> Vec3 {
     let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
         return Vec3::ZERO;
     };
