@@ -1267,8 +1267,8 @@ impl<'a> Builder<'a> {
                 }
                 Geometry::Mesh(self.ply(&t.loc, &name)?)
             }
-            "sphere" => Geometry::Sphere(shapes::sphere(&params, &t.loc, &mut found)?),
-            "disk" => Geometry::Disk(shapes::disk(&params, &mut found)?),
+            "sphere" => Geometry::Sphere(shapes::sphere(&params, &t.loc)?),
+            "disk" => Geometry::Disk(shapes::disk(&params, &t.loc)?),
             "cylinder" => Geometry::Mesh(Arc::new(shapes::cylinder(&params, &t.loc)?)),
             "curve" => match shapes::curves(&params, &t.loc, &mut found)? {
                 Some(c) => Geometry::Curves(c),

@@ -39,6 +39,7 @@
 use super::error::{Loc, PbrtError};
 use super::ir::{Geometry, PbrtScene, Shape, TextureKind};
 use super::params::{FloatOrTexture, Param, Params, SpectrumOrTexture};
+use super::shapes;
 use super::spectrum::{spectrum_to_xyz, xyz_to_linear_srgb, SpectrumValue};
 use crate::bsdf::{HairBxdf, MeasuredBxdf, MeasuredData};
 use crate::error::{Error, Result};
@@ -1705,20 +1706,9 @@ impl<'a> Conv<'a> {
         let scene = self.scene;
         for shape in &scene.shapes {
             let p: &Params = &shape.params;
-            match &shape.geometry {
-                Geometry::Other => {
-                    self.skip_shape(shape);
-                    continue;
-                }
-                Geometry::Disk(d) if d.is_partial() => {
-                    self.skip_shape(shape);
-                    continue;
-                }
-                Geometry::Sphere(s) if s.is_partial() => {
-                    self.skip_shape(shape);
-                    continue;
-                }
-                _ => {}
+            if shape.geometry == Geometry::Other {
+                self.skip_shape(shape);
+                continue;
             }
             // pbrt-v4 cuts a shape out where its alpha is below 1; a number
             // of 1 or more leaves it whole.
@@ -1807,7 +1797,32 @@ impl<'a> Conv<'a> {
                     ),
                 );
             }
-            match &shape.geometry {
+            // A partial sphere or disk, or one under a transformation the
+            // analytic shapes do not take, is a mesh (as a cylinder is),
+            // facing where pbrt-v4's shape faces.
+            let mirrors = m.determinant() < 0.0;
+            let similar = similarity(m);
+            if let Geometry::Disk(d) = &shape.geometry {
+                if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
+                    return Err(located(
+                        &shape.loc,
+                        format!(
+                            "disk: radius {} must be > 0 and innerradius {} in [0, radius)",
+                            d.radius, d.inner_radius
+                        ),
+                    ));
+                }
+            }
+            let tessellated = match &shape.geometry {
+                Geometry::Sphere(s) if s.is_partial() || similar.is_none() => {
+                    Some(Geometry::Mesh(Arc::new(shapes::sphere_mesh(s, mirrors))))
+                }
+                Geometry::Disk(d) if d.is_partial() || similar.is_none() => {
+                    Some(Geometry::Mesh(Arc::new(shapes::disk_mesh(d, mirrors))))
+                }
+                _ => None,
+            };
+            match tessellated.as_ref().unwrap_or(&shape.geometry) {
                 Geometry::Mesh(mesh) => {
                     let world: Vec<Vec3> = mesh.positions.iter().map(|&v| m.project_point3(v)).collect();
                     let normal_matrix = m.inverse().transpose();
@@ -1924,13 +1939,8 @@ impl<'a> Conv<'a> {
                     }
                 }
                 Geometry::Sphere(s) => {
-                    let Some((centre, scale)) = similarity(m) else {
-                        self.problem(
-                            Kind::Shape,
-                            &shape.loc,
-                            "a sphere under a transformation other than rotation, uniform scale and translation is not supported",
-                        );
-                        self.skip_shape(shape);
+                    // (A mesh above otherwise.)
+                    let Some((centre, scale)) = similar else {
                         continue;
                     };
                     let sphere = Sphere {
@@ -1990,24 +2000,9 @@ impl<'a> Conv<'a> {
                     }
                 }
                 Geometry::Disk(d) => {
-                    let Some((_, scale)) = similarity(m) else {
-                        self.problem(
-                            Kind::Shape,
-                            &shape.loc,
-                            "a disk under a transformation other than rotation, uniform scale and translation is not supported",
-                        );
-                        self.skip_shape(shape);
+                    let Some((_, scale)) = similar else {
                         continue;
                     };
-                    if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
-                        return Err(located(
-                            &shape.loc,
-                            format!(
-                                "disk: radius {} must be > 0 and innerradius {} in [0, radius)",
-                                d.radius, d.inner_radius
-                            ),
-                        ));
-                    }
                     let centre = m.transform_point3(Vec3::new(0.0, 0.0, d.height));
                     let axes = [
                         m.transform_vector3(Vec3::X) / scale,
@@ -5139,14 +5134,14 @@ mod tests {
     fn unsupported_features_are_one_error_unless_lenient() {
         let text = format!(
             "WorldBegin\nMakeNamedMaterial \"cu\" \"string type\" \"plastic\"\nNamedMaterial \"cu\"\n{}\
-             Shape \"sphere\" \"float phimax\" 90\nLightSource \"laser\"\nLightSource \"laser\"\nLightSource \"laser\"\n",
+             Shape \"teapot\"\nLightSource \"laser\"\nLightSource \"laser\"\nLightSource \"laser\"\n",
             quad(0.0)
         );
         let e = convert_text(&text, false).unwrap_err().to_string();
         assert!(e.starts_with("dir/main.pbrt:2: material \"cu\""), "{e}");
         assert!(e.contains("dir/main.pbrt:6: light \"laser\" is not supported"), "{e}");
         assert!(
-            e.contains("dir/main.pbrt:5: a partial sphere") && e.contains("and 1 more"),
+            e.contains("dir/main.pbrt:5: \"teapot\"") && e.contains("and 1 more"),
             "{e}"
         );
         assert!(!e.contains('\n'));

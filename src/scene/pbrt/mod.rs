@@ -21,7 +21,7 @@
 //! directives, parameters of the wrong type, unterminated strings and lists,
 //! unbalanced `AttributeBegin`/`AttributeEnd`, missing or cyclic `Include`s,
 //! malformed meshes. What the file may say but this reader does not express
-//! (partial spheres, curves, media, motion...) is not an error here: it is
+//! (`ribbon` curves, media, motion...) is not an error here: it is
 //! listed in [`PbrtScene::unsupported`] for the converter to decide.
 
 mod builder;

@@ -979,13 +979,7 @@ fn meshes_spheres_and_disks_are_decoded() {
     }
     assert_eq!(s.shapes[7].geometry, Geometry::Other);
     let unsupported: Vec<_> = s.unsupported.iter().map(|n| (n.loc.line, n.message.as_str())).collect();
-    assert_eq!(
-        unsupported,
-        [
-            (5, "a partial sphere (zmin -2, zmax 1, phimax 360) is not supported"),
-            (9, "\"teapot\" is not a pbrt-v4 shape type"),
-        ]
-    );
+    assert_eq!(unsupported, [(9, "\"teapot\" is not a pbrt-v4 shape type"),]);
     let warnings: Vec<_> = s.warnings.iter().map(|n| (n.loc.line, n.message.as_str())).collect();
     assert_eq!(
         warnings,
@@ -1693,7 +1687,7 @@ fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
 fn a_file_included_twice_lists_each_unsupported_place_once() {
     let files = Files::default().with(
         "scene/s.pbrt",
-        "Shape \"sphere\" \"float zmax\" 0.5\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
+        "Shape \"teapot\"\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
          Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
     );
     // Moving shapes: two problems on each line of s.pbrt.
@@ -1704,7 +1698,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
         false,
     )
     .unwrap_err();
-    assert_eq!(e.matches("a partial sphere").count(), 1, "{e}");
+    assert_eq!(e.matches("\"teapot\"").count(), 1, "{e}");
     assert_eq!(e.matches("\"ribbon\" curves").count(), 1, "{e}");
     assert_eq!(e.matches("a moving \"curve\" (ActiveTransform)").count(), 1, "{e}");
 }
@@ -2799,5 +2793,125 @@ fn measured_materials_read_their_file_and_name_bad_ones_at_their_line() {
         let e = converted(&scene(&named("")), Files::default(), lenient).unwrap_err();
         assert!(e.starts_with("scene/main.pbrt:3: measured: no \"filename\""), "{e}");
         assert!(!e.contains('\n'));
+    }
+}
+
+/// The scene's ray (ours mirrors pbrt's x) from (x, y, 0) along +z.
+fn hit_at(scene: &crate::Scene, x: f32, y: f32) -> Option<crate::scene::Hit> {
+    scene.intersect(
+        &crate::math::Ray::new(Vec3::new(x, y, 0.0), Vec3::Z),
+        0.0,
+        f32::INFINITY,
+    )
+}
+
+#[test]
+fn partial_and_stretched_spheres_and_disks_are_where_pbrt_puts_them() {
+    let one = |shape: &str| {
+        let c = converted(
+            &format!("WorldBegin\nTranslate 0 0 5\n{shape}\n"),
+            Files::default(),
+            false,
+        )
+        .unwrap();
+        assert!(c.mirrored);
+        crate::Scene::build(c.desc).unwrap()
+    };
+    // The far half only (object z >= 0): the ray meets it from inside,
+    // where v = 1 (pbrt-v4's theta_zmax), its normal pbrt's outward one.
+    let s = one("Shape \"sphere\" \"float zmin\" 0");
+    let h = hit_at(&s, 0.0, 0.0).unwrap();
+    assert!((h.t - 6.0).abs() < 1e-4 && (h.uv.y - 1.0).abs() < 1e-6, "{h:?}");
+    assert!(h.ng.z > 0.999 && h.ns.z > 0.999, "{h:?}");
+    let h = hit_at(&s, 0.6, 0.0).unwrap();
+    assert!((h.t - 5.8).abs() < 2e-3, "{h:?}");
+    // A wedge of phi in [0, 90] degrees: pbrt's (0.5, 0.5), ours (-0.5, 0.5).
+    let s = one("Shape \"sphere\" \"float phimax\" 90");
+    let h = hit_at(&s, -0.5, 0.5).unwrap();
+    assert!((h.t - (5.0 - 0.5f32.sqrt())).abs() < 2e-3, "{h:?}");
+    assert!((h.uv.x - 0.5).abs() < 1e-2, "{h:?}");
+    assert!(hit_at(&s, 0.5, 0.5).is_none() && hit_at(&s, -0.5, -0.5).is_none());
+    // An ellipsoid twice as wide along x as the sphere.
+    let s = one("Scale 2 1 1\nShape \"sphere\"");
+    let h = hit_at(&s, -1.5, 0.0).unwrap();
+    assert!((h.t - (5.0 - 0.4375f32.sqrt())).abs() < 2e-3, "{h:?}");
+    let n = Vec3::new(-1.5 / 4.0, 0.0, -0.4375f32.sqrt()).normalize();
+    assert!(h.ns.dot(n) > 0.9999, "{h:?} {n}");
+    assert!(hit_at(&s, 1.95, 0.0).is_some() && hit_at(&s, 2.05, 0.0).is_none());
+    assert!(hit_at(&s, 0.0, 0.95).is_some() && hit_at(&s, 0.0, 1.05).is_none());
+    // A quarter disk, and an annulus squeezed into an ellipse's ring.
+    let s = one("Shape \"disk\" \"float phimax\" 90");
+    let h = hit_at(&s, -0.5, 0.5).unwrap();
+    assert!((h.t - 5.0).abs() < 1e-5, "{h:?}");
+    assert!((h.uv - Vec2::new(0.5, 1.0 - 0.5f32.sqrt())).length() < 2e-3, "{h:?}");
+    assert!(hit_at(&s, 0.5, 0.5).is_none() && hit_at(&s, -0.5, -0.5).is_none());
+    let s = one("Scale 1 0.5 1\nShape \"disk\" \"float innerradius\" 0.5");
+    assert!(hit_at(&s, 0.0, 0.2).is_none() && hit_at(&s, 0.0, 0.3).is_some() && hit_at(&s, 0.0, 0.55).is_none());
+    assert!(hit_at(&s, 0.4, 0.0).is_none() && hit_at(&s, 0.6, 0.0).is_some());
+    // Cuts that leave nothing are the file's error (pbrt-v4 draws nothing).
+    for (shape, what) in [
+        (
+            "sphere\" \"float zmin\" 1.5",
+            "sphere: zmin 1.5 and zmax 1 must leave a band",
+        ),
+        ("sphere\" \"float phimax\" 0", "phimax 0 must be > 0"),
+        ("disk\" \"float phimax\" -5", "disk: phimax -5 must be > 0"),
+    ] {
+        let e = converted(&format!("WorldBegin\nShape \"{shape}\n"), Files::default(), false).unwrap_err();
+        assert!(e.starts_with("scene/main.pbrt:2:1: ") && e.contains(what), "{e}");
+    }
+}
+
+#[test]
+fn meshed_spheres_and_disks_face_as_pbrts_normals() {
+    // pbrt-v4 turns a quadric's normal inwards (a disk's to -z) under
+    // ReverseOrientation or a transformation that swaps handedness, not
+    // both: one-sided light leaves on that side, and a dielectric's inside
+    // is behind it.
+    for (attrs, inward) in [
+        ("", false),
+        ("ReverseOrientation\n", true),
+        ("Scale -1 1 1\n", true),
+        ("Scale -1 1 1\nReverseOrientation\n", false),
+    ] {
+        for shape in [
+            "Shape \"sphere\" \"float zmin\" 0.2",
+            "Shape \"sphere\" \"float phimax\" 300",
+            "Shape \"disk\" \"float phimax\" 300",
+        ] {
+            let text = format!(
+                "WorldBegin\nTranslate 0 0 5\nAttributeBegin\n{attrs}AreaLightSource \"diffuse\"\n{shape}\nAttributeEnd\n\
+                 {attrs}Material \"dielectric\"\n{shape}\n"
+            );
+            let c = converted(&text, Files::default(), false).unwrap();
+            let outward = |v: [Vec3; 3]| {
+                let centroid = (v[0] + v[1] + v[2]) / 3.0;
+                let out = if shape.contains("disk") {
+                    Vec3::Z
+                } else {
+                    centroid - Vec3::new(0.0, 0.0, 5.0)
+                };
+                (v[1] - v[0]).cross(v[2] - v[0]).dot(out) > 0.0
+            };
+            let lights: Vec<_> = c
+                .desc
+                .lights
+                .iter()
+                .filter_map(|l| match l {
+                    crate::light::Light::Triangle {
+                        vertices, two_sided, ..
+                    } => Some((*vertices, *two_sided)),
+                    _ => None,
+                })
+                .collect();
+            assert!(lights.len() > 100, "{attrs}{shape}");
+            assert!(
+                lights.iter().all(|&(v, two)| !two && outward(v) != inward),
+                "{attrs}{shape}"
+            );
+            let tris = &c.desc.triangles;
+            assert!(tris.len() > 100, "{attrs}{shape}");
+            assert!(tris.iter().all(|t| outward(t.vertices) != inward), "{attrs}{shape}");
+        }
     }
 }
