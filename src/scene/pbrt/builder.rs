@@ -1372,6 +1372,7 @@ impl<'a> Builder<'a> {
             quads_split: read.quads,
             second_halves,
             file: Some(path.clone()),
+            quadric: false,
         });
         self.ply_cache.insert(path, mesh.clone());
         Ok(mesh)

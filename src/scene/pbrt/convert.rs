@@ -1798,9 +1798,7 @@ impl<'a> Conv<'a> {
                 );
             }
             // A partial sphere or disk, or one under a transformation the
-            // analytic shapes do not take, is a mesh (as a cylinder is),
-            // facing where pbrt-v4's shape faces.
-            let mirrors = m.determinant() < 0.0;
+            // analytic shapes do not take, is a mesh (as a cylinder is).
             let similar = similarity(m);
             if let Geometry::Disk(d) = &shape.geometry {
                 if !(d.radius > 0.0 && (0.0..d.radius).contains(&d.inner_radius)) {
@@ -1815,10 +1813,10 @@ impl<'a> Conv<'a> {
             }
             let tessellated = match &shape.geometry {
                 Geometry::Sphere(s) if s.is_partial() || similar.is_none() => {
-                    Some(Geometry::Mesh(Arc::new(shapes::sphere_mesh(s, mirrors))))
+                    Some(Geometry::Mesh(Arc::new(shapes::sphere_mesh(s))))
                 }
                 Geometry::Disk(d) if d.is_partial() || similar.is_none() => {
-                    Some(Geometry::Mesh(Arc::new(shapes::disk_mesh(d, mirrors))))
+                    Some(Geometry::Mesh(Arc::new(shapes::disk_mesh(d))))
                 }
                 _ => None,
             };
@@ -1826,7 +1824,12 @@ impl<'a> Conv<'a> {
                 Geometry::Mesh(mesh) => {
                     let world: Vec<Vec3> = mesh.positions.iter().map(|&v| m.project_point3(v)).collect();
                     let normal_matrix = m.inverse().transpose();
-                    let sign = if shape.reverse_orientation { -1.0 } else { 1.0 };
+                    let flip = if mesh.quadric {
+                        shape.flips_normals()
+                    } else {
+                        shape.reverse_orientation
+                    };
+                    let sign = if flip { -1.0 } else { 1.0 };
                     let normals: Option<Vec<Vec3>> = mesh.normals.as_ref().map(|ns| {
                         ns.iter()
                             .map(|&n| normal_matrix.transform_vector3(n).normalize_or_zero() * sign)

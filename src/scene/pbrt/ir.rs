@@ -176,6 +176,11 @@ pub struct TriMesh {
     pub second_halves: Vec<bool>,
     /// The mesh file, for `plymesh`.
     pub file: Option<PathBuf>,
+    /// A quadric made a mesh (`cylinder`, and a partial or stretched
+    /// `sphere` or `disk`): its normals turn, as pbrt-v4 turns a quadric's,
+    /// under a transformation that swaps handedness too, not only under
+    /// `ReverseOrientation` as a mesh's do.
+    pub quadric: bool,
 }
 
 impl TriMesh {

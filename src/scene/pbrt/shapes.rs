@@ -220,11 +220,9 @@ fn push_quad(mesh: &mut TriMesh, [a, b, c, d]: [u32; 4]) {
 /// under a transformation other than a similarity (an ellipsoid). pbrt-v4's
 /// parametrisation (its `Sphere`): u = phi / phimax and v = (theta -
 /// theta_zmin) / (theta_zmax - theta_zmin), zmin and zmax clamped to the
-/// radius. The vertices lie on the sphere, with its normals: outward, or
-/// inward when `inward` (pbrt-v4 turns a sphere's normal where its
-/// transformation swaps handedness, which transforming a mesh's normals
-/// does not do). Triangles are wound to face the normals.
-pub fn sphere_mesh(s: &Sphere, inward: bool) -> TriMesh {
+/// radius. The vertices lie on the sphere, with its outward normals, and
+/// the triangles face them.
+pub fn sphere_mesh(s: &Sphere) -> TriMesh {
     let r = s.radius;
     let (z0, z1) = (s.zmin.min(s.zmax).clamp(-r, r), s.zmin.max(s.zmax).clamp(-r, r));
     let (theta0, theta1) = ((z0 / r).clamp(-1.0, 1.0).acos(), (z1 / r).clamp(-1.0, 1.0).acos());
@@ -233,8 +231,10 @@ pub fn sphere_mesh(s: &Sphere, inward: bool) -> TriMesh {
     let nt = ((ROUND_SEGMENTS / 2.0) * (theta0 - theta1) / std::f32::consts::PI)
         .ceil()
         .max(1.0) as u32;
-    let side = if inward { -1.0 } else { 1.0 };
-    let mut mesh = TriMesh::default();
+    let mut mesh = TriMesh {
+        quadric: true,
+        ..TriMesh::default()
+    };
     let (mut normals, mut uvs) = (vec![], vec![]);
     for j in 0..=nt {
         let v = j as f32 / nt as f32;
@@ -252,7 +252,7 @@ pub fn sphere_mesh(s: &Sphere, inward: bool) -> TriMesh {
             let (sin_p, cos_p) = (u * phimax).sin_cos();
             let n = Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t);
             mesh.positions.push(n * r);
-            normals.push(n * side);
+            normals.push(n);
             uvs.push(crate::math::Vec2::new(u, v));
         }
     }
@@ -261,14 +261,7 @@ pub fn sphere_mesh(s: &Sphere, inward: bool) -> TriMesh {
         for i in 0..np {
             let quad = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
             // (a, b, c) turns from +phi to +z: outward.
-            push_quad(
-                &mut mesh,
-                if inward {
-                    [quad[0], quad[3], quad[2], quad[1]]
-                } else {
-                    quad
-                },
-            );
+            push_quad(&mut mesh, quad);
         }
     }
     mesh.normals = Some(normals);
@@ -281,33 +274,28 @@ pub fn sphere_mesh(s: &Sphere, inward: bool) -> TriMesh {
 /// other than a similarity (an ellipse). pbrt-v4's parametrisation (its
 /// `Disk`): u = phi / phimax, v = (radius - r) / (radius - innerradius) at
 /// distance r from the axis; one ring of quads from the rim to the hole (or
-/// the centre). Normals +z, or -z when `inward` (as for `sphere_mesh`).
-pub fn disk_mesh(d: &Disk, inward: bool) -> TriMesh {
+/// the centre). Normals +z.
+pub fn disk_mesh(d: &Disk) -> TriMesh {
     let phimax = d.phimax_deg.clamp(0.0, 360.0).to_radians();
     let np = segments(d.phimax_deg);
-    let mut mesh = TriMesh::default();
+    let mut mesh = TriMesh {
+        quadric: true,
+        ..TriMesh::default()
+    };
     let (mut normals, mut uvs) = (vec![], vec![]);
-    let n = if inward { -Vec3::Z } else { Vec3::Z };
     for i in 0..=np {
         let u = i as f32 / np as f32;
         let (sin, cos) = (u * phimax).sin_cos();
         for (rho, v) in [(d.radius, 0.0), (d.inner_radius, 1.0)] {
             mesh.positions.push(Vec3::new(rho * cos, rho * sin, d.height));
-            normals.push(n);
+            normals.push(Vec3::Z);
             uvs.push(crate::math::Vec2::new(u, v));
         }
     }
     for i in 0..np {
         // Rim, next rim, next hole, hole: +z.
         let quad = [2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1];
-        push_quad(
-            &mut mesh,
-            if inward {
-                [quad[0], quad[3], quad[2], quad[1]]
-            } else {
-                quad
-            },
-        );
+        push_quad(&mut mesh, quad);
     }
     mesh.normals = Some(normals);
     mesh.uvs = Some(uvs);
@@ -340,7 +328,10 @@ pub fn cylinder(params: &Params, loc: &Loc) -> Result<TriMesh> {
         ));
     }
     let n = (CYLINDER_SEGMENTS * phimax / 360.0).ceil().max(4.0) as u32;
-    let mut mesh = TriMesh::default();
+    let mut mesh = TriMesh {
+        quadric: true,
+        ..TriMesh::default()
+    };
     let (mut normals, mut uvs) = (vec![], vec![]);
     for i in 0..=n {
         let u = i as f32 / n as f32;

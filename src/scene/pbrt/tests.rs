@@ -2863,7 +2863,7 @@ fn partial_and_stretched_spheres_and_disks_are_where_pbrt_puts_them() {
 }
 
 #[test]
-fn meshed_spheres_and_disks_face_as_pbrts_normals() {
+fn meshed_quadrics_face_as_pbrts_normals() {
     // pbrt-v4 turns a quadric's normal inwards (a disk's to -z) under
     // ReverseOrientation or a transformation that swaps handedness, not
     // both: one-sided light leaves on that side, and a dielectric's inside
@@ -2878,6 +2878,7 @@ fn meshed_spheres_and_disks_face_as_pbrts_normals() {
             "Shape \"sphere\" \"float zmin\" 0.2",
             "Shape \"sphere\" \"float phimax\" 300",
             "Shape \"disk\" \"float phimax\" 300",
+            "Shape \"cylinder\" \"float phimax\" 300",
         ] {
             let text = format!(
                 "WorldBegin\nTranslate 0 0 5\nAttributeBegin\n{attrs}AreaLightSource \"diffuse\"\n{shape}\nAttributeEnd\n\
@@ -2886,10 +2887,10 @@ fn meshed_spheres_and_disks_face_as_pbrts_normals() {
             let c = converted(&text, Files::default(), false).unwrap();
             let outward = |v: [Vec3; 3]| {
                 let centroid = (v[0] + v[1] + v[2]) / 3.0;
-                let out = if shape.contains("disk") {
-                    Vec3::Z
-                } else {
-                    centroid - Vec3::new(0.0, 0.0, 5.0)
+                let out = match &shape[7..11] {
+                    "disk" => Vec3::Z,
+                    "cyli" => centroid * Vec3::new(1.0, 1.0, 0.0),
+                    _ => centroid - Vec3::new(0.0, 0.0, 5.0),
                 };
                 (v[1] - v[0]).cross(v[2] - v[0]).dot(out) > 0.0
             };
