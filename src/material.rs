@@ -7,7 +7,9 @@
 //! towards the side it is seen from. A dielectric's frame keeps the surface's
 //! outward normal, because which side is inside decides its relative index.
 
-use crate::bsdf::{Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, MeasuredBxdf, TrowbridgeReitz};
+use crate::bsdf::{
+    Bsdf, Bxdf, ConductorBxdf, DielectricBxdf, Frame, HairBxdf, MeasuredBxdf, ScatteringCoatBxdf, TrowbridgeReitz,
+};
 use crate::bssrdf::{Bssrdf, BssrdfTable};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::hash_unit;
@@ -43,6 +45,20 @@ impl Roughness {
     pub fn is_smooth(&self) -> bool {
         self.distribution().effectively_smooth()
     }
+}
+
+/// The scattering of a coat's medium (pbrt-v4's `albedo` and `g` of
+/// `coateddiffuse` and `coatedconductor`), with the walk's limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoatMedium {
+    /// Single-scattering albedo, each channel in [0, 1], not all 0.
+    pub albedo: Vec3,
+    /// Henyey-Greenstein asymmetry, in (-1, 1).
+    pub g: f32,
+    /// Scattering events a walk may take (pbrt-v4's `maxdepth`, 10).
+    pub max_depth: u32,
+    /// Walks per evaluation (pbrt-v4's `nsamples`, 1).
+    pub samples: u32,
 }
 
 /// A material's roughness: a constant (decided once, as most scenes give
@@ -158,6 +174,9 @@ pub enum Material {
         roughness: MaterialRoughness,
         eta: f32,
         thickness: f32,
+        /// A coat medium that scatters (`bsdf::ScatteringCoatBxdf`); `None`
+        /// for one that only absorbs (the closed form).
+        medium: Option<CoatMedium>,
     },
     /// A dielectric coat of index `eta` over a metal (pbrt-v4
     /// `coatedconductor`, the random-walk model of
@@ -173,6 +192,9 @@ pub enum Material {
         max_depth: u32,
         /// Walks per evaluation (pbrt-v4: 1).
         samples: u32,
+        /// A coat medium that scatters (`bsdf::ScatteringCoatBxdf`); `None`
+        /// for one that only absorbs.
+        medium: Option<CoatMedium>,
     },
     /// Lambertian reflection and transmission (pbrt-v4 `diffusetransmission`).
     DiffuseTransmission {
@@ -397,8 +419,9 @@ impl Material {
             Material::CoatedConductor {
                 interface_roughness,
                 conductor_roughness,
+                medium,
                 ..
-            } => interface_roughness.is_smooth() && conductor_roughness.is_smooth(),
+            } => interface_roughness.is_smooth() && conductor_roughness.is_smooth() && medium.is_none(),
             Material::Mix { materials, .. } => materials.iter().all(Material::is_specular),
             Material::Bumped { base, .. } | Material::NormalMapped { base, .. } => base.is_specular(),
             _ => false,
@@ -629,7 +652,19 @@ impl Material {
                 roughness,
                 eta,
                 thickness,
-            } => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, albedo(reflectance, &tc), *thickness),
+                medium,
+            } => match medium {
+                None => Bxdf::coated_diffuse(roughness.distribution(&tc), *eta, albedo(reflectance, &tc), *thickness),
+                Some(m) => Bxdf::ScatteringCoat(ScatteringCoatBxdf::over_diffuse(
+                    DielectricBxdf::new(roughness.distribution(&tc), *eta),
+                    albedo(reflectance, &tc),
+                    *thickness,
+                    m.albedo,
+                    m.g,
+                    m.max_depth,
+                    m.samples,
+                )),
+            },
             Material::CoatedConductor {
                 interface_roughness,
                 eta,
@@ -638,6 +673,7 @@ impl Material {
                 conductor_roughness,
                 max_depth,
                 samples,
+                medium,
             } => {
                 let coat = DielectricBxdf::new(interface_roughness.distribution(&tc), *eta);
                 let d = conductor_roughness.distribution(&tc);
@@ -645,7 +681,12 @@ impl Material {
                     ConductorFresnel::Ior { eta, k } => ConductorBxdf::new(d, *eta, *k),
                     ConductorFresnel::Reflectance(r) => ConductorBxdf::from_reflectance(d, albedo(r, &tc)),
                 };
-                Bxdf::coated_conductor(coat, metal, *thickness, *max_depth, *samples)
+                match medium {
+                    None => Bxdf::coated_conductor(coat, metal, *thickness, *max_depth, *samples),
+                    Some(m) => Bxdf::ScatteringCoat(ScatteringCoatBxdf::over_conductor(
+                        coat, metal, *thickness, m.albedo, m.g, *max_depth, *samples,
+                    )),
+                }
             }
             Material::DiffuseTransmission {
                 reflectance,

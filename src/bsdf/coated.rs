@@ -60,9 +60,10 @@
 //!
 //! # Differences from pbrt-v4's stochastic model
 //!
-//! - pbrt-v4's coat can also scatter (`albedo`, `g`); here it only absorbs
-//!   (pbrt-v4's default, `albedo` 0). `maxdepth` and `nsamples` have no
-//!   counterpart. Pass pbrt-v4's default `thickness`, 0.01, to match it.
+//! - pbrt-v4's coat can also scatter (`albedo`, `g`); this one only absorbs
+//!   (pbrt-v4's default, `albedo` 0), and a coat that scatters is
+//!   [`super::ScatteringCoatBxdf`]'s walk. `maxdepth` and `nsamples` have no
+//!   counterpart here. Pass pbrt-v4's default `thickness`, 0.01, to match it.
 //! - pbrt-v4 ends its random walk after `maxdepth` (10) scattering events,
 //!   which loses energy for bright bases under a smooth coat, whose total
 //!   internal reflection keeps light bouncing: 4% of the albedo for r = 0.9

@@ -42,8 +42,8 @@
 //! agree with the analog walk within its noise (the test
 //! `coated_conductor_against_layered_random_walk`).
 //!
-//! The coat only absorbs (pbrt-v4's `albedo` 0, its default); a scattering
-//! coat medium is refused when the material is read.
+//! The coat only absorbs (pbrt-v4's `albedo` 0, its default); a coat whose
+//! medium scatters is [`super::ScatteringCoatBxdf`].
 
 use super::dielectric::Lobes;
 use super::fresnel::{fr_complex_rgb, fr_dielectric};

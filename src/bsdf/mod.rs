@@ -15,6 +15,7 @@
 //! | [`DispersiveBxdf`] | `dispersive` | a dielectric per colour channel, one-sample MIS over the channels |
 //! | [`CoatedDiffuseBxdf`] | `coated` | closed form after Weidlich & Wilkie 2007 / Mitsuba's `roughplastic`, checked against pbrt-v4's `LayeredBxDF` |
 //! | [`CoatedConductorBxdf`] | `layered` | pbrt-v4's `LayeredBxDF` random walk (Guo et al. 2018) for `f`; a deterministic mixture for sampling |
+//! | [`ScatteringCoatBxdf`] | `scattering_coat` | the same walk with a scattering medium in the coat, over a Lambertian base or a metal |
 //! | [`HairBxdf`] | `hair` | pbrt-v4 9.9 (Chiang et al. 2016) |
 //! | [`MeasuredBxdf`] | `measured` | pbrt-v4's `MeasuredBxDF` (Dupuy & Jakob 2018): the RGL database's tensor files |
 //! | [`TrowbridgeReitz`] | `microfacet` | pbrt-v4 9.6; Heitz 2014 (masking), Heitz 2018 (visible normals) |
@@ -43,6 +44,7 @@ mod layered;
 mod measured;
 mod metals;
 mod microfacet;
+mod scattering_coat;
 
 #[cfg(test)]
 mod spectral_data;
@@ -63,6 +65,7 @@ pub use measured::test_file as measured_test_file;
 pub use measured::{MeasuredBxdf, MeasuredData};
 pub use metals::{named_metal, named_spectrum_rgb, NAMED_METALS};
 pub use microfacet::TrowbridgeReitz;
+pub use scattering_coat::ScatteringCoatBxdf;
 
 use crate::math::{Vec2, Vec3};
 use std::fmt;
@@ -245,6 +248,7 @@ pub enum Bxdf {
     ThinDielectric(ThinDielectricBxdf),
     CoatedDiffuse(CoatedDiffuseBxdf),
     CoatedConductor(CoatedConductorBxdf),
+    ScatteringCoat(ScatteringCoatBxdf),
     Hair(HairBxdf),
     NormalizedFresnel(NormalizedFresnelBxdf),
     Measured(MeasuredBxdf),
@@ -318,6 +322,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(_) => Vec3::ZERO,
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
+            Bxdf::ScatteringCoat(b) => b.f(wo, wi, mode),
             Bxdf::Hair(b) => b.f(wo, wi, mode),
             Bxdf::NormalizedFresnel(b) => b.f(wo, wi, mode),
             Bxdf::Measured(b) => b.f(wo, wi, mode),
@@ -342,6 +347,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode),
+            Bxdf::ScatteringCoat(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode),
             Bxdf::NormalizedFresnel(b) => b.sample_f(wo, u, mode),
             Bxdf::Measured(b) => b.sample_f(wo, u, mode),
@@ -362,6 +368,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(_) => 0.0,
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi),
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi),
+            Bxdf::ScatteringCoat(b) => b.pdf(wo, wi),
             Bxdf::Hair(b) => b.pdf(wo, wi),
             Bxdf::NormalizedFresnel(b) => b.pdf(wo, wi),
             Bxdf::Measured(b) => b.pdf(wo, wi),
@@ -378,6 +385,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.flags(),
             Bxdf::CoatedDiffuse(b) => b.flags(),
             Bxdf::CoatedConductor(b) => b.flags(),
+            Bxdf::ScatteringCoat(b) => b.flags(),
             Bxdf::Hair(b) => b.flags(),
             Bxdf::NormalizedFresnel(_) => BxdfFlags::DIFFUSE_REFLECTION,
             Bxdf::Measured(b) => b.flags(),
@@ -444,6 +452,7 @@ impl Bsdf {
             Bxdf::Diffuse(_) | Bxdf::Conductor(_) | Bxdf::NormalizedFresnel(_) | Bxdf::Measured(_) => false,
             // Both smooth: one specular reflection, no choice.
             Bxdf::CoatedConductor(b) => b.flags() != BxdfFlags::SPECULAR_REFLECTION,
+            Bxdf::ScatteringCoat(_) => true,
             _ => true,
         }
     }

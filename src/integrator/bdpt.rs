@@ -1187,6 +1187,7 @@ mod tests {
                     roughness: rough(0.1),
                     eta: 1.5,
                     thickness: 0.01,
+                    medium: None,
                 },
             ),
         ];

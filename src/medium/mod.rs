@@ -1233,19 +1233,25 @@ impl Medium {
     /// function, and its density (the phase function's value: it is
     /// normalised over the sphere, and sampled exactly).
     pub fn sample_phase(&self, d: Vec3, u: Vec2) -> (Vec3, f32) {
-        let g = self.g;
-        let cos = if g.abs() < 1e-3 {
-            1.0 - 2.0 * u.x
-        } else {
-            let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.x);
-            ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
-        };
-        let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let phi = 2.0 * PI * u.y;
-        let local = Vec3::new(sin * phi.cos(), sin * phi.sin(), cos);
-        let wi = to_world(local, d).normalize();
-        (wi, henyey_greenstein(cos, g))
+        sample_henyey_greenstein(d, self.g, u)
     }
+}
+
+/// A direction scattered from travelling along `d` by the Henyey-Greenstein
+/// phase function of asymmetry `g`, and its density (the phase function's
+/// value: it is sampled exactly).
+pub fn sample_henyey_greenstein(d: Vec3, g: f32, u: Vec2) -> (Vec3, f32) {
+    let cos = if g.abs() < 1e-3 {
+        1.0 - 2.0 * u.x
+    } else {
+        let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.x);
+        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+    };
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    let local = Vec3::new(sin * phi.cos(), sin * phi.sin(), cos);
+    let wi = to_world(local, d).normalize();
+    (wi, henyey_greenstein(cos, g))
 }
 
 /// `beta` and `ratio` both divided by the largest ratio, which leaves the

@@ -64,6 +64,7 @@ fn glossy_room(size: u32) -> Scene {
             roughness: Roughness::isotropic(0.05, true).into(),
             eta: 1.5,
             thickness: 0.01,
+            medium: None,
         },
     );
     for (x, r, m) in [(-0.45, 0.3, copper), (0.45, 0.3, coated)] {

@@ -214,7 +214,8 @@ fn every_material_type_is_read_with_pbrt_defaults() {
             reflectance: Texture::Constant(Vec3::new(0.2, 0.3, 0.4)),
             roughness: Roughness::isotropic(0.05, true).into(),
             eta: 1.5,
-            thickness: 0.01
+            thickness: 0.01,
+            medium: None,
         }
     );
     assert_eq!(

@@ -768,6 +768,7 @@ fn material(
                 roughness: roughness()?.into(),
                 eta: eta(1.5)?,
                 thickness,
+                medium: None,
             }
         }
         "coatedconductor" => {
@@ -806,6 +807,7 @@ fn material(
                 conductor_roughness: roughness_of("metal_")?.into(),
                 max_depth: count("max_depth", 10.0, 0.0)?,
                 samples: count("samples", 1.0, 1.0)?,
+                medium: None,
             }
         }
         "diffusetransmission" => {

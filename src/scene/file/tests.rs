@@ -635,6 +635,7 @@ fn coated_conductor_materials_are_read_and_checked() {
             conductor_roughness: rough(0.2, 0.3),
             max_depth: 20,
             samples: 1,
+            medium: None,
         })
     );
     let Some(Material::CoatedConductor {

@@ -47,7 +47,7 @@ use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
 use crate::light::{EmissionImage, Emits, ImageOnSphere, ImageOnTriangle, Light};
-use crate::material::{ConductorFresnel, Material, MaterialRoughness, Roughness};
+use crate::material::{CoatMedium, ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::{Vec2, Vec3};
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
 use crate::scene::mesh::MeshReport;
@@ -2684,13 +2684,12 @@ fn convert_surface(
             Ok(Ok(Material::Conductor { fresnel, roughness }))
         }
         "coateddiffuse" => {
-            if p.get_spectrum("albedo")?
-                .is_some_and(|a| a.to_rgb().is_none_or(|c| c.max_element() > 0.0))
-            {
-                return Ok(Err(
-                    "a coat medium that scatters (\"albedo\" > 0) is not supported".into()
-                ));
-            }
+            let max_depth = p.get_int("maxdepth", 10)?;
+            let samples = p.get_int("nsamples", 1)?;
+            let medium = match coat_medium(p, "coateddiffuse", max_depth, samples, loc)? {
+                Ok(m) => m,
+                Err(why) => return Ok(Err(why)),
+            };
             let roughness = match roughness(scene, p, loc)? {
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
@@ -2712,17 +2711,10 @@ fn convert_surface(
                 roughness,
                 eta,
                 thickness,
+                medium,
             }))
         }
         "coatedconductor" => {
-            if p.get_spectrum("albedo")?
-                .is_some_and(|a| a.to_rgb().is_none_or(|c| c.max_element() > 0.0))
-            {
-                return Ok(Err(
-                    "a coat medium that scatters (\"albedo\" > 0) is not supported".into()
-                ));
-            }
-            p.mark_used("g", super::ParamType::Float);
             let interface_roughness = match roughness_of(scene, p, loc, "interface.")? {
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
@@ -2748,12 +2740,10 @@ fn convert_surface(
                     "coatedconductor: \"interface.eta\" must be positive and \"thickness\" not negative",
                 ));
             }
-            if !(0..=1000).contains(&max_depth) || !(1..=1000).contains(&samples) {
-                return Err(located(
-                    loc,
-                    "coatedconductor: \"maxdepth\" must be in 0..1000 and \"nsamples\" in 1..1000",
-                ));
-            }
+            let medium = match coat_medium(p, "coatedconductor", max_depth, samples, loc)? {
+                Ok(m) => m,
+                Err(why) => return Ok(Err(why)),
+            };
             Ok(Ok(Material::CoatedConductor {
                 interface_roughness,
                 eta,
@@ -2762,6 +2752,7 @@ fn convert_surface(
                 conductor_roughness,
                 max_depth: max_depth as u32,
                 samples: samples as u32,
+                medium,
             }))
         }
         "diffusetransmission" => {
@@ -3607,6 +3598,51 @@ fn colour(p: &Params, name: &str, loc: &Loc) -> Result<std::result::Result<Vec3,
 /// A reflectance spectrum's RGB: an `rgb` as given; a sampled spectrum's
 /// colour divided by that of the constant spectrum 1 (so a constant
 /// reflectance is that grey).
+/// The medium of a coat (`albedo`, `g`; the walk's `maxdepth` and
+/// `nsamples`, checked here): `None` for one that only absorbs (`albedo` 0,
+/// pbrt-v4's default). The error is the file's; the inner one says what is
+/// not supported.
+fn coat_medium(
+    p: &Params,
+    ty: &str,
+    max_depth: i32,
+    samples: i32,
+    loc: &Loc,
+) -> Result<std::result::Result<Option<CoatMedium>, String>> {
+    if !(0..=1000).contains(&max_depth) || !(1..=1000).contains(&samples) {
+        return Err(located(
+            loc,
+            format!("{ty}: \"maxdepth\" must be in 0..1000 and \"nsamples\" in 1..1000"),
+        ));
+    }
+    let g = match p.get_float_or_texture("g")? {
+        None => 0.0,
+        Some(FloatOrTexture::Value(g)) => g,
+        Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured coat \"g\" is not supported".into())),
+    };
+    let albedo = match p.get_spectrum_or_texture("albedo")? {
+        None => return Ok(Ok(None)),
+        Some(SpectrumOrTexture::Texture(_)) => return Ok(Err("a textured coat \"albedo\" is not supported".into())),
+        Some(SpectrumOrTexture::Value(v)) => match reflectance_rgb(&v) {
+            Some(c) => c,
+            None => return Ok(Err("a coat \"albedo\" given as this spectrum is not supported".into())),
+        },
+    };
+    if !(albedo.is_finite() && g.is_finite() && g > -1.0 && g < 1.0) {
+        return Err(located(
+            loc,
+            format!("{ty}: \"albedo\" must be finite and \"g\" {g} in (-1, 1)"),
+        ));
+    }
+    let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+    Ok(Ok((albedo != Vec3::ZERO).then_some(CoatMedium {
+        albedo,
+        g,
+        max_depth: max_depth as u32,
+        samples: samples as u32,
+    })))
+}
+
 fn reflectance_rgb(v: &SpectrumValue) -> Option<Vec3> {
     match v {
         SpectrumValue::Rgb(c) => Some(*c),
@@ -4938,6 +4974,7 @@ mod tests {
                 .into(),
                 max_depth: 7,
                 samples: 1,
+                medium: None,
             }
         );
         assert!(c.warnings.is_empty(), "{:?}", c.warnings);
@@ -4956,8 +4993,45 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("dir/main.pbrt:2: coatedconductor: give"), "{e}");
-        let e = m("\"rgb albedo\" [ 0.5 0.5 0.5 ]").unwrap_err().to_string();
-        assert!(e.contains("scatters"), "{e}");
+        // A coat medium that scatters, with its walk's limits.
+        let c = m("\"rgb albedo\" [ 0.5 0.25 0 ] \"float g\" 0.3 \"integer maxdepth\" 20")
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Material::CoatedConductor { medium, .. } = &c.desc.materials[0].1 else {
+            panic!("{:?}", c.desc.materials)
+        };
+        assert_eq!(
+            *medium,
+            Some(CoatMedium {
+                albedo: Vec3::new(0.5, 0.25, 0.0),
+                g: 0.3,
+                max_depth: 20,
+                samples: 1
+            })
+        );
+        assert!(!c.desc.materials[0].1.is_specular());
+        let c = m("\"rgb albedo\" [ 0 0 0 ] \"float g\" 0.3").unwrap_or_else(|e| panic!("{e}"));
+        assert!(matches!(
+            c.desc.materials[0].1,
+            Material::CoatedConductor { medium: None, .. }
+        ));
+        let e = m("\"rgb albedo\" [ 0.5 0.5 0.5 ] \"float g\" 1")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("dir/main.pbrt:2: coatedconductor: \"albedo\" must be finite and \"g\" 1 in (-1, 1)"),
+            "{e}"
+        );
+        let e = convert_text(
+            &format!(
+                "WorldBegin\nTexture \"t\" \"spectrum\" \"constant\" \"rgb value\" [ 0.5 0.5 0.5 ]\n\
+                 Material \"coateddiffuse\" \"texture albedo\" \"t\"\n{}",
+                quad(0.0)
+            ),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("a textured coat \"albedo\" is not supported"), "{e}");
         // So is the plain conductor, as pbrt-v4's.
         let e = convert_text(
             &format!(
