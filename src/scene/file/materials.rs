@@ -5,7 +5,7 @@
 use super::Source;
 use crate::bsdf::{named_metal, MeasuredBxdf, MeasuredData};
 use crate::error::Result;
-use crate::material::{ConductorFresnel, Material, Roughness};
+use crate::material::{CoatMedium, ConductorFresnel, Material, Roughness};
 use crate::math::Vec3;
 use crate::scene::mesh::FileSource;
 use crate::texture::{
@@ -593,6 +593,31 @@ fn material(
         Ok(t)
     };
     let kind = k.string("type")?.unwrap_or("diffuse");
+    // A coat's medium: `albedo` (0, the default, only absorbs) and `g`.
+    let coat_medium = |max_depth: u32, samples: u32| -> Result<Option<CoatMedium>> {
+        let g = k.num("g")?.unwrap_or(0.0);
+        if !(g > -1.0 && g < 1.0) {
+            return Err(k.err(Some("g"), format!("g {g} must lie in (-1, 1)")));
+        }
+        let albedo = k.rgb("albedo")?.unwrap_or(Vec3::ZERO);
+        if !(albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
+            let shown = albedo.to_array();
+            return Err(k.err(Some("albedo"), format!("albedo {shown:?} must lie in [0, 1]")));
+        }
+        Ok((albedo != Vec3::ZERO).then_some(CoatMedium {
+            albedo,
+            g,
+            max_depth,
+            samples,
+        }))
+    };
+    let count = |key: &str, default: f32, lo: f32| -> Result<u32> {
+        let n = k.num(key)?.unwrap_or(default);
+        if n.fract() != 0.0 || !(lo..=1000.0).contains(&n) {
+            return Err(k.err(Some(key), format!("{key} {n} must be a whole number in {lo}..1000")));
+        }
+        Ok(n as u32)
+    };
     let eta = |default: f32| -> Result<f32> {
         let e = k.num("eta")?.unwrap_or(default);
         if e <= 0.0 {
@@ -756,7 +781,7 @@ fn material(
             Material::ThinDielectric { eta: eta(1.5)? }
         }
         "coateddiffuse" => {
-            let mut keys = vec!["reflectance", "eta", "thickness"];
+            let mut keys = vec!["reflectance", "eta", "thickness", "albedo", "g", "max_depth", "samples"];
             keys.extend(ROUGHNESS_KEYS);
             k.only(kind, &keys)?;
             let thickness = k.num("thickness")?.unwrap_or(0.01);
@@ -768,7 +793,7 @@ fn material(
                 roughness: roughness()?.into(),
                 eta: eta(1.5)?,
                 thickness,
-                medium: None,
+                medium: coat_medium(count("max_depth", 10.0, 0.0)?, count("samples", 1.0, 1.0)?)?,
             }
         }
         "coatedconductor" => {
@@ -784,6 +809,8 @@ fn material(
                 "metal_vroughness",
                 "max_depth",
                 "samples",
+                "albedo",
+                "g",
             ];
             keys.extend(ROUGHNESS_KEYS);
             k.only(kind, &keys)?;
@@ -791,23 +818,17 @@ fn material(
             if thickness.is_nan() || thickness < 0.0 {
                 return Err(k.err(Some("thickness"), format!("thickness {thickness} must be >= 0")));
             }
-            let count = |key: &str, default: f32, lo: f32| -> Result<u32> {
-                let n = k.num(key)?.unwrap_or(default);
-                if n.fract() != 0.0 || !(lo..=1000.0).contains(&n) {
-                    return Err(k.err(Some(key), format!("{key} {n} must be a whole number in {lo}..1000")));
-                }
-                Ok(n as u32)
-            };
             let conductor = metal_fresnel("metal_", &mut albedo)?;
+            let (max_depth, samples) = (count("max_depth", 10.0, 0.0)?, count("samples", 1.0, 1.0)?);
             Material::CoatedConductor {
                 interface_roughness: roughness()?.into(),
                 eta: eta(1.5)?,
                 thickness,
                 conductor,
                 conductor_roughness: roughness_of("metal_")?.into(),
-                max_depth: count("max_depth", 10.0, 0.0)?,
-                samples: count("samples", 1.0, 1.0)?,
-                medium: None,
+                max_depth,
+                samples,
+                medium: coat_medium(max_depth, samples)?,
             }
         }
         "diffusetransmission" => {

@@ -1,6 +1,6 @@
 use super::*;
 use crate::integrator::{render, RenderSettings};
-use crate::material::{ConductorFresnel, Roughness};
+use crate::material::{CoatMedium, ConductorFresnel, Roughness};
 use crate::scene::builtin;
 use crate::scene::mesh::tests::bunny_path;
 use crate::Scene;
@@ -1748,5 +1748,44 @@ fn a_lens_file_makes_a_realistic_camera_focused_at_what_it_looks_at() {
             .to_string();
         assert!(e.contains(&format!("scene.toml:{line}:")) && e.contains(what), "{e}");
         assert!(!e.contains('\n'), "{e}");
+    }
+}
+
+#[test]
+fn coats_that_scatter_are_read_and_checked() {
+    let text = format!(
+        "{CAMERA}[materials.milk]\ntype = \"coateddiffuse\"\nreflectance = [0.5, 0.1, 0.1]\nalbedo = 0.9\ng = 0.3\n\
+         thickness = 0.2\nmax_depth = 30\n\
+         [materials.gold]\ntype = \"coatedconductor\"\nmetal = \"Au\"\nalbedo = [0.5, 0.4, 0.3]\n\
+         [materials.clear]\ntype = \"coateddiffuse\"\ng = 0.5\n"
+    );
+    let d = parse_str(&text).unwrap().desc;
+    let get = |n: &str| d.materials.iter().find(|(k, _)| k == n).map(|(_, m)| m.clone());
+    let medium = |n: &str| match get(n) {
+        Some(Material::CoatedDiffuse { medium, .. } | Material::CoatedConductor { medium, .. }) => medium,
+        m => panic!("{m:?}"),
+    };
+    assert_eq!(
+        medium("milk"),
+        Some(CoatMedium {
+            albedo: Vec3::splat(0.9),
+            g: 0.3,
+            max_depth: 30,
+            samples: 1
+        })
+    );
+    assert_eq!(
+        medium("gold").map(|m| (m.albedo, m.g, m.max_depth)),
+        Some((Vec3::new(0.5, 0.4, 0.3), 0.0, 10))
+    );
+    // No albedo: a coat that only absorbs, whatever its g.
+    assert_eq!(medium("clear"), None);
+    for (bad, why) in [
+        ("g = 1", "g 1 must lie in (-1, 1)"),
+        ("albedo = 1.5", "must lie in [0, 1]"),
+    ] {
+        let t = format!("{CAMERA}[materials.m]\ntype = \"coateddiffuse\"\n{bad}\n");
+        let e = parse_str(&t).unwrap_err().to_string();
+        assert!(e.contains(why), "{e}");
     }
 }
