@@ -109,38 +109,6 @@ impl CoatedConductorBxdf {
         (-self.thickness / w.z.abs()).exp()
     }
 
-    /// The direction inside the coat that leaves as `w` (both pointing up),
-    /// or `None` for a coat of index below 1 that `w` cannot come from.
-    fn inside(&self, w: Vec3) -> Option<Vec3> {
-        let eta = self.coat.eta;
-        let (x, y) = (w.x / eta, w.y / eta);
-        let z2 = 1.0 - x * x - y * y;
-        (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
-    }
-
-    /// The direction outside that light inside going up along `w` leaves as;
-    /// `None` under total internal reflection.
-    fn outside(&self, w: Vec3) -> Option<Vec3> {
-        let eta = self.coat.eta;
-        let (x, y) = (w.x * eta, w.y * eta);
-        let z2 = 1.0 - x * x - y * y;
-        (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
-    }
-
-    /// Reflectance of the whole, for a smooth coat over a smooth metal.
-    fn specular_reflectance(&self, cos_o: f32) -> Vec3 {
-        let f = fr_dielectric(cos_o, self.coat.eta);
-        let eta = self.coat.eta;
-        let cos_t2 = 1.0 - (1.0 - cos_o * cos_o) / (eta * eta);
-        if cos_t2 <= 0.0 {
-            return Vec3::splat(f);
-        }
-        let cos_t = cos_t2.sqrt();
-        let a = (-self.thickness / cos_t).exp();
-        let r = fr_complex_rgb(cos_t, self.base.eta, self.base.k) * (a * a);
-        Vec3::splat(f) + r * ((1.0 - f) * (1.0 - f)) / (Vec3::ONE - r * f)
-    }
-
     /// The lobes `sample_f` chooses between for `wo` (upper side): the
     /// coat's reflection, the metal's lobe through the coat, the cosine.
     fn lobe_weights(&self, cos_o: f32) -> (f32, f32, f32) {
@@ -163,14 +131,9 @@ impl CoatedConductorBxdf {
         if self.coat_smooth() && self.base_smooth() {
             return Vec3::ZERO;
         }
-        let n = self.samples;
-        let mut f = self.coat.f(wo, wi, mode) * n as f32;
-        let key = |w: Vec3| mix64((w.x.to_bits() as u64) | (w.y.to_bits() as u64) << 32) ^ w.z.to_bits() as u64;
-        let mut rng = Rng::keyed(WALK_SEED, key(wo), key(wi));
-        for _ in 0..n {
-            f += self.walk(wo, wi, mode, &mut rng);
-        }
-        f / n as f32
+        walks_mean(&self.coat, wo, wi, mode, WALK_SEED, self.samples, |rng| {
+            self.walk(wo, wi, mode, rng)
+        })
     }
 
     /// One walk: in through the coat at `wo`, then between the metal and the
@@ -179,18 +142,7 @@ impl CoatedConductorBxdf {
     /// the power heuristic.
     fn walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut Rng) -> Vec3 {
         let (coat, base) = (&self.coat, &self.base);
-        let valid = |b: &BsdfSample| b.pdf > 0.0 && b.wi.z != 0.0 && b.f != Vec3::ZERO;
-        let Some(wos) = coat
-            .sample_lobes(wo, rng.next_f32(), rng.next_2d(), mode, Lobes::Transmission)
-            .filter(valid)
-        else {
-            return Vec3::ZERO;
-        };
-        // The way out to wi, sampled from its side (adjoint transport).
-        let Some(wis) = coat
-            .sample_lobes(wi, rng.next_f32(), rng.next_2d(), !mode, Lobes::Transmission)
-            .filter(valid)
-        else {
+        let Some((wos, wis)) = walk_ends(coat, wo, wi, mode, rng) else {
             return Vec3::ZERO;
         };
         let mut f = Vec3::ZERO;
@@ -198,12 +150,8 @@ impl CoatedConductorBxdf {
         let mut w = wos.wi;
         let mut at_base = false;
         for depth in 0..self.max_depth {
-            if depth > 3 && beta.max_element() < 0.25 {
-                let q = (1.0 - beta.max_element()).max(0.0);
-                if rng.next_f32() < q {
-                    break;
-                }
-                beta /= 1.0 - q;
+            if roulette(depth, &mut beta, rng) {
+                break;
             }
             beta *= self.tr(w);
             at_base = !at_base;
@@ -255,7 +203,7 @@ impl CoatedConductorBxdf {
                 return None;
             }
             let bs = if self.coat_smooth() && self.base_smooth() {
-                let r = self.specular_reflectance(wo.z);
+                let r = mirror_reflectance(&self.coat, &self.base, self.thickness, wo.z);
                 BsdfSample {
                     f: r / wo.z,
                     wi: mirror(wo),
@@ -268,18 +216,7 @@ impl CoatedConductorBxdf {
                 if uc < p_coat && self.coat_smooth() {
                     coat_reflection(wo, self.coat.eta, p_coat)
                 } else {
-                    let wi = if uc < p_coat {
-                        let wm = self.coat.distrib.sample_wm(wo, u);
-                        super::reflect(wo, wm)
-                    } else if uc < p_coat + p_base {
-                        let inner = self.base.sample_f(self.inside(wo)?, u)?.wi;
-                        self.outside(inner)?
-                    } else {
-                        cosine_hemisphere(u)
-                    };
-                    if wi.z <= 0.0 {
-                        return None;
-                    }
+                    let wi = mixture_direction(&self.coat, &self.base, (p_coat, p_base), wo, uc, u)?;
                     BsdfSample {
                         f: self.f_upper(wo, wi, mode),
                         wi,
@@ -302,25 +239,149 @@ impl CoatedConductorBxdf {
         if self.coat_smooth() && self.base_smooth() {
             return 0.0;
         }
-        let (p_coat, p_base, p_cos) = self.lobe_weights(wo.z);
-        let mut pdf = p_cos * wi.z * FRAC_1_PI;
-        if !self.coat_smooth() {
-            let wm = (wo + wi).normalize();
-            pdf += p_coat * self.coat.distrib.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
-        }
-        if p_base > 0.0 {
-            if let (Some(o), Some(i)) = (self.inside(wo), self.inside(wi)) {
-                // Refraction compresses solid angle: dw_in / dw_out =
-                // cos_out / (eta^2 cos_in).
-                let eta = self.coat.eta;
-                pdf += p_base * self.base.pdf(o, i) * wi.z / (eta * eta * i.z);
-            }
-        }
-        pdf
+        mixture_pdf(&self.coat, &self.base, self.lobe_weights(wo.z), wo, wi)
     }
 }
 
-fn power_heuristic(a: f32, b: f32) -> f32 {
+/// A sample worth following in a walk.
+pub(super) fn valid(b: &BsdfSample) -> bool {
+    b.pdf > 0.0 && b.wi.z != 0.0 && b.f != Vec3::ZERO
+}
+
+/// The layered estimate for `wo` and `wi` above: the coat's own reflection
+/// and the mean of `samples` walks, their random numbers keyed by the two
+/// directions (pbrt-v4 hashes its global seed in too), so that the same
+/// pair always gets the same value.
+pub(super) fn walks_mean(
+    coat: &DielectricBxdf,
+    wo: Vec3,
+    wi: Vec3,
+    mode: TransportMode,
+    seed: u64,
+    samples: u32,
+    mut walk: impl FnMut(&mut Rng) -> Vec3,
+) -> Vec3 {
+    let n = samples.max(1);
+    let mut f = coat.f(wo, wi, mode) * n as f32;
+    let key = |w: Vec3| mix64((w.x.to_bits() as u64) | (w.y.to_bits() as u64) << 32) ^ w.z.to_bits() as u64;
+    let mut rng = Rng::keyed(seed, key(wo), key(wi));
+    for _ in 0..n {
+        f += walk(&mut rng);
+    }
+    f / n as f32
+}
+
+/// A walk's two ends: the way in through the coat at `wo`, and the way out
+/// to `wi`, sampled from its side (adjoint transport).
+pub(super) fn walk_ends(
+    coat: &DielectricBxdf,
+    wo: Vec3,
+    wi: Vec3,
+    mode: TransportMode,
+    rng: &mut Rng,
+) -> Option<(BsdfSample, BsdfSample)> {
+    let wos = coat
+        .sample_lobes(wo, rng.next_f32(), rng.next_2d(), mode, Lobes::Transmission)
+        .filter(valid)?;
+    let wis = coat
+        .sample_lobes(wi, rng.next_f32(), rng.next_2d(), !mode, Lobes::Transmission)
+        .filter(valid)?;
+    Some((wos, wis))
+}
+
+/// pbrt-v4's Russian roulette in a walk: true to end it.
+pub(super) fn roulette(depth: u32, beta: &mut Vec3, rng: &mut Rng) -> bool {
+    if depth > 3 && beta.max_element() < 0.25 {
+        let q = (1.0 - beta.max_element()).max(0.0);
+        if rng.next_f32() < q {
+            return true;
+        }
+        *beta /= 1.0 - q;
+    }
+    false
+}
+
+/// The direction inside a coat of index `eta` that leaves as `w` (both
+/// pointing up), or `None` for a coat of index below 1 that `w` cannot come
+/// from.
+fn inside(eta: f32, w: Vec3) -> Option<Vec3> {
+    let (x, y) = (w.x / eta, w.y / eta);
+    let z2 = 1.0 - x * x - y * y;
+    (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
+}
+
+/// The direction outside that light inside going up along `w` leaves as;
+/// `None` under total internal reflection.
+pub(super) fn outside(eta: f32, w: Vec3) -> Option<Vec3> {
+    let (x, y) = (w.x * eta, w.y * eta);
+    let z2 = 1.0 - x * x - y * y;
+    (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
+}
+
+/// Reflectance of a smooth coat over a smooth metal (relative index), for
+/// light that crosses the coat's `thickness` without meeting its medium.
+pub(super) fn mirror_reflectance(coat: &DielectricBxdf, metal: &ConductorBxdf, thickness: f32, cos_o: f32) -> Vec3 {
+    let eta = coat.eta;
+    let f = fr_dielectric(cos_o, eta);
+    let cos_t2 = 1.0 - (1.0 - cos_o * cos_o) / (eta * eta);
+    if cos_t2 <= 0.0 {
+        return Vec3::splat(f);
+    }
+    let cos_t = cos_t2.sqrt();
+    let a = (-thickness / cos_t).exp();
+    let r = fr_complex_rgb(cos_t, metal.eta, metal.k) * (a * a);
+    Vec3::splat(f) + r * ((1.0 - f) * (1.0 - f)) / (Vec3::ONE - r * f)
+}
+
+/// A direction (upper side) from the coats' sampling mixture for `wo`: the
+/// coat's rough reflection with probability `p_coat`, the metal's lobe seen
+/// through the smooth coat with `p_base`, else the cosine lobe.
+pub(super) fn mixture_direction(
+    coat: &DielectricBxdf,
+    metal: &ConductorBxdf,
+    (p_coat, p_base): (f32, f32),
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<Vec3> {
+    let wi = if uc < p_coat {
+        let wm = coat.distrib.sample_wm(wo, u);
+        super::reflect(wo, wm)
+    } else if uc < p_coat + p_base {
+        let inner = metal.sample_f(inside(coat.eta, wo)?, u)?.wi;
+        outside(coat.eta, inner)?
+    } else {
+        cosine_hemisphere(u)
+    };
+    (wi.z > 0.0).then_some(wi)
+}
+
+/// The density of [`mixture_direction`]'s non-specular lobes, with the
+/// probabilities of the coat, the metal and the cosine lobe.
+pub(super) fn mixture_pdf(
+    coat: &DielectricBxdf,
+    metal: &ConductorBxdf,
+    (p_coat, p_base, p_cos): (f32, f32, f32),
+    wo: Vec3,
+    wi: Vec3,
+) -> f32 {
+    let mut pdf = p_cos * wi.z * FRAC_1_PI;
+    if !coat.is_specular() {
+        let wm = (wo + wi).normalize();
+        pdf += p_coat * coat.distrib.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
+    }
+    if p_base > 0.0 {
+        let eta = coat.eta;
+        if let (Some(o), Some(i)) = (inside(eta, wo), inside(eta, wi)) {
+            // Refraction compresses solid angle: dw_in / dw_out =
+            // cos_out / (eta^2 cos_in).
+            pdf += p_base * metal.pdf(o, i) * wi.z / (eta * eta * i.z);
+        }
+    }
+    pdf
+}
+
+pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
     if a2.is_infinite() {
         return 1.0;

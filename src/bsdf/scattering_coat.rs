@@ -24,13 +24,17 @@
 
 use super::dielectric::Lobes;
 use super::fresnel::{fr_complex_rgb, fr_dielectric};
+use super::layered::{
+    mirror_reflectance, mixture_direction, mixture_pdf, outside, power_heuristic, roulette, valid, walk_ends,
+    walks_mean,
+};
 use super::{
     coat_reflection, mirror, two_sided, two_sided_sample, BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf,
     TransportMode,
 };
 use crate::math::{Vec2, Vec3};
 use crate::medium::{henyey_greenstein, sample_henyey_greenstein};
-use crate::sampling::{cosine_hemisphere, mix64, Rng};
+use crate::sampling::{cosine_hemisphere, Rng};
 use std::f32::consts::FRAC_1_PI;
 
 /// Key of the walk's random numbers (another than the clear coat's).
@@ -171,35 +175,6 @@ impl ScatteringCoatBxdf {
         (-(dz / w.z).abs()).exp()
     }
 
-    fn inside(&self, w: Vec3) -> Option<Vec3> {
-        let eta = self.coat.eta;
-        let (x, y) = (w.x / eta, w.y / eta);
-        let z2 = 1.0 - x * x - y * y;
-        (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
-    }
-
-    fn outside(&self, w: Vec3) -> Option<Vec3> {
-        let eta = self.coat.eta;
-        let (x, y) = (w.x * eta, w.y * eta);
-        let z2 = 1.0 - x * x - y * y;
-        (z2 > 0.0).then(|| Vec3::new(x, y, z2.sqrt()))
-    }
-
-    /// For a smooth coat over a smooth metal: the reflectance of the light
-    /// that crosses the coat without meeting its medium (its mirror part).
-    fn specular_reflectance(&self, cos_o: f32) -> Vec3 {
-        let f = fr_dielectric(cos_o, self.coat.eta);
-        let eta = self.coat.eta;
-        let cos_t2 = 1.0 - (1.0 - cos_o * cos_o) / (eta * eta);
-        if cos_t2 <= 0.0 {
-            return Vec3::splat(f);
-        }
-        let cos_t = cos_t2.sqrt();
-        let a = (-self.thickness / cos_t).exp();
-        let r = fr_complex_rgb(cos_t, self.base.eta, self.base.k) * (a * a);
-        Vec3::splat(f) + r * ((1.0 - f) * (1.0 - f)) / (Vec3::ONE - r * f)
-    }
-
     /// Probabilities of the coat's reflection, the metal's lobe through
     /// the coat and the cosine lobe, for `wo` (upper side).
     fn lobe_weights(&self, cos_o: f32) -> (f32, f32, f32) {
@@ -220,31 +195,16 @@ impl ScatteringCoatBxdf {
     }
 
     fn f_upper(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        let n = self.samples as u32;
-        let mut f = self.coat.f(wo, wi, mode) * n as f32;
-        let key = |w: Vec3| mix64((w.x.to_bits() as u64) | (w.y.to_bits() as u64) << 32) ^ w.z.to_bits() as u64;
-        let mut rng = Rng::keyed(WALK_SEED, key(wo), key(wi));
-        for _ in 0..n {
-            f += self.walk(wo, wi, mode, &mut rng);
-        }
-        f / n as f32
+        walks_mean(&self.coat, wo, wi, mode, WALK_SEED, self.samples as u32, |rng| {
+            self.walk(wo, wi, mode, rng)
+        })
     }
 
     /// One walk from the top of the coat (z = thickness) down towards the
     /// base (z = 0), pbrt-v4's `LayeredBxDF::f` loop with its medium.
     fn walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut Rng) -> Vec3 {
         let coat = &self.coat;
-        let valid = |b: &BsdfSample| b.pdf > 0.0 && b.wi.z != 0.0 && b.f != Vec3::ZERO;
-        let Some(wos) = coat
-            .sample_lobes(wo, rng.next_f32(), rng.next_2d(), mode, Lobes::Transmission)
-            .filter(valid)
-        else {
-            return Vec3::ZERO;
-        };
-        let Some(wis) = coat
-            .sample_lobes(wi, rng.next_f32(), rng.next_2d(), !mode, Lobes::Transmission)
-            .filter(valid)
-        else {
+        let Some((wos, wis)) = walk_ends(coat, wo, wi, mode, rng) else {
             return Vec3::ZERO;
         };
         let (coat_smooth, base_smooth) = (self.coat_smooth(), self.base_smooth());
@@ -254,12 +214,8 @@ impl ScatteringCoatBxdf {
         let mut z = top;
         let mut w = wos.wi;
         for depth in 0..self.max_depth {
-            if depth > 3 && beta.max_element() < 0.25 {
-                let q = (1.0 - beta.max_element()).max(0.0);
-                if rng.next_f32() < q {
-                    break;
-                }
-                beta /= 1.0 - q;
+            if roulette(depth as u32, &mut beta, rng) {
+                break;
             }
             // A free flight of unit extinction, measured along z.
             let dz = -(1.0 - rng.next_f32()).ln() * w.z.abs();
@@ -352,7 +308,7 @@ impl ScatteringCoatBxdf {
         let top = self.thickness;
         let cross = self.tr(top, up);
         let metal = fr_complex_rgb(up.z.abs(), self.base.eta, self.base.k);
-        let coat = fr_dielectric(self.outside(up).map_or(1.0, |o| o.z), self.coat.eta);
+        let coat = fr_dielectric(outside(self.coat.eta, up).map_or(1.0, |o| o.z), self.coat.eta);
         let first = Vec3::splat(henyey_greenstein(w.dot(up), self.g) * self.tr(top - z, up))
             + metal * (henyey_greenstein(w.dot(down), self.g) * self.tr(z, up) * cross);
         first / (Vec3::ONE - metal * (coat * cross * cross))
@@ -368,7 +324,7 @@ impl ScatteringCoatBxdf {
                 if self.base_smooth() {
                     // The coat's mirror and the metal's seen through it,
                     // for light that meets no medium.
-                    let r = self.specular_reflectance(wo.z);
+                    let r = mirror_reflectance(&self.coat, &self.base, self.thickness, wo.z);
                     return Some(BsdfSample {
                         f: r / wo.z,
                         wi: mirror(wo),
@@ -379,18 +335,7 @@ impl ScatteringCoatBxdf {
                 }
                 return Some(coat_reflection(wo, self.coat.eta, p_coat));
             }
-            let wi = if uc < p_coat {
-                let wm = self.coat.distrib.sample_wm(wo, u);
-                super::reflect(wo, wm)
-            } else if uc < p_coat + p_base {
-                let inner = self.base.sample_f(self.inside(wo)?, u)?.wi;
-                self.outside(inner)?
-            } else {
-                cosine_hemisphere(u)
-            };
-            if wi.z <= 0.0 {
-                return None;
-            }
+            let wi = mixture_direction(&self.coat, &self.base, (p_coat, p_base), wo, uc, u)?;
             Some(BsdfSample {
                 f: self.f_upper(wo, wi, mode),
                 wi,
@@ -407,30 +352,6 @@ impl ScatteringCoatBxdf {
 
     /// Density of the mixture's non-specular lobes.
     fn pdf_upper(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let (p_coat, p_base, p_cos) = self.lobe_weights(wo.z);
-        let mut pdf = p_cos * wi.z * FRAC_1_PI;
-        if !self.coat_smooth() {
-            let wm = (wo + wi).normalize();
-            pdf += p_coat * self.coat.distrib.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
-        }
-        if p_base > 0.0 {
-            if let (Some(o), Some(i)) = (self.inside(wo), self.inside(wi)) {
-                let eta = self.coat.eta;
-                pdf += p_base * self.base.pdf(o, i) * wi.z / (eta * eta * i.z);
-            }
-        }
-        pdf
-    }
-}
-
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2.is_infinite() {
-        return 1.0;
-    }
-    if a2 + b2 > 0.0 {
-        a2 / (a2 + b2)
-    } else {
-        0.0
+        mixture_pdf(&self.coat, &self.base, self.lobe_weights(wo.z), wo, wi)
     }
 }
