@@ -380,6 +380,29 @@ AttributeBegin
 AttributeEnd
 """)
 
+# Quadrics made meshes (partial and stretched spheres and disks, a mirrored
+# cap that emits) and coats whose medium scatters.
+put("pbrt", "quadrics-coats.pbrt", pbrt_camera + """WorldBegin
+LightSource "distant" "point3 from" [ -1 3 -2 ] "point3 to" [ 0 0 0 ] "rgb L" [ 2 2 2 ]
+AttributeBegin
+  Scale 1 0.5 2
+  Material "coateddiffuse" "rgb albedo" [ 0.9 0.5 0.1 ] "float g" 0.3 "float thickness" 0.2 "integer maxdepth" 12
+  Shape "sphere" "float radius" 0.7 "float zmin" -0.2 "float zmax" 0.5 "float phimax" 270
+AttributeEnd
+AttributeBegin
+  Translate 0 1 0
+  Scale -1 1 1
+  AreaLightSource "diffuse" "rgb L" [ 3 3 3 ]
+  Shape "sphere" "float radius" 0.4 "float zmin" 0.1
+AttributeEnd
+AttributeBegin
+  Rotate 90 1 0 0
+  Scale 2 1 1
+  Material "coatedconductor" "rgb albedo" [ 0.5 0.5 0.5 ] "float g" -0.4 "float conductor.roughness" 0.2
+  Shape "disk" "float radius" 1 "float innerradius" 0.3 "float phimax" 200
+AttributeEnd
+""")
+
 # Motion: a moving mesh, a moving instance, a moving camera and transform
 # times, and the refused kinds (a moving sphere, a moving area light).
 put("pbrt", "motion.pbrt", """TransformTimes 0.25 1.5
