@@ -49,10 +49,10 @@ impl Roughness {
 
 /// The scattering of a coat's medium (pbrt-v4's `albedo` and `g` of
 /// `coateddiffuse` and `coatedconductor`), with the walk's limits.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CoatMedium {
-    /// Single-scattering albedo, each channel in [0, 1], not all 0.
-    pub albedo: Vec3,
+    /// Single-scattering albedo, kept within [0, 1] where it is looked up.
+    pub albedo: Texture,
     /// Henyey-Greenstein asymmetry, in (-1, 1).
     pub g: f32,
     /// Scattering events a walk may take (pbrt-v4's `maxdepth`, 10).
@@ -487,20 +487,30 @@ impl Material {
             }
             Material::Dielectric { roughness, .. } | Material::Dispersive { roughness, .. } => rough(roughness),
             Material::CoatedDiffuse {
-                reflectance, roughness, ..
+                reflectance,
+                roughness,
+                medium,
+                ..
             } => {
                 tex(reflectance);
-                rough(roughness)
+                rough(roughness);
+                if let Some(m) = medium {
+                    tex(&mut m.albedo)
+                }
             }
             Material::CoatedConductor {
                 interface_roughness,
                 conductor,
                 conductor_roughness,
+                medium,
                 ..
             } => {
                 rough(interface_roughness);
                 fresnel(conductor);
-                rough(conductor_roughness)
+                rough(conductor_roughness);
+                if let Some(m) = medium {
+                    tex(&mut m.albedo)
+                }
             }
             Material::DiffuseTransmission {
                 reflectance,
@@ -535,6 +545,7 @@ impl Material {
     /// is bump mapped: its lookups then take the surface's footprint.
     pub fn needs_footprint(&self) -> bool {
         let fresnel = |f: &ConductorFresnel| matches!(f, ConductorFresnel::Reflectance(r) if r.needs_footprint());
+        let medium_footprint = |m: &Option<CoatMedium>| m.as_ref().is_some_and(|m| m.albedo.needs_footprint());
         match self {
             Material::Diffuse { reflectance } => reflectance.needs_footprint(),
             Material::Emissive { .. }
@@ -547,14 +558,23 @@ impl Material {
                 roughness.needs_footprint()
             }
             Material::CoatedDiffuse {
-                reflectance, roughness, ..
-            } => reflectance.needs_footprint() || roughness.needs_footprint(),
+                reflectance,
+                roughness,
+                medium,
+                ..
+            } => reflectance.needs_footprint() || roughness.needs_footprint() || medium_footprint(medium),
             Material::CoatedConductor {
                 interface_roughness,
                 conductor,
                 conductor_roughness,
+                medium,
                 ..
-            } => interface_roughness.needs_footprint() || fresnel(conductor) || conductor_roughness.needs_footprint(),
+            } => {
+                interface_roughness.needs_footprint()
+                    || fresnel(conductor)
+                    || conductor_roughness.needs_footprint()
+                    || medium_footprint(medium)
+            }
             Material::DiffuseTransmission {
                 reflectance,
                 transmittance,
@@ -659,7 +679,7 @@ impl Material {
                     DielectricBxdf::new(roughness.distribution(&tc), *eta),
                     albedo(reflectance, &tc),
                     *thickness,
-                    m.albedo,
+                    albedo(&m.albedo, &tc),
                     m.g,
                     m.max_depth,
                     m.samples,
@@ -684,7 +704,13 @@ impl Material {
                 match medium {
                     None => Bxdf::coated_conductor(coat, metal, *thickness, *max_depth, *samples),
                     Some(m) => Bxdf::ScatteringCoat(ScatteringCoatBxdf::over_conductor(
-                        coat, metal, *thickness, m.albedo, m.g, *max_depth, *samples,
+                        coat,
+                        metal,
+                        *thickness,
+                        albedo(&m.albedo, &tc),
+                        m.g,
+                        *max_depth,
+                        *samples,
                     )),
                 }
             }

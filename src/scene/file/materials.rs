@@ -605,7 +605,7 @@ fn material(
             return Err(k.err(Some("albedo"), format!("albedo {shown:?} must lie in [0, 1]")));
         }
         Ok((albedo != Vec3::ZERO).then_some(CoatMedium {
-            albedo,
+            albedo: Texture::from(albedo),
             g,
             max_depth,
             samples,

@@ -1768,15 +1768,15 @@ fn coats_that_scatter_are_read_and_checked() {
     assert_eq!(
         medium("milk"),
         Some(CoatMedium {
-            albedo: Vec3::splat(0.9),
+            albedo: crate::texture::Texture::from(Vec3::splat(0.9)),
             g: 0.3,
             max_depth: 30,
             samples: 1
         })
     );
     assert_eq!(
-        medium("gold").map(|m| (m.albedo, m.g, m.max_depth)),
-        Some((Vec3::new(0.5, 0.4, 0.3), 0.0, 10))
+        medium("gold").map(|m| (m.albedo.as_constant(), m.g, m.max_depth)),
+        Some((Some(Vec3::new(0.5, 0.4, 0.3)), 0.0, 10))
     );
     // No albedo: a coat that only absorbs, whatever its g.
     assert_eq!(medium("clear"), None);

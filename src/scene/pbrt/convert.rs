@@ -2686,7 +2686,7 @@ fn convert_surface(
         "coateddiffuse" => {
             let max_depth = p.get_int("maxdepth", 10)?;
             let samples = p.get_int("nsamples", 1)?;
-            let medium = match coat_medium(p, "coateddiffuse", max_depth, samples, loc)? {
+            let medium = match coat_medium(scene, p, "coateddiffuse", max_depth, samples, loc)? {
                 Ok(m) => m,
                 Err(why) => return Ok(Err(why)),
             };
@@ -2740,7 +2740,7 @@ fn convert_surface(
                     "coatedconductor: \"interface.eta\" must be positive and \"thickness\" not negative",
                 ));
             }
-            let medium = match coat_medium(p, "coatedconductor", max_depth, samples, loc)? {
+            let medium = match coat_medium(scene, p, "coatedconductor", max_depth, samples, loc)? {
                 Ok(m) => m,
                 Err(why) => return Ok(Err(why)),
             };
@@ -3603,6 +3603,7 @@ fn colour(p: &Params, name: &str, loc: &Loc) -> Result<std::result::Result<Vec3,
 /// pbrt-v4's default). The error is the file's; the inner one says what is
 /// not supported.
 fn coat_medium(
+    scene: &PbrtScene,
     p: &Params,
     ty: &str,
     max_depth: i32,
@@ -3620,22 +3621,31 @@ fn coat_medium(
         Some(FloatOrTexture::Value(g)) => g,
         Some(FloatOrTexture::Texture(_)) => return Ok(Err("a textured coat \"g\" is not supported".into())),
     };
+    if !(g > -1.0 && g < 1.0) {
+        return Err(located(loc, format!("{ty}: \"g\" {g} must be in (-1, 1)")));
+    }
     let albedo = match p.get_spectrum_or_texture("albedo")? {
         None => return Ok(Ok(None)),
-        Some(SpectrumOrTexture::Texture(_)) => return Ok(Err("a textured coat \"albedo\" is not supported".into())),
+        // Looked up, and kept within [0, 1], at each hit.
+        Some(SpectrumOrTexture::Texture(t)) => {
+            match texture(scene, &t, TextureKind::Spectrum, place(p, "albedo", loc), 0)? {
+                Ok(t) => t,
+                Err(why) => return Ok(Err(why)),
+            }
+        }
         Some(SpectrumOrTexture::Value(v)) => match reflectance_rgb(&v) {
-            Some(c) => c,
+            Some(c) if c.is_finite() => {
+                let c = c.clamp(Vec3::ZERO, Vec3::ONE);
+                if c == Vec3::ZERO {
+                    return Ok(Ok(None));
+                }
+                Texture::from(c)
+            }
+            Some(_) => return Err(located(loc, format!("{ty}: \"albedo\" must be finite"))),
             None => return Ok(Err("a coat \"albedo\" given as this spectrum is not supported".into())),
         },
     };
-    if !(albedo.is_finite() && g.is_finite() && g > -1.0 && g < 1.0) {
-        return Err(located(
-            loc,
-            format!("{ty}: \"albedo\" must be finite and \"g\" {g} in (-1, 1)"),
-        ));
-    }
-    let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
-    Ok(Ok((albedo != Vec3::ZERO).then_some(CoatMedium {
+    Ok(Ok(Some(CoatMedium {
         albedo,
         g,
         max_depth: max_depth as u32,
@@ -5002,7 +5012,7 @@ mod tests {
         assert_eq!(
             *medium,
             Some(CoatMedium {
-                albedo: Vec3::new(0.5, 0.25, 0.0),
+                albedo: Texture::from(Vec3::new(0.5, 0.25, 0.0)),
                 g: 0.3,
                 max_depth: 20,
                 samples: 1
@@ -5018,20 +5028,27 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.starts_with("dir/main.pbrt:2: coatedconductor: \"albedo\" must be finite and \"g\" 1 in (-1, 1)"),
+            e.starts_with("dir/main.pbrt:2: coatedconductor: \"g\" 1 must be in (-1, 1)"),
             "{e}"
         );
-        let e = convert_text(
-            &format!(
-                "WorldBegin\nTexture \"t\" \"spectrum\" \"constant\" \"rgb value\" [ 0.5 0.5 0.5 ]\n\
-                 Material \"coateddiffuse\" \"texture albedo\" \"t\"\n{}",
-                quad(0.0)
-            ),
-            false,
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("a textured coat \"albedo\" is not supported"), "{e}");
+        // A textured albedo is looked up at each hit; a textured g is refused.
+        let textured = |param: &str| {
+            convert_text(
+                &format!(
+                    "WorldBegin\nTexture \"t\" \"spectrum\" \"checkerboard\"\nTexture \"f\" \"float\" \"constant\"\n\
+                     Material \"coateddiffuse\" {param}\n{}",
+                    quad(0.0)
+                ),
+                false,
+            )
+        };
+        let c = textured("\"texture albedo\" \"t\"").unwrap_or_else(|e| panic!("{e}"));
+        let Material::CoatedDiffuse { medium: Some(m), .. } = &c.desc.materials[0].1 else {
+            panic!("{:?}", c.desc.materials)
+        };
+        assert!(m.albedo.as_constant().is_none(), "{m:?}");
+        let e = textured("\"texture g\" \"f\"").unwrap_err().to_string();
+        assert!(e.contains("a textured coat \"g\" is not supported"), "{e}");
         // So is the plain conductor, as pbrt-v4's.
         let e = convert_text(
             &format!(
