@@ -167,13 +167,19 @@ pub fn sphere(params: &Params, loc: &Loc) -> Result<Sphere> {
     };
     // pbrt-v4 renders such a sphere as nothing; here it is the file's error.
     let (z0, z1) = (s.zmin.min(s.zmax).max(-radius), s.zmin.max(s.zmax).min(radius));
-    if !(z1 > z0 && s.phimax_deg > 0.0) {
+    if z1.partial_cmp(&z0) != Some(std::cmp::Ordering::Greater) {
         return Err(PbrtError::at(
             loc,
             format!(
-                "sphere: zmin {} and zmax {} must leave a band of the radius {radius}, and phimax {} must be > 0",
-                s.zmin, s.zmax, s.phimax_deg
+                "sphere: zmin {} and zmax {} must leave a band of the radius {radius}",
+                s.zmin, s.zmax
             ),
+        ));
+    }
+    if s.phimax_deg.is_nan() || s.phimax_deg <= 0.0 {
+        return Err(PbrtError::at(
+            loc,
+            format!("sphere: phimax {} must be > 0", s.phimax_deg),
         ));
     }
     Ok(s)

@@ -2854,7 +2854,7 @@ fn partial_and_stretched_spheres_and_disks_are_where_pbrt_puts_them() {
             "sphere\" \"float zmin\" 1.5",
             "sphere: zmin 1.5 and zmax 1 must leave a band",
         ),
-        ("sphere\" \"float phimax\" 0", "phimax 0 must be > 0"),
+        ("sphere\" \"float phimax\" 0", "sphere: phimax 0 must be > 0"),
         ("disk\" \"float phimax\" -5", "disk: phimax -5 must be > 0"),
     ] {
         let e = converted(&format!("WorldBegin\nShape \"{shape}\n"), Files::default(), false).unwrap_err();
