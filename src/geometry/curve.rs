@@ -2,7 +2,8 @@
 //! (pbrt-v4 6.7, `Curve`). A curve is not a tube: it is a ribbon that turns
 //! to face each ray, so it costs no more than its axis, and a `Cylinder`
 //! curve only shades as if it were round (its normal turns across the
-//! width). A ray meets it where its projection on the plane across the
+//! width). A `Ribbon` keeps the normals it is given, and looks as much
+//! narrower as it is turned from the ray. A ray meets it where its projection on the plane across the
 //! ray comes within half the width of the curve's projected axis, found by
 //! subdividing the Bezier until its pieces are near enough to straight
 //! (pbrt-v4's `RecursiveIntersect`).
@@ -13,8 +14,8 @@
 
 use crate::math::{orthonormal_basis, Aabb, Ray, Vec3};
 
-/// How a curve shades across its width (pbrt-v4's `flat` and `cylinder`;
-/// `ribbon`, oriented by given normals, is not supported).
+/// How a curve faces the ray and shades across its width (pbrt-v4's
+/// `flat`, `cylinder` and `ribbon`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CurveKind {
     /// Its normal faces the ray everywhere.
@@ -22,6 +23,10 @@ pub enum CurveKind {
     /// Its normal turns from -90 to 90 degrees across the width, as a
     /// cylinder's would.
     Cylinder,
+    /// A strip whose normal is given at the segment's two ends and turned
+    /// between them (spherical interpolation): seen at an angle it is
+    /// narrower, edge on it is not seen at all.
+    Ribbon,
 }
 
 /// One piece of a cubic Bezier segment.
@@ -34,6 +39,9 @@ pub struct Curve {
     /// The segment's width at its start and end (u = 0 and 1).
     pub width: [f32; 2],
     pub kind: CurveKind,
+    /// A ribbon's unit normals at its segment's start and end (unused by
+    /// the other kinds).
+    pub n: [Vec3; 2],
 }
 
 /// Where a ray met a curve.
@@ -46,7 +54,8 @@ pub struct CurveHit {
     pub v: f32,
     /// dp/du along the segment.
     pub dpdu: Vec3,
-    /// Unit normal facing the ray, perpendicular to the curve.
+    /// Unit normal, perpendicular to the curve: along the ray's line for
+    /// flat and cylinder curves, a ribbon's own normal for a ribbon.
     pub ng: Vec3,
     /// Unit shading normal: `ng`, or turned across the width for a
     /// cylinder.
@@ -112,6 +121,23 @@ pub fn quadratic_bspline_to_bezier(p: &[Vec3; 3]) -> [Vec3; 3] {
 /// A quadratic Bezier as the cubic that traces it.
 pub fn elevate_quadratic(p: &[Vec3; 3]) -> [Vec3; 4] {
     [p[0], lerp3(2.0 / 3.0, p[0], p[1]), lerp3(1.0 / 3.0, p[1], p[2]), p[2]]
+}
+
+/// The angle between unit vectors, accurate near 0 and pi (pbrt-v4's
+/// `AngleBetween`).
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        std::f32::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin()
+    } else {
+        2.0 * ((b - a).length() / 2.0).min(1.0).asin()
+    }
+}
+
+/// Whether a ribbon's end normals can be interpolated: unit length, and
+/// not so near opposite that the way between them is undefined.
+pub fn ribbon_normals_valid(n: [Vec3; 2]) -> bool {
+    n.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-3)
+        && angle_between(n[0], n[1]) < std::f32::consts::PI - 1e-3
 }
 
 /// The ray's frame: origin at its origin, z along its direction, y along
@@ -181,12 +207,25 @@ impl Curve {
         b
     }
 
-    /// Whether the curve's numbers can be intersected: finite, widths > 0.
+    /// Whether the curve's numbers can be intersected: finite, widths > 0,
+    /// and a ribbon's normals of unit length and not opposite.
     pub fn is_valid(&self) -> bool {
         self.cp.iter().all(|p| p.is_finite())
             && self.width.iter().all(|w| w.is_finite() && *w > 0.0)
             && self.u[0].is_finite()
             && self.u[1].is_finite()
+            && (self.kind != CurveKind::Ribbon || ribbon_normals_valid(self.n))
+    }
+
+    /// A ribbon's normal at `u` along its segment: pbrt-v4's spherical
+    /// interpolation of the two ends' normals.
+    pub fn ribbon_normal(&self, u: f32) -> Vec3 {
+        let angle = angle_between(self.n[0], self.n[1]);
+        if angle == 0.0 {
+            return self.n[0];
+        }
+        let inv_sin = 1.0 / angle.sin();
+        self.n[0] * (((1.0 - u) * angle).sin() * inv_sin) + self.n[1] * ((u * angle).sin() * inv_sin)
     }
 
     /// The nearest hit in (t_min, t_max]. A hit closer to the ray's origin
@@ -284,13 +323,22 @@ impl Search<'_> {
         }
         let w = (-cp[0].truncate()).dot(dir) / denom;
         let u = lerp(w, u0, u1).clamp(u0, u1);
-        let hit_width = self.curve.width_at(u);
+        let width = self.curve.width_at(u);
+        // A ribbon is as wide as it looks from the ray: its width times
+        // the cosine between its normal and the ray (pbrt-v4's measure).
+        let (hit_width, ribbon_n) = match self.curve.kind {
+            CurveKind::Ribbon => {
+                let n = self.curve.ribbon_normal(u);
+                (width * n.dot(self.frame.z).abs(), n)
+            }
+            _ => (width, Vec3::ZERO),
+        };
         let (pc, dpcdw) = evaluate_bezier(cp, w.clamp(0.0, 1.0));
         let dist2 = pc.x * pc.x + pc.y * pc.y;
-        if dist2 > hit_width * hit_width * 0.25 {
+        if dist2 > hit_width * hit_width * 0.25 || hit_width <= 0.0 || hit_width.is_nan() {
             return;
         }
-        if pc.z <= self.z_min || pc.z <= hit_width || pc.z > self.z_max {
+        if pc.z <= self.z_min || pc.z <= width || pc.z > self.z_max {
             return;
         }
         let t = pc.z / self.len;
@@ -313,6 +361,22 @@ impl Search<'_> {
         };
         let (_, d) = evaluate_bezier(&self.curve.cp, local.clamp(0.0, 1.0));
         let dpdu = d / (self.curve.u[1] - self.curve.u[0]).max(f32::MIN_POSITIVE);
+        if self.curve.kind == CurveKind::Ribbon {
+            // Its own normal, made perpendicular to the axis.
+            let dpdv = ribbon_n.cross(dpdu).normalize();
+            let ng = dpdu.cross(dpdv).normalize();
+            if ng.is_finite() {
+                *self.best = Some(CurveHit {
+                    t,
+                    u,
+                    v: v.clamp(0.0, 1.0),
+                    dpdu,
+                    ng,
+                    ns: ng,
+                });
+            }
+            return;
+        }
         let dpdu_plane = self.frame.to_local(dpdu);
         let across = Vec3::new(-dpdu_plane.y, dpdu_plane.x, 0.0);
         if across.length_squared() <= 0.0 || !across.is_finite() || !dpdu.is_finite() {
@@ -321,7 +385,7 @@ impl Search<'_> {
         let dpdv_flat = self.frame.to_world(across.normalize());
         let ng = dpdu.cross(dpdv_flat).normalize();
         let ns = match self.curve.kind {
-            CurveKind::Flat => ng,
+            CurveKind::Flat | CurveKind::Ribbon => ng,
             CurveKind::Cylinder => {
                 // dp/dv turned by -theta about dp/du; the normal with it.
                 let theta = lerp(v, -90.0f32, 90.0).to_radians();
@@ -361,6 +425,7 @@ mod tests {
             u: [0.0, 1.0],
             width: [w, w],
             kind,
+            n: [Vec3::Z; 2],
         }
     }
 
@@ -430,6 +495,7 @@ mod tests {
             u: [0.0, 1.0],
             width: [0.05, 0.05],
             kind: CurveKind::Flat,
+            n: [Vec3::ZERO; 2],
         };
         let down = Vec3::new(0.0, 0.0, -1.0);
         let h = c
@@ -461,6 +527,56 @@ mod tests {
             assert!(h.ns.x.abs() < 1e-4);
         }
         assert!(a.ns.y * b.ns.y < 0.0);
+    }
+
+    #[test]
+    fn a_ribbon_is_as_wide_as_it_looks_from_the_ray() {
+        // A strip in the z = 0 plane, 0.2 wide across y: rays that come in
+        // at 60 degrees from its normal meet it where they cross the strip,
+        // and no ray meets it edge on.
+        let mut c = straight(0.2, CurveKind::Ribbon);
+        c.n = [Vec3::Z; 2];
+        let d = Vec3::new(0.0, 60f32.to_radians().sin(), -60f32.to_radians().cos());
+        let aim = |y: f32| Ray::new(Vec3::new(0.3, y, 0.0) - d * 2.0, d);
+        let h = c.intersect(&aim(0.09), 0.0, f32::INFINITY).unwrap();
+        assert!((h.ng.z.abs() - 1.0).abs() < 1e-5 && h.ns == h.ng, "{h:?}");
+        assert!((h.v - 0.95).abs() < 0.01 || (h.v - 0.05).abs() < 0.01, "{h:?}");
+        assert!(c.intersect(&aim(-0.09), 0.0, f32::INFINITY).is_some());
+        assert!(c.intersect(&aim(0.11), 0.0, f32::INFINITY).is_none());
+        assert!(c.intersect(&aim(-0.11), 0.0, f32::INFINITY).is_none());
+        // A flat curve turns to face that ray: seen at its whole width, it
+        // is met by the ray aimed 0.11 across as well.
+        let flat = straight(0.2, CurveKind::Flat);
+        assert!(flat.intersect(&aim(0.11), 0.0, f32::INFINITY).is_some());
+        let edge_on = Ray::new(Vec3::new(0.3, -2.0, 0.0), Vec3::Y);
+        assert!(c.intersect(&edge_on, 0.0, f32::INFINITY).is_none());
+        assert!(flat.intersect(&edge_on, 0.0, f32::INFINITY).is_some());
+    }
+
+    #[test]
+    fn a_ribbons_normal_turns_between_its_ends_as_pbrt_turns_it() {
+        // From +z to +y along the segment: a quarter turn about x, at a
+        // constant rate (spherical interpolation), perpendicular to the axis.
+        let mut c = straight(0.2, CurveKind::Ribbon);
+        c.n = [Vec3::Z, Vec3::Y];
+        assert!(c.is_valid());
+        for u in [0.0f32, 0.25, 1.0 / 3.0, 0.8, 1.0] {
+            let a = u * std::f32::consts::FRAC_PI_2;
+            let want = Vec3::new(0.0, a.sin(), a.cos());
+            assert!((c.ribbon_normal(u) - want).length() < 1e-5, "{u}");
+        }
+        // Straight down at x = -1/3 (u = 1/3): the normal is 30 degrees
+        // from the ray's line, the ribbon cos 30 as wide.
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        let at = |y: f32| c.intersect(&Ray::new(Vec3::new(-1.0 / 3.0, y, 2.0), down), 0.0, f32::INFINITY);
+        let h = at(0.0).unwrap();
+        assert!((h.u - 1.0 / 3.0).abs() < 1e-3, "{h:?}");
+        assert!(h.ng.dot(Vec3::new(0.0, 0.5, 0.75f32.sqrt())).abs() > 0.9999, "{h:?}");
+        let half = 0.1 * 30f32.to_radians().cos();
+        assert!(at(half - 0.004).is_some() && at(half + 0.004).is_none());
+        // Normals that point opposite ways have no way between them.
+        c.n = [Vec3::Z, -Vec3::Z];
+        assert!(!c.is_valid());
     }
 
     #[test]

@@ -2088,8 +2088,13 @@ impl<'a> Conv<'a> {
                         ));
                     }
                     desc.curves.reserve(c.segments.len() * pieces as usize);
-                    for (seg, w) in c.segments.iter().zip(&c.widths) {
+                    for (k, (seg, w)) in c.segments.iter().zip(&c.widths).enumerate() {
                         let world = seg.map(|q| m.transform_point3(q));
+                        // Under a similarity a normal turns as a vector does.
+                        let n = match c.normals.get(k..k + 2) {
+                            Some(&[a, b]) => [a, b].map(|v| m.transform_vector3(v).normalize()),
+                            _ => [Vec3::ZERO; 2],
+                        };
                         for i in 0..pieces {
                             let u = [i as f32 / pieces as f32, (i + 1) as f32 / pieces as f32];
                             desc.curves.push(CurveDesc {
@@ -2098,6 +2103,7 @@ impl<'a> Conv<'a> {
                                     u,
                                     width: [w[0] * scale, w[1] * scale],
                                     kind: c.kind,
+                                    n,
                                 },
                                 material,
                             });
@@ -3732,6 +3738,7 @@ fn reflect(desc: &mut SceneDesc) {
     }
     for c in &mut desc.curves {
         c.curve.cp = c.curve.cp.map(point);
+        c.curve.n = c.curve.n.map(vector);
     }
     for m in &mut desc.moving {
         m.motion = m.motion.mirrored(r);

@@ -223,6 +223,9 @@ pub struct Curves {
     pub widths: Vec<[f32; 2]>,
     pub kind: crate::geometry::CurveKind,
     pub split_depth: u32,
+    /// A ribbon's unit normals `N` (object space) at the segments' ends:
+    /// one more than the segments; empty for the other kinds.
+    pub normals: Vec<Vec3>,
 }
 
 /// A disk in the z = height plane, pbrt-v4's defaults: height 0, radius 1,

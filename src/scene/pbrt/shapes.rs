@@ -5,7 +5,7 @@
 use super::error::{Loc, PbrtError, Result};
 use super::ir::{Curves, Disk, Sphere, TriMesh};
 use super::params::Params;
-use crate::geometry::curve::{bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier};
+use crate::geometry::curve::{bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier, ribbon_normals_valid};
 use crate::geometry::subdivision::loop_subdivide;
 use crate::geometry::CurveKind;
 use crate::math::Vec3;
@@ -361,8 +361,8 @@ pub fn cylinder(params: &Params, loc: &Loc) -> Result<TriMesh> {
 
 /// A `curve` (pbrt-v4's `Curve::Create`): its control points `P` as
 /// cubic Bezier segments, with `basis` "bezier" or "bspline", `degree` 2 or
-/// 3, `type` "flat" or "cylinder" ("ribbon" is unsupported: `None`),
-/// `width` (or `width0` and `width1`) and `splitdepth`.
+/// 3, `type` "flat", "cylinder" or "ribbon" (with normals `N` at the
+/// segments' ends), `width` (or `width0` and `width1`) and `splitdepth`.
 pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option<Curves>> {
     let err = |m: String| Err(PbrtError::at(loc, format!("curve: {m}")));
     let width = params.get_float("width", 1.0)?;
@@ -377,13 +377,7 @@ pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option
     let kind = match params.get_string_or("type", "flat")?.as_str() {
         "flat" => CurveKind::Flat,
         "cylinder" => CurveKind::Cylinder,
-        "ribbon" => {
-            params.mark_used("N", super::params::ParamType::Normal);
-            found
-                .unsupported
-                .push("curve: \"ribbon\" curves (oriented by normals) are not supported".into());
-            return Ok(None);
-        }
+        "ribbon" => CurveKind::Ribbon,
         other => {
             // pbrt-v4 warns and takes a cylinder.
             found
@@ -453,7 +447,30 @@ pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option
     let widths = (0..segments.len())
         .map(|i| [lerp(i as f32 / n), lerp((i + 1) as f32 / n)])
         .collect();
-    if params.has("N") {
+    let mut normals = vec![];
+    if kind == CurveKind::Ribbon {
+        let given = params.get_normals("N");
+        if given.len() != segments.len() + 1 {
+            return err(format!(
+                "a ribbon of {} segments needs {} normals \"N\" (one at each segment's end), not {}",
+                segments.len(),
+                segments.len() + 1,
+                given.len()
+            ));
+        }
+        for (i, n) in given.iter().enumerate() {
+            if !(n.is_finite() && n.length_squared() > 0.0) {
+                return err(format!("normal {i} of \"N\", {n}, has no direction"));
+            }
+            normals.push(n.normalize());
+        }
+        if let Some(i) = (0..segments.len()).find(|&i| !ribbon_normals_valid([normals[i], normals[i + 1]])) {
+            return err(format!(
+                "normals {i} and {} of \"N\" point opposite ways: the ribbon cannot turn between them",
+                i + 1
+            ));
+        }
+    } else if params.has("N") {
         params.mark_used("N", super::params::ParamType::Normal);
         found
             .warnings
@@ -464,6 +481,7 @@ pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option
         widths,
         kind,
         split_depth: split_depth as u32,
+        normals,
     }))
 }
 

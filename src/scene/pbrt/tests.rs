@@ -1687,7 +1687,7 @@ fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
 fn a_file_included_twice_lists_each_unsupported_place_once() {
     let files = Files::default().with(
         "scene/s.pbrt",
-        "Shape \"teapot\"\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
+        "Shape \"teapot\"\nShape \"curve\" \"float alpha\" 0.5 \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
          Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
     );
     // Moving shapes: two problems on each line of s.pbrt.
@@ -1699,7 +1699,7 @@ fn a_file_included_twice_lists_each_unsupported_place_once() {
     )
     .unwrap_err();
     assert_eq!(e.matches("\"teapot\"").count(), 1, "{e}");
-    assert_eq!(e.matches("\"ribbon\" curves").count(), 1, "{e}");
+    assert_eq!(e.matches("a curve cut out by \"alpha\"").count(), 1, "{e}");
     assert_eq!(e.matches("a moving \"curve\" (ActiveTransform)").count(), 1, "{e}");
 }
 
@@ -2386,7 +2386,36 @@ fn curves_convert_into_pieces_where_pbrt_puts_them() {
 }
 
 #[test]
-fn malformed_curves_are_errors_at_their_place_and_ribbons_are_unsupported() {
+fn ribbons_face_where_their_normals_say() {
+    use crate::math::Ray;
+    // A ribbon from x = 0 to 6 at z = 5, 1 wide, facing the camera (-z) at
+    // its start and turned a quarter about x, edge on, at its end. Ours is
+    // mirrored across the camera's vertical plane (x -> -x), as the rest
+    // of the scene is.
+    let text = "WorldBegin\nAttributeBegin\nTranslate 0 0 5\nScale 2 2 2\n\
+                Shape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
+                  \"float width\" 0.5 \"normal N\" [0 0 -3 0 2 0]\n\
+                AttributeEnd\n";
+    let c = converted(text, Files::default(), false).unwrap_or_else(|e| panic!("{e}"));
+    let scene = crate::Scene::build(c.desc).unwrap();
+    let hit = |x: f32, y: f32| scene.intersect(&Ray::new(Vec3::new(x, y, 0.0), Vec3::Z), 0.0, f32::INFINITY);
+    // Near its start it is as wide as given; a third of the way along its
+    // normal has turned by 30 degrees, and it looks cos 30 as wide.
+    assert!(hit(-0.1, 0.49).is_some() && hit(-0.1, 0.51).is_none());
+    let h = hit(-2.0, 0.0).unwrap();
+    assert!(
+        (h.t - 5.0).abs() < 1e-3 && h.kind == crate::scene::PrimKind::Curve,
+        "{h:?}"
+    );
+    assert!(h.ng.dot(Vec3::new(0.0, 0.5, -(0.75f32.sqrt()))).abs() > 0.9999, "{h:?}");
+    let half = 0.5 * 30f32.to_radians().cos();
+    assert!(hit(-2.0, half - 0.01).is_some() && hit(-2.0, half + 0.01).is_none());
+    // Near its end it is nearly edge on: a thread.
+    assert!(hit(-5.9, 0.0).is_some() && hit(-5.9, 0.05).is_none());
+}
+
+#[test]
+fn malformed_curves_are_errors_at_their_place() {
     for (shape, what) in [
         (
             "\"integer degree\" 4 \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0]",
@@ -2421,15 +2450,26 @@ fn malformed_curves_are_errors_at_their_place_and_ribbons_are_unsupported() {
         e.starts_with("scene/main.pbrt:2: curve: 16400 segments of 1024 pieces") && e.contains("limit of 16777216"),
         "{e}"
     );
-    let ribbon = "WorldBegin\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n\
-                  \"normal N\" [0 0 1 0 0 1]\n";
-    let e = converted(ribbon, Files::default(), false).unwrap_err();
-    assert!(e.contains("scene/main.pbrt:2: curve: \"ribbon\" curves"), "{e}");
-    assert!(converted(ribbon, Files::default(), true)
-        .unwrap()
-        .desc
-        .curves
-        .is_empty());
+    // A ribbon needs a normal at each segment's end, each with a direction,
+    // and no two neighbours opposite.
+    for (normals, what) in [
+        ("", "needs 2 normals \"N\" (one at each segment's end), not 0"),
+        ("\"normal N\" [0 0 1 0 0 1 0 0 1]", "needs 2 normals"),
+        (
+            "\"normal N\" [0 0 1 0 0 0]",
+            "normal 1 of \"N\", [0, 0, 0], has no direction",
+        ),
+        (
+            "\"normal N\" [0 0 1 0 0 -1]",
+            "normals 0 and 1 of \"N\" point opposite ways",
+        ),
+    ] {
+        let ribbon = format!(
+            "WorldBegin\nShape \"curve\" \"string type\" \"ribbon\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] {normals}\n"
+        );
+        let e = converted(&ribbon, Files::default(), false).unwrap_err();
+        assert!(e.starts_with("scene/main.pbrt:2:1: curve: ") && e.contains(what), "{e}");
+    }
     // An area light on a curve cannot be sampled (pbrt-v4 cannot either).
     let lit = "WorldBegin\nAreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n";
     let e = converted(lit, Files::default(), false).unwrap_err();
