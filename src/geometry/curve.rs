@@ -231,7 +231,9 @@ impl Curve {
     /// The nearest hit in (t_min, t_max]. A hit closer to the ray's origin
     /// than the curve's width there is no hit: a ray leaving a curve starts
     /// within its width, and would meet the ribbon that turns to face it
-    /// (pbrt-v4 starts such rays a width away instead).
+    /// (pbrt-v4 starts such rays a width away instead). A ribbon, which
+    /// does not turn, is closer only by what its own width along the ray
+    /// can account for.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<CurveHit> {
         let mut up = ray.d.cross(self.cp[3] - self.cp[0]);
         if up.length_squared() <= 0.0 || !up.is_finite() {
@@ -326,19 +328,29 @@ impl Search<'_> {
         let width = self.curve.width_at(u);
         // A ribbon is as wide as it looks from the ray: its width times
         // the cosine between its normal and the ray (pbrt-v4's measure).
-        let (hit_width, ribbon_n) = match self.curve.kind {
+        // A ray leaving a curve starts within its width and would meet it
+        // again: hits nearer than `near` are none (pbrt-v4 starts such rays
+        // a width away instead). A flat or cylinder curve turns to face the
+        // ray, so that is its width. A ribbon's point lies up to half its
+        // width across from the axis, which puts the axis that much times
+        // the cosine between the ray and the ribbon's across direction
+        // along the ray (or within the width it shows the ray): a ray from
+        // another surface nearby still meets it.
+        let (hit_width, ribbon_n, near) = match self.curve.kind {
             CurveKind::Ribbon => {
                 let n = self.curve.ribbon_normal(u);
-                (width * n.dot(self.frame.z).abs(), n)
+                let hit_width = width * n.dot(self.frame.z).abs();
+                let across = self.frame.to_local(n).cross(cp[3] - cp[0]).normalize_or_zero();
+                (hit_width, n, hit_width.max(0.5 * width * across.z.abs()))
             }
-            _ => (width, Vec3::ZERO),
+            _ => (width, Vec3::ZERO, width),
         };
         let (pc, dpcdw) = evaluate_bezier(cp, w.clamp(0.0, 1.0));
         let dist2 = pc.x * pc.x + pc.y * pc.y;
         if dist2 > hit_width * hit_width * 0.25 || hit_width <= 0.0 || hit_width.is_nan() {
             return;
         }
-        if pc.z <= self.z_min || pc.z <= width || pc.z > self.z_max {
+        if pc.z <= self.z_min || pc.z <= near || pc.z > self.z_max {
             return;
         }
         let t = pc.z / self.len;
@@ -479,6 +491,31 @@ mod tests {
                 "{d}"
             );
         }
+        // A ribbon in the z = 0 plane: rays leaving a point of it just off
+        // its plane, on either side, do not meet it again; but a ray from a
+        // point nearer than its width, to which it looks narrower, meets it
+        // (at its axis' depth, as pbrt-v4 has it).
+        let mut r = straight(0.2, CurveKind::Ribbon);
+        r.n = [Vec3::Z; 2];
+        for side in [1e-5f32, -1e-5] {
+            for d in [
+                Vec3::new(0.3, 0.5, 1.0),
+                Vec3::new(0.0, -0.2, 1.0),
+                Vec3::new(-1.0, 0.1, 0.2),
+                Vec3::new(0.2, 0.9, 0.05),
+            ] {
+                let d = d * side.signum();
+                let o = Vec3::new(0.1, 0.03, side);
+                assert!(r.intersect(&Ray::new(o, d.normalize()), 0.0, f32::INFINITY).is_none(), "{d}");
+            }
+        }
+        let d = Vec3::new(0.0, 0.8, -0.6);
+        let h = r
+            .intersect(&Ray::new(Vec3::new(0.3, 0.03, 0.0) - d * 0.15, d), 0.0, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 0.126).abs() < 1e-4, "{h:?}");
+        let flat = straight(0.2, CurveKind::Flat);
+        assert!(flat.intersect(&Ray::new(Vec3::new(0.3, 0.03, 0.0) - d * 0.15, d), 0.0, f32::INFINITY).is_none());
     }
 
     #[test]
