@@ -59,6 +59,7 @@ pub fn place_and_build(mesh: &Mesh) {
         curves: vec![],
         lights: vec![],
         light_surfaces: vec![],
+        invisible_lights: vec![],
         cutouts: vec![],
         media: vec![],
         camera_medium: None,

@@ -274,11 +274,11 @@ impl Vertex {
         }
     }
 
-    /// Whether this is a light vertex whose light is a delta in position
-    /// or direction: no path can end on it by chance.
+    /// Whether this is a light vertex whose light no path can end on by
+    /// chance: a delta in position or direction, or an invisible area light.
     fn is_delta_light(&self, scene: &Scene) -> bool {
         match self.kind {
-            Kind::Light(li) | Kind::Infinity(Some(li)) => scene.lights[li].is_delta(),
+            Kind::Light(li) | Kind::Infinity(Some(li)) => !scene.light_is_met(li),
             _ => false,
         }
     }

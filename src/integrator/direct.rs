@@ -211,7 +211,7 @@ pub fn sample_direct_with(
     // What the light brings if nothing blocks it, reckoned before the shadow
     // ray is traced: this work does not depend on the ray, so the processor
     // overlaps it with the traversal rather than waiting for both in turn.
-    let (f, w) = if mis && !scene.lights[li].is_delta() {
+    let (f, w) = if mis && scene.light_is_met(li) {
         let (f, pdf_bsdf) = bsdf.f_pdf(wo, ls.wi, TransportMode::Radiance);
         (f, power_heuristic(pmf * ls.pdf, pdf_bsdf))
     } else {

@@ -373,7 +373,7 @@ fn sample_direct_with(scene: &Scene, v: &Vertex, mis: bool, u: Vec2, stats: &mut
     if tr == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let w = if mis && !light.is_delta() {
+    let w = if mis && scene.light_is_met(li) {
         power_heuristic(pmf * ls.pdf, pdf)
     } else {
         1.0

@@ -384,6 +384,11 @@ pub struct SceneDesc {
     /// emitters keep their shape's material). A light missing here, or
     /// `None`, reflects nothing.
     pub light_surfaces: Vec<Option<LightSurface>>,
+    /// Area lights that no ray meets, by light index (pbrt-v4's area
+    /// lights of `alpha` 0): they light the scene through light sampling
+    /// alone, are not seen and cast no shadow. A light missing here is met
+    /// as any surface is.
+    pub invisible_lights: Vec<bool>,
     /// Shapes cut out by alpha textures.
     pub cutouts: Vec<Cutout>,
     /// Participating media, by name.
@@ -480,6 +485,7 @@ impl SceneDesc {
             curves: vec![],
             lights: vec![],
             light_surfaces: vec![],
+            invisible_lights: vec![],
             cutouts: vec![],
             media: vec![],
             camera_medium: None,
@@ -919,6 +925,8 @@ pub struct Scene {
     light_pmfs: Vec<f32>,
     /// Indices of the infinite lights.
     infinite_lights: Vec<u32>,
+    /// Whether a ray can meet each light, by light index (`light_is_met`).
+    lights_met: Vec<bool>,
     pub bvh: Bvh,
     /// Runs of triangles that move while the shutter is open (empty for a
     /// still scene), each with a BVH of its own.
@@ -1120,8 +1128,15 @@ impl Scene {
         let mut names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
         materials.push(Material::diffuse(0.0, 0.0, 0.0));
         names.push("<light>".into());
+        let invisible = |i: usize| desc.invisible_lights.get(i).copied().unwrap_or(false);
+        let lights_met = (0..lights.len())
+            .map(|i| !lights[i].is_delta() && !invisible(i))
+            .collect();
         for (i, l) in lights.iter_mut().enumerate() {
             l.check(1.0).map_err(|m| Error::Scene(format!("light {i}: {m}")))?;
+            if invisible(i) {
+                continue;
+            }
             // An emitter reflects by its material, or nothing (`black`), and
             // blocks light like any surface.
             let reflecting = desc.light_surfaces.get(i).and_then(|s| s.as_ref());
@@ -1279,6 +1294,7 @@ impl Scene {
             light_cdf: vec![],
             light_pmfs: vec![],
             infinite_lights,
+            lights_met,
             bvh,
             movers,
             mover_bvh,
@@ -1372,6 +1388,13 @@ impl Scene {
         let before = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
         let rest = ((target - before) / (self.light_cdf[i] - before)).clamp(0.0, crate::sampling::ONE_MINUS_EPS);
         Some((i, self.light_pmfs[i], rest))
+    }
+
+    /// Whether a ray can meet light `i`, so that a BSDF sample may find it
+    /// too: not a delta light, nor an invisible area light. Samples of the
+    /// others take no MIS weight, being their only way in.
+    pub fn light_is_met(&self, i: usize) -> bool {
+        self.lights_met[i]
     }
 
     /// The probability that `pick_light` chooses light `i`.

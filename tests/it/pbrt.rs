@@ -491,6 +491,17 @@ fn width_or_height_alone_keeps_the_scenes_aspect_ratio() {
 /// AreaLightSource's parameters, `pre` comes before the disk's Shape.
 /// Returns the mean radiance.
 fn floor_under_disk(light: &str, pre: &str) -> f64 {
+    floor_under_disk_with(
+        light,
+        pre,
+        "",
+        &["--integrator", "path", "--max-depth", "1", "--spp", "256"],
+    )
+}
+
+/// [`floor_under_disk`] with `shape` after the disk's parameters, rendered
+/// with `options`.
+fn floor_under_disk_with(light: &str, pre: &str, shape: &str, options: &[&str]) -> f64 {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("disk.pbrt");
     std::fs::write(
@@ -502,12 +513,39 @@ fn floor_under_disk(light: &str, pre: &str) -> f64 {
              Shape \"trianglemesh\" \"point3 P\" [ -10 0 -10  10 0 -10  10 0 10  -10 0 10 ] \
              \"integer indices\" [ 0 1 2 0 2 3 ]\n\
              AttributeBegin\nAreaLightSource \"diffuse\" {light}\n\
-             Translate 0 1 0\nRotate 90 1 0 0\n{pre}Shape \"disk\" \"float radius\" [ 0.5 ]\nAttributeEnd\n"
+             Translate 0 1 0\nRotate 90 1 0 0\n{pre}Shape \"disk\" \"float radius\" [ 0.5 ] {shape}\nAttributeEnd\n"
         ),
     )
     .unwrap();
-    let img = render_to_image(&p, &["--integrator", "path", "--max-depth", "1", "--spp", "256"]);
+    let img = render_to_image(&p, options);
     img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+}
+
+#[test]
+fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
+    // pbrt-v4's area light of "float alpha" 0: no ray meets it, so its
+    // light samples carry all of it (no MIS weight against BSDF samples
+    // that cannot find it). The closed form of the test above holds for
+    // each integrator, and with all bounces (the floor alone reflects).
+    let invisible = "\"float alpha\" 0";
+    for options in [
+        &["--integrator", "path", "--max-depth", "1", "--spp", "256"][..],
+        &["--integrator", "path", "--spp", "256"],
+        &["--integrator", "bdpt", "--spp", "128"],
+        &["--integrator", "photon", "--photons", "200000", "--ssaa", "2"],
+    ] {
+        let l = floor_under_disk_with("\"rgb L\" [ 10 10 10 ]", "", invisible, options);
+        let tolerance = if options[1] == "photon" { 0.05 } else { 0.02 };
+        assert!((l - 1.0).abs() < tolerance, "{options:?}: {l} vs 1");
+    }
+    // Turned away, it still lights nothing.
+    let up = floor_under_disk_with(
+        "\"rgb L\" [ 10 10 10 ]",
+        "ReverseOrientation\n",
+        invisible,
+        &["--max-depth", "1"],
+    );
+    assert!(up < 1e-6, "{up}");
 }
 
 #[test]

@@ -39,6 +39,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         curves: vec![],
         lights: vec![light],
         light_surfaces: vec![],
+        invisible_lights: vec![],
         cutouts: vec![],
         media: vec![],
         camera_medium: None,

@@ -186,6 +186,7 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         dropped_light_triangles: 0,
         emitters_bounding_media: 0,
         emitters_unbumped: 0,
+        invisible: false,
         imaging_ratio: 1.0,
         shutter: [0.0, 1.0],
         first_motion: None,
@@ -358,6 +359,8 @@ struct Conv<'a> {
     /// medium, and those whose material is bumped (warned of once each).
     emitters_bounding_media: usize,
     emitters_unbumped: usize,
+    /// Whether the shape being converted is an invisible area light.
+    invisible: bool,
 }
 
 fn origin(loc: &Loc) -> Origin {
@@ -384,6 +387,10 @@ impl<'a> Conv<'a> {
     /// Adds an area light, with the surface it reflects by if any.
     fn push_emitter(&self, desc: &mut SceneDesc, light: Light, surface: Option<LightSurface>, loc: &Loc) -> Result<()> {
         self.push_light(desc, light, loc)?;
+        if self.invisible {
+            desc.invisible_lights.resize(desc.lights.len() - 1, false);
+            desc.invisible_lights.push(true);
+        }
         if let Some(s) = surface {
             desc.light_surfaces.resize(desc.lights.len() - 1, None);
             desc.light_surfaces.push(Some(s));
@@ -1746,12 +1753,19 @@ impl<'a> Conv<'a> {
                 Some(i) if !no_surface => self.emission(i)?,
                 _ => None,
             };
-            if emission.is_some() && alpha.is_some() {
+            // pbrt-v4 makes an area light of constant alpha 0 invisible: it
+            // emits whole, but no ray meets its surface, so light sampling
+            // alone finds it (pbrt-v4 marks it a delta light for that).
+            self.invisible =
+                emission.is_some() && alpha.as_ref().and_then(|a| a.as_constant()).is_some_and(|a| a.x == 0.0);
+            if self.invisible {
+                alpha = None;
+            } else if emission.is_some() && alpha.is_some() {
                 // pbrt-v4 would also mask the light's emission and its samples.
                 self.problem(
                     Kind::Light,
                     place(p, "alpha", &shape.loc),
-                    "an \"alpha\" cut-out on an area light is not supported",
+                    "an \"alpha\" cut-out on an area light is not supported, only \"float alpha\" 0 (an invisible light)",
                 );
                 alpha = None;
             }
@@ -3945,7 +3959,7 @@ mod tests {
                      Shape \"sphere\" \"float alpha\" 0.5\nAttributeEnd\n";
         let e = convert_text(light, false).unwrap_err().to_string();
         assert!(
-            e.contains("main.pbrt:4: an \"alpha\" cut-out on an area light is not supported"),
+            e.contains("main.pbrt:4: an \"alpha\" cut-out on an area light is not supported, only \"float alpha\" 0"),
             "{e}"
         );
         // Leniently, the light shines whole.
@@ -3955,6 +3969,44 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("main.pbrt:2") && e.contains("nothing"), "{e}");
+    }
+
+    #[test]
+    fn an_area_light_of_alpha_zero_is_a_light_no_ray_meets() {
+        // A sphere light and a quad light of alpha 0 between two visible
+        // emitters, and a grey wall behind them all at z = 5.
+        let text = "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [-9 -9 5 9 -9 5 9 9 5 -9 9 5] \"integer indices\" [0 1 2 0 2 3]\n\
+                    AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nTranslate -3 0 2\nShape \"sphere\"\nAttributeEnd\n\
+                    AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\nTranslate 0 0 2\nShape \"sphere\" \"float alpha\" 0\nAttributeEnd\n\
+                    AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [3 3 3]\n\
+                    Shape \"bilinearmesh\" \"point3 P\" [2 -1 2 4 -1 2 2 1 2 4 1 2] \"float alpha\" [ 0 ]\nAttributeEnd\n";
+        let c = convert_text(text, false).unwrap();
+        assert!(c.desc.cutouts.is_empty());
+        // The first sphere, the second, then the quad's two triangles.
+        assert_eq!(c.desc.lights.len(), 4);
+        assert_eq!(c.desc.invisible_lights, [false, true, true, true]);
+        let scene = crate::Scene::build(c.desc).unwrap();
+        assert!(scene.light_is_met(0) && !scene.light_is_met(1) && !scene.light_is_met(2));
+        // Rays along +z (ours mirrored, x -> -x): the visible sphere stops
+        // one; through the invisible ones they reach the wall.
+        let hit = |x: f32| {
+            let h = scene.intersect(
+                &crate::math::Ray::new(Vec3::new(x, 0.0, 0.0), Vec3::Z),
+                1e-4,
+                f32::INFINITY,
+            );
+            h.map(|h| (h.t, h.light))
+        };
+        assert_eq!(hit(3.0), Some((1.0, Some(0))));
+        for x in [0.0, -3.0] {
+            let (t, light) = hit(x).unwrap();
+            assert!((t - 5.0).abs() < 1e-4 && light.is_none(), "{x}: {t} {light:?}");
+        }
+        // They emit all the same: the middle one's light samples reach the wall.
+        let ls = scene.lights[1]
+            .sample_li(Vec3::new(0.0, 0.0, 5.0), crate::math::Vec2::new(0.3, 0.6))
+            .unwrap();
+        assert!(ls.weight.x > 0.0, "{ls:?}");
     }
 
     #[test]
