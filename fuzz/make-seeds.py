@@ -403,6 +403,25 @@ AttributeBegin
 AttributeEnd
 """)
 
+# Ribbon curves (normals at the segments' ends) and invisible area lights
+# (alpha 0 on an emitting sphere and quad).
+put("pbrt", "ribbons-invisible.pbrt", pbrt_camera + """WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [ 4 4 4 ]
+  Translate 0 2 0
+  Shape "sphere" "float radius" 0.3 "float alpha" 0
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [ 2 2 2 ] "bool twosided" true
+  Shape "bilinearmesh" "point3 P" [ -1 1 1  1 1 1  -1 1.2 1  1 1.2 1 ] "float alpha" [ 0 ]
+AttributeEnd
+Shape "curve" "string type" "ribbon" "float width0" 0.3 "float width1" 0.1
+  "point3 P" [ -1 0 0  -0.5 0.5 0  0.5 0.5 0  1 0 0  1.5 -0.5 0  2 0 0  2 1 0 ]
+  "normal N" [ 0 0 1  0 1 1  1 0 0 ]
+Shape "curve" "string type" "ribbon" "string basis" "bspline" "integer degree" 2
+  "point3 P" [ 0 0 0  0 1 0  1 1 0  1 2 0 ] "normal N" [ 0 0 1  1 0 0  0 0 1 ]
+""")
+
 # Motion: a moving mesh, a moving instance, a moving camera and transform
 # times, and the refused kinds (a moving sphere, a moving area light).
 put("pbrt", "motion.pbrt", """TransformTimes 0.25 1.5

@@ -475,9 +475,16 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
     if imaged > 0 {
         kinds.push(format!("{imaged} of them with an emission image"));
     }
-    let reflecting = scene.desc.light_surfaces.iter().flatten().count();
+    let invisible = |i: usize| scene.desc.invisible_lights.get(i).copied().unwrap_or(false);
+    let reflecting = (scene.desc.light_surfaces.iter().enumerate())
+        .filter(|(i, s)| s.is_some() && !invisible(*i))
+        .count();
     if reflecting > 0 {
         kinds.push(format!("{reflecting} of them reflecting by a material"));
+    }
+    let invisible = (0..scene.lights.len()).filter(|&i| invisible(i)).count();
+    if invisible > 0 {
+        kinds.push(format!("{invisible} of them invisible (alpha 0: met by no ray)"));
     }
     println!("lights: {} ({})", scene.lights.len(), kinds.join(", "));
     println!("materials: {}", scene.materials.len());

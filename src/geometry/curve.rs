@@ -506,7 +506,10 @@ mod tests {
             ] {
                 let d = d * side.signum();
                 let o = Vec3::new(0.1, 0.03, side);
-                assert!(r.intersect(&Ray::new(o, d.normalize()), 0.0, f32::INFINITY).is_none(), "{d}");
+                assert!(
+                    r.intersect(&Ray::new(o, d.normalize()), 0.0, f32::INFINITY).is_none(),
+                    "{d}"
+                );
             }
         }
         let d = Vec3::new(0.0, 0.8, -0.6);
@@ -515,7 +518,9 @@ mod tests {
             .unwrap();
         assert!((h.t - 0.126).abs() < 1e-4, "{h:?}");
         let flat = straight(0.2, CurveKind::Flat);
-        assert!(flat.intersect(&Ray::new(Vec3::new(0.3, 0.03, 0.0) - d * 0.15, d), 0.0, f32::INFINITY).is_none());
+        assert!(flat
+            .intersect(&Ray::new(Vec3::new(0.3, 0.03, 0.0) - d * 0.15, d), 0.0, f32::INFINITY)
+            .is_none());
     }
 
     #[test]

@@ -538,6 +538,23 @@ fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
         let tolerance = if options[1] == "photon" { 0.05 } else { 0.02 };
         assert!((l - 1.0).abs() < tolerance, "{options:?}: {l} vs 1");
     }
+    // `info` counts it.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("lights.pbrt");
+    std::fs::write(
+        &p,
+        "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\"\nShape \"sphere\" \"float alpha\" 0\nAttributeEnd\n\
+         AreaLightSource \"diffuse\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let out = raytracer(&["info", "--scene", p.to_str().unwrap()]);
+    let info = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        info.contains(
+            "lights: 2 (2 sphere, 1 of them reflecting by a material, 1 of them invisible (alpha 0: met by no ray))"
+        ),
+        "{info}"
+    );
     // Turned away, it still lights nothing.
     let up = floor_under_disk_with(
         "\"rgb L\" [ 10 10 10 ]",
