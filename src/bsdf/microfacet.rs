@@ -80,6 +80,13 @@ impl TrowbridgeReitz {
         self.alpha_y
     }
 
+    /// pbrt-v4's `Regularize`: each alpha below 0.3 doubled, and kept
+    /// within [0.1, 0.3], so that a smooth surface becomes a glossy one.
+    pub fn regularized(&self) -> Self {
+        let r = |a: f32| if a < 0.3 { (2.0 * a).clamp(0.1, 0.3) } else { a };
+        Self::new(r(self.alpha_x), r(self.alpha_y))
+    }
+
     /// True when the surface is to be treated as a perfect specular one.
     pub fn effectively_smooth(&self) -> bool {
         self.alpha_x.max(self.alpha_y) < Self::SMOOTH_ALPHA

@@ -375,6 +375,32 @@ impl Bxdf {
         }
     }
 
+    /// pbrt-v4's `Regularize`: every microfacet interface made at least
+    /// somewhat rough (`TrowbridgeReitz::regularized`), so that paths a
+    /// smooth one would make impossible to sample (a light seen through a
+    /// mirror from a diffuse surface) are found, at the price of a bias.
+    /// Lambertian, thin dielectric, hair, measured and subsurface lobes
+    /// stay as they are, as in pbrt-v4.
+    pub fn regularize(&mut self) {
+        match self {
+            Bxdf::Conductor(b) => b.distrib = b.distrib.regularized(),
+            Bxdf::Dielectric(b) => b.distrib = b.distrib.regularized(),
+            Bxdf::Dispersive(b) => b.distrib = b.distrib.regularized(),
+            Bxdf::CoatedDiffuse(b) => b.distrib = b.distrib.regularized(),
+            Bxdf::CoatedConductor(b) => {
+                b.coat.distrib = b.coat.distrib.regularized();
+                b.base.distrib = b.base.distrib.regularized();
+            }
+            Bxdf::ScatteringCoat(b) => b.regularize(),
+            Bxdf::Diffuse(_)
+            | Bxdf::DiffuseTransmission(_)
+            | Bxdf::ThinDielectric(_)
+            | Bxdf::Hair(_)
+            | Bxdf::NormalizedFresnel(_)
+            | Bxdf::Measured(_) => {}
+        }
+    }
+
     pub fn flags(&self) -> BxdfFlags {
         match self {
             Bxdf::Diffuse(b) => b.flags(),

@@ -62,6 +62,15 @@ pub struct ScatteringCoatBxdf {
 }
 
 impl ScatteringCoatBxdf {
+    /// Both interfaces regularized (pbrt-v4's `LayeredBxDF::Regularize`);
+    /// a Lambertian base has none.
+    pub fn regularize(&mut self) {
+        self.coat.distrib = self.coat.distrib.regularized();
+        if !self.diffuse_base {
+            self.base.distrib = self.base.distrib.regularized();
+        }
+    }
+
     /// Over a Lambertian base of reflectance `r`.
     pub fn over_diffuse(
         coat: DielectricBxdf,

@@ -1558,3 +1558,38 @@ fn scattering_coats_against_the_analog_walk() {
     }
     assert_eq!(furnace, 2);
 }
+
+#[test]
+fn regularizing_makes_smooth_interfaces_glossy_as_pbrt_does() {
+    // pbrt-v4's rule: alphas below 0.3 doubled, kept within [0.1, 0.3].
+    let r = |ax: f32, ay: f32| {
+        let d = TrowbridgeReitz::new(ax, ay).regularized();
+        (d.alpha_x(), d.alpha_y())
+    };
+    assert_eq!(r(0.0, 0.0), (0.1, 0.1));
+    assert_eq!(r(0.02, 0.12), (0.1, 0.24));
+    assert_eq!(r(0.2, 0.3), (0.3, 0.3));
+    assert_eq!(r(0.5, 0.05), (0.5, 0.1));
+    // A mirror becomes a glossy reflector; a smooth coat over a metal, both
+    // interfaces; a Lambertian surface stays as it is.
+    let mut mirror = Bxdf::conductor(TrowbridgeReitz::smooth(), Vec3::ONE, Vec3::splat(3.0));
+    assert!(mirror.flags().is_specular());
+    mirror.regularize();
+    assert!(mirror.flags().is_non_specular() && !mirror.flags().is_specular());
+    let Bxdf::Conductor(c) = mirror else { panic!() };
+    assert_eq!((c.distrib.alpha_x(), c.distrib.alpha_y()), (0.1, 0.1));
+    let mut coated = Bxdf::coated_conductor(
+        DielectricBxdf::new(TrowbridgeReitz::smooth(), 1.5),
+        ConductorBxdf::new(TrowbridgeReitz::isotropic(0.04), Vec3::splat(0.2), Vec3::splat(3.0)),
+        0.01,
+        10,
+        1,
+    );
+    coated.regularize();
+    let Bxdf::CoatedConductor(c) = coated else { panic!() };
+    assert_eq!((c.coat.distrib.alpha_x(), c.base.distrib.alpha_x()), (0.1, 0.1));
+    let mut diffuse = Bxdf::diffuse(Vec3::splat(0.5));
+    let before = diffuse;
+    diffuse.regularize();
+    assert_eq!(diffuse, before);
+}

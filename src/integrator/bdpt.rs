@@ -55,6 +55,9 @@ pub struct Bdpt {
     /// Whether light subpaths are also joined to the camera (t = 1): a
     /// pinhole camera's.
     pub light_tracing: bool,
+    /// Microfacet surfaces made glossy after a subpath's first
+    /// non-specular bounce (pbrt-v4's `regularize`, as its BDPT has it).
+    pub regularize: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -427,6 +430,7 @@ impl Bdpt {
         let mut ray = *ray;
         let mut beta = Vec3::ONE;
         let mut roulette = Vec3::ONE;
+        let mut rough_before = false;
         let mut pdf_fwd = scene.camera.pdf_dir_at(ray.d, ray.time);
         let mut diffs: Option<Differentials> = None;
         let max_vertices = self.limit(1);
@@ -466,11 +470,15 @@ impl Bdpt {
             let sp = scene.surface_seen(&hit, diffs.as_ref());
             let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
+            if self.regularize && rough_before {
+                bsdf.bxdf.regularize();
+            }
             let v = Vertex::surface(hit, bsdf, wo, beta, TransportMode::Radiance);
             let Some((bs, next)) = Self::bounce(path, v, pdf_fwd, max_vertices, (&mut beta, &mut roulette), sampler)
             else {
                 break;
             };
+            rough_before |= !bs.is_specular();
             pdf_fwd = next;
             diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
                 scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
@@ -603,6 +611,7 @@ impl Bdpt {
             return;
         }
         let mut roulette = Vec3::ONE;
+        let mut rough_before = false;
         let mut pdf_fwd = pdf_next;
         let mut ray = le.ray;
         let max_vertices = self.limit(0);
@@ -617,11 +626,15 @@ impl Bdpt {
             let sp = scene.surface_seen(&hit, None);
             let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
+            if self.regularize && rough_before {
+                bsdf.bxdf.regularize();
+            }
             let v = Vertex::surface(hit, bsdf, wo, beta, TransportMode::Importance);
             let Some((bs, next)) = Self::bounce(path, v, pdf_fwd, max_vertices, (&mut beta, &mut roulette), sampler)
             else {
                 break;
             };
+            rough_before |= !bs.is_specular();
             pdf_fwd = next;
             stats.other_rays += 1;
             ray = Ray::timed(offset_origin(hit.p, hit.ng, bs.wi), bs.wi, hit.time);

@@ -245,6 +245,7 @@ mod tests {
             let est = crate::integrator::path::PathTracer {
                 max_depth: None,
                 light_sampling: Default::default(),
+                regularize: false,
             };
             let (one_pass, ..) = render_tiles(&scene, &settings, &est, crate::integrator::Progress::silent());
             let out = render(&scene, &settings, &|| {}).unwrap();

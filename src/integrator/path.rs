@@ -65,6 +65,9 @@ pub struct PathTracer {
     /// estimation at one fewer (1: direct light only); `None`: unlimited.
     pub max_depth: Option<u32>,
     pub light_sampling: LightSampling,
+    /// Microfacet surfaces made glossy after the path's first non-specular
+    /// bounce (pbrt-v4's `regularize`).
+    pub regularize: bool,
 }
 
 impl RadianceEstimator for PathTracer {
@@ -84,6 +87,9 @@ impl RadianceEstimator for PathTracer {
         // The ray's differentials, while it has any: the camera's, carried
         // through specular bounces (texture footprints).
         let mut diffs = None;
+        // Whether the path has bounced off a non-specular lobe (regularization
+        // starts there, as in pbrt-v4).
+        let mut rough_before = false;
         // Emission found by a BSDF-sampled ray: MIS-weighted, or all or nothing.
         let weigh = |from: Option<(Vec3, f32)>| match (from, self.light_sampling) {
             (None, _) | (_, LightSampling::Mis) => (from, 1.0),
@@ -118,6 +124,9 @@ impl RadianceEstimator for PathTracer {
             let sp = scene.surface_seen(&hit, diffs.as_ref());
             let mut bsdf = m.bsdf(&sp, wo);
             bsdf.carry(beta);
+            if self.regularize && rough_before {
+                bsdf.bxdf.regularize();
+            }
             let flags = bsdf.flags();
             if flags.is_empty() {
                 break;
@@ -148,6 +157,7 @@ impl RadianceEstimator for PathTracer {
                 eta_scale *= bs.eta * bs.eta;
             }
             from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+            rough_before |= !bs.is_specular();
             diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
                 scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
             });
@@ -190,12 +200,14 @@ impl<'a> Progressive<'a> {
         let bdpt = || Bdpt {
             max_depth: settings.max_depth,
             light_tracing: cam.is_pinhole(),
+            regularize: settings.regularize,
         };
         let est: Box<dyn RadianceEstimator> = match settings.integrator {
             IntegratorKind::Bdpt => Box::new(bdpt()),
             _ => Box::new(PathTracer {
                 max_depth: settings.max_depth,
                 light_sampling: settings.light_sampling,
+                regularize: settings.regularize,
             }),
         };
         let light_tracer = (settings.integrator == IntegratorKind::Bdpt && cam.is_pinhole()).then(bdpt);
@@ -590,6 +602,7 @@ mod tests {
                 let est = PathTracer {
                     max_depth: Some(1),
                     light_sampling: mode,
+                    regularize: false,
                 };
                 let (mut sum, mut sum2) = (0.0f64, 0.0f64);
                 let mut stats = RayStats::default();

@@ -61,6 +61,9 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     // first surface, carried through specular bounces (texture footprints).
     let mut camera_ray = true;
     let mut diffs = None;
+    // Whether the path has scattered other than specularly (regularization
+    // starts there, as in pbrt-v4).
+    let mut rough_before = false;
     let weigh = |from: Option<(Vec3, f32)>| match (from, pt.light_sampling) {
         (None, _) | (_, LightSampling::Mis) => (from, 1.0),
         (Some(_), LightSampling::Bsdf) => (None, 1.0),
@@ -106,6 +109,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                     // The phase function is sampled exactly: f / pdf = 1.
                     let (wi, pdf) = med.sample_phase(ray.d, sampler.next_2d());
                     from = Some((p, pdf));
+                    rough_before = true;
                     if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
                         break;
                     }
@@ -155,6 +159,9 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         let sp = scene.surface_seen(&hit, diffs.as_ref());
         let mut bsdf = m.bsdf(&sp, wo);
         bsdf.carry(beta);
+        if pt.regularize && rough_before {
+            bsdf.bxdf.regularize();
+        }
         let flags = bsdf.flags();
         if flags.is_empty() {
             break;
@@ -189,6 +196,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
             eta_scale *= bs.eta * bs.eta;
         }
         from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        rough_before |= !bs.is_specular();
         diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
             scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
         });
@@ -205,6 +213,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                 };
                 beta *= sp_weight;
                 ratio *= sp_ratio;
+                rough_before = true;
                 let esp = scene.surface(&exit);
                 let exit_bsdf = Bsdf::new(
                     Bxdf::NormalizedFresnel(NormalizedFresnelBxdf { eta: bssrdf.eta }),
@@ -725,6 +734,7 @@ mod tests {
         let est = PathTracer {
             max_depth: None,
             light_sampling: LightSampling::Mis,
+            regularize: false,
         };
         for (flip, length) in [(false, 1.0), (true, 2.0)] {
             let scene = slab(flip);
@@ -817,6 +827,7 @@ mod tests {
             let est = PathTracer {
                 max_depth: Some(1),
                 light_sampling: mode,
+                regularize: false,
             };
             let (mean, err) = estimate(&scene, &est, &ray, 2048, 16);
             assert!(
@@ -846,6 +857,7 @@ mod tests {
             let est = PathTracer {
                 max_depth: Some(2),
                 light_sampling: mode,
+                regularize: false,
             };
             results.push((mode, estimate(&scene, &est, &ray, 4096, 16)));
         }

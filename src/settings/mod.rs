@@ -246,6 +246,9 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Path tracer: how direct light is sampled.
     pub light_sampling: LightSampling,
+    /// Path tracers: microfacet surfaces made glossy after a path's first
+    /// non-specular bounce (pbrt-v4's `regularize`).
+    pub regularize: bool,
     /// Where camera samples' random numbers come from.
     pub sampler: SamplerKind,
     /// Largest RGB component a camera sample keeps (the sample is scaled
@@ -328,6 +331,10 @@ impl RenderSettings {
         }
         if let Some(m) = self.max_component {
             v.push(("max_component", Value::Real(m)));
+        }
+        // Absent when off, so older checkpoints still match.
+        if self.regularize {
+            v.push(("regularize", Value::Bool(true)));
         }
         if let Some(k) = self.white_balance {
             v.push(("white_balance", Value::Real(k)));
@@ -703,6 +710,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         spp: int("spp").unwrap_or_default() as u32,
         max_depth: int("max_depth").map(|d| d as u32),
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
+        regularize: flag("regularize"),
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         max_component: real("max_component"),
         white_balance: real("white_balance"),

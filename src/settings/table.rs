@@ -76,6 +76,17 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &["path"],
     },
     Spec {
+        name: "regularize",
+        kind: Kind::Flag,
+        default: DefaultValue::Bool(false),
+        doc: "Path tracers (path, bdpt): after a path's first non-specular bounce, make smooth and nearly smooth \
+              microfacet surfaces glossy (pbrt-v4's Integrator \"regularize\": alphas below 0.3 doubled, kept \
+              within [0.1, 0.3]), so that lights seen through mirrors and glass from diffuse surfaces are found, \
+              at the price of a bias",
+        in_scene_file: true,
+        only_for: &["path", "bdpt"],
+    },
+    Spec {
         name: "sampler",
         kind: Kind::Choice(SAMPLERS),
         default: DefaultValue::Name("sobol"),

@@ -565,6 +565,89 @@ fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
     assert!(up < 1e-6, "{up}");
 }
 
+/// The mean radiance of a patch of floor (y = 0, reflectance 0.5, the
+/// square of half side 1.8 tan 10 degrees about x = 1.5, seen from straight
+/// above) that a point light of intensity 10 at height 1 lights only
+/// through a mirror ceiling at height 2: a black square just below the
+/// light hides the patch from it. `integrator` holds the Integrator
+/// directive's parameters, `options` the command line's.
+fn floor_under_mirror(integrator: &str, options: &[&str]) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("mirror.pbrt");
+    std::fs::write(
+        &p,
+        format!(
+            "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
+             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
+             Integrator {integrator}\nWorldBegin\n\
+             LightSource \"point\" \"point3 from\" [ 0 1 0 ] \"rgb I\" [ 10 10 10 ]\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+             Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" 0\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+        ),
+    )
+    .unwrap();
+    let img = render_to_image(&p, options);
+    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
+}
+
+#[test]
+fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
+    // The light's image in the mirror is at height 3: a point's irradiance
+    // is 10 cos / d^2 = 30 / d^3, its radiance 0.5 / pi of that (the mirror
+    // reflecting 0.9999); averaged over the patch (the camera looks
+    // straight down, so its pixels cover equal areas).
+    let half = 1.8 * 10f64.to_radians().tan();
+    let n = 200;
+    let mut sum = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let x = 1.5 + half * (2.0 * (i as f64 + 0.5) / n as f64 - 1.0);
+            let z = half * (2.0 * (j as f64 + 0.5) / n as f64 - 1.0);
+            sum += 30.0 / (x * x + z * z + 9.0).powf(1.5);
+        }
+    }
+    let expected = 0.5 / std::f64::consts::PI * sum / (n * n) as f64 * 0.9999;
+    // Bidirectional paths find it as it is (light tracing through the mirror).
+    let bdpt = floor_under_mirror("\"bdpt\" \"integer maxdepth\" [ 2 ]", &["--spp", "256"]);
+    assert!((bdpt / expected - 1.0).abs() < 0.05, "bdpt {bdpt} vs {expected}");
+    // A path tracer cannot: from the floor the mirror is specular, and no
+    // BSDF sample finds a point light.
+    let plain = floor_under_mirror("\"path\" \"integer maxdepth\" [ 2 ]", &["--spp", "64"]);
+    assert!(plain < 1e-4 * expected, "{plain}");
+    // Regularized after the floor's bounce, the mirror is glossy: light
+    // samples from it find the light, spread over the mirror's lobe (which
+    // a plane mirror's caustic on a plane barely changes here).
+    let regularized = floor_under_mirror(
+        "\"path\" \"integer maxdepth\" [ 2 ] \"bool regularize\" true",
+        &["--spp", "256"],
+    );
+    assert!(
+        (regularized / expected - 1.0).abs() < 0.1,
+        "regularized {regularized} vs {expected}"
+    );
+    // The command line says the same.
+    let asked = floor_under_mirror("\"path\" \"integer maxdepth\" [ 2 ]", &["--spp", "256", "--regularize"]);
+    assert_eq!(asked, regularized);
+    // bdpt regularizes each subpath after its first non-specular bounce, as
+    // pbrt-v4's does: the camera subpath's mirror is glossy, the light
+    // subpath's (no bounce before it) smooth, and the two strategies that
+    // find the caustic, each taking the other's density as nothing, count
+    // it both. pbrt-v4's BDPT on this file: 0.1249 plain, 0.1809 regularized.
+    let bdpt_regularized = floor_under_mirror(
+        "\"bdpt\" \"integer maxdepth\" [ 2 ] \"bool regularize\" true",
+        &["--spp", "256"],
+    );
+    let ratio = bdpt_regularized / expected;
+    assert!(
+        ratio > 1.3 && ratio < 1.6,
+        "bdpt regularized {bdpt_regularized} vs {expected}"
+    );
+}
+
 #[test]
 fn a_disk_area_light_lights_a_floor_as_the_closed_form_says() {
     // A disk of radius R and radiance L at height h over a point on its axis

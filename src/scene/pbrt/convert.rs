@@ -1110,6 +1110,15 @@ impl<'a> Conv<'a> {
                     "max_bounces",
                     Value::Int(max_depth.clamp(1, 100) as u64),
                 );
+                // pbrt-v4's path, volpath, bdpt and mlt regularize when asked.
+                if matches!(i.ty.as_str(), "path" | "volpath" | "bdpt" | "mlt") && ip.get_bool("regularize", false)? {
+                    set(
+                        self,
+                        ip.loc_of("regularize").or(i.loc.as_ref()),
+                        "regularize",
+                        Value::Bool(true),
+                    );
+                }
             }
             "sppm" => {
                 set(self, i.loc.as_ref(), "integrator", Value::Name("sppm"));
@@ -1145,10 +1154,7 @@ impl<'a> Conv<'a> {
                 set(self, Some(&iloc), "integrator", Value::Name("path"));
             }
         }
-        for (n, t) in [
-            ("regularize", super::ParamType::Bool),
-            ("lightsampler", super::ParamType::String),
-        ] {
+        for (n, t) in [("lightsampler", super::ParamType::String)] {
             if ip.has(n) {
                 self.warn(place(ip, n, &iloc), format!("Integrator: \"{n}\" is ignored"));
                 ip.mark_used(n, t);
