@@ -135,6 +135,10 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
             c.curve.cp.iter().for_each(|&p| h.vec3(p));
             c.curve.u.iter().chain(&c.curve.width).for_each(|&v| h.f32(v));
             h.u32(c.curve.kind as u32);
+            // Ribbons came later: their normals only where there are some.
+            if c.curve.kind == crate::geometry::CurveKind::Ribbon {
+                c.curve.n.iter().for_each(|&v| h.vec3(v));
+            }
             h.u32(c.material);
         }
     }
@@ -298,6 +302,13 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
     if desc.light_surfaces.iter().any(Option::is_some) {
         h.bytes(b"light surfaces");
         h.bytes(format!("{:?}", desc.light_surfaces).as_bytes());
+    }
+    // So did invisible lights, likewise.
+    if desc.invisible_lights.iter().any(|&b| b) {
+        h.bytes(b"invisible lights");
+        (0..desc.invisible_lights.len())
+            .filter(|&i| desc.invisible_lights[i])
+            .for_each(|i| h.u32(i as u32));
     }
     // So did media, likewise.
     if !desc.media.is_empty() {
@@ -722,6 +733,37 @@ mod tests {
         for other in [moved(&textured), more(&textured)] {
             assert_ne!(scene_fingerprint(&textured, false), scene_fingerprint(&other, false));
         }
+    }
+
+    #[test]
+    fn scene_fingerprint_sees_ribbon_normals_and_invisible_lights() {
+        use crate::geometry::{Curve, CurveKind};
+        use crate::math::Vec3;
+        use crate::scene::CurveDesc;
+        let a = crate::scene::builtin::cornell();
+        let mut b = a.clone();
+        let p = |x: f32| Vec3::new(x, 0.5, 0.0);
+        b.curves.push(CurveDesc {
+            curve: Curve {
+                cp: [p(-0.2), p(-0.1), p(0.1), p(0.2)],
+                u: [0.0, 1.0],
+                width: [0.05, 0.05],
+                kind: CurveKind::Ribbon,
+                n: [Vec3::Z, Vec3::Y],
+            },
+            material: 0,
+        });
+        let fb = scene_fingerprint(&b, false);
+        assert_ne!(scene_fingerprint(&a, false), fb);
+        let mut c = b.clone();
+        c.curves[0].curve.n[1] = Vec3::X;
+        assert_ne!(scene_fingerprint(&c, false), fb);
+        // An invisible light is another scene; no invisible light is none.
+        let mut d = a.clone();
+        d.invisible_lights = vec![false; d.lights.len()];
+        assert_eq!(scene_fingerprint(&d, false), scene_fingerprint(&a, false));
+        d.invisible_lights[0] = true;
+        assert_ne!(scene_fingerprint(&d, false), scene_fingerprint(&a, false));
     }
 
     #[test]

@@ -332,16 +332,21 @@ impl Search<'_> {
         // again: hits nearer than `near` are none (pbrt-v4 starts such rays
         // a width away instead). A flat or cylinder curve turns to face the
         // ray, so that is its width. A ribbon's point lies up to half its
-        // width across from the axis, which puts the axis that much times
-        // the cosine between the ray and the ribbon's across direction
-        // along the ray (or within the width it shows the ray): a ray from
-        // another surface nearby still meets it.
+        // width across from the axis, which puts the nearest axis point
+        // that much times the cosine between the ray and the ribbon's
+        // across direction, over the sine between the ray and the axis,
+        // along the ray; and a hit point lies off the ribbon's plane by up
+        // to half the width the ribbon shows the ray. A ray from another
+        // surface beyond both still meets it.
         let (hit_width, ribbon_n, near) = match self.curve.kind {
             CurveKind::Ribbon => {
                 let n = self.curve.ribbon_normal(u);
                 let hit_width = width * n.dot(self.frame.z).abs();
-                let across = self.frame.to_local(n).cross(cp[3] - cp[0]).normalize_or_zero();
-                (hit_width, n, hit_width.max(0.5 * width * across.z.abs()))
+                let along = (cp[3] - cp[0]).normalize_or_zero();
+                let across = self.frame.to_local(n).cross(along).normalize_or_zero();
+                let sin2 = (1.0 - along.z * along.z).max(1e-6);
+                let leave = (0.5 * width * across.z.abs() / sin2.sqrt()).min(width);
+                (hit_width, n, hit_width.max(leave))
             }
             _ => (width, Vec3::ZERO, width),
         };

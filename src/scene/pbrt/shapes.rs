@@ -459,10 +459,12 @@ pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option
             ));
         }
         for (i, n) in given.iter().enumerate() {
-            if !(n.is_finite() && n.length_squared() > 0.0) {
+            // Scaled first, so that huge components keep their direction.
+            let unit = (*n / n.abs().max_element()).normalize_or_zero();
+            if !(n.is_finite() && unit.is_finite() && unit != Vec3::ZERO) {
                 return err(format!("normal {i} of \"N\", {n}, has no direction"));
             }
-            normals.push(n.normalize());
+            normals.push(unit);
         }
         if let Some(i) = (0..segments.len()).find(|&i| !ribbon_normals_valid([normals[i], normals[i + 1]])) {
             return err(format!(
