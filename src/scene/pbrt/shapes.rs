@@ -452,8 +452,9 @@ pub fn curves(params: &Params, loc: &Loc, found: &mut Findings) -> Result<Option
         let given = params.get_normals("N");
         if given.len() != segments.len() + 1 {
             return err(format!(
-                "a ribbon of {} segments needs {} normals \"N\" (one at each segment's end), not {}",
+                "a ribbon of {} segment{} needs {} normals \"N\" (one at each segment's end), not {}",
                 segments.len(),
+                if segments.len() == 1 { "" } else { "s" },
                 segments.len() + 1,
                 given.len()
             ));
