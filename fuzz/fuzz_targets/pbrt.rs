@@ -79,7 +79,10 @@ fuzz_target!(|data: &[u8]| {
         // and the BSDF at each hit (bump and normal maps included).
         let c = &scene.camera;
         let (w, h) = (c.width as f32, c.height as f32);
-        for (x, y) in [(0.5, 0.5), (w * 0.5, h * 0.5), (w - 0.5, h - 0.5), (w * 0.25, h * 0.75)] {
+        for (k, (x, y)) in [(0.5, 0.5), (w * 0.5, h * 0.5), (w - 0.5, h - 0.5), (w * 0.25, h * 0.75)]
+            .into_iter()
+            .enumerate()
+        {
             let ray = c.generate_ray(x, y);
             if let Some(hit) = scene.intersect(&ray, 0.0, f32::INFINITY) {
                 let _ = scene.occluded(&ray, 0.0, hit.t);
@@ -87,15 +90,18 @@ fuzz_target!(|data: &[u8]| {
             }
             let mut sampler = Sampler::new(true, 1, (x + w * y) as u64, 0);
             if scene.has_media() {
+                // Every other ray regularized, so that both ways are walked.
                 let pt = PathTracer {
                     max_depth: Some(6),
                     light_sampling: LightSampling::Mis,
+                    regularize: k % 2 == 1,
                 };
                 let _ = pt.li(&scene, &ray, &mut sampler, &mut RayStats::default());
             } else {
                 let bdpt = Bdpt {
                     max_depth: Some(4),
                     light_tracing: c.is_pinhole(),
+                    regularize: k % 2 == 1,
                 };
                 let mut stats = RayStats::default();
                 let _ = bdpt.li(&scene, &ray, &mut sampler, &mut stats);
