@@ -502,11 +502,8 @@ fn floor_under_disk(light: &str, pre: &str) -> f64 {
 /// [`floor_under_disk`] with `shape` after the disk's parameters, rendered
 /// with `options`.
 fn floor_under_disk_with(light: &str, pre: &str, shape: &str, options: &[&str]) -> f64 {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("disk.pbrt");
-    std::fs::write(
-        &p,
-        format!(
+    mean_luminance_of(
+        &format!(
             "LookAt 1.5 0.6 0  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [ 1 ]\n\
              Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\nWorldBegin\n\
              Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
@@ -515,8 +512,15 @@ fn floor_under_disk_with(light: &str, pre: &str, shape: &str, options: &[&str]) 
              AttributeBegin\nAreaLightSource \"diffuse\" {light}\n\
              Translate 0 1 0\nRotate 90 1 0 0\n{pre}Shape \"disk\" \"float radius\" [ 0.5 ] {shape}\nAttributeEnd\n"
         ),
+        options,
     )
-    .unwrap();
+}
+
+/// Renders the pbrt-v4 scene `text` with `options`; its mean luminance.
+fn mean_luminance_of(text: &str, options: &[&str]) -> f64 {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.pbrt");
+    std::fs::write(&p, text).unwrap();
     let img = render_to_image(&p, options);
     img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
 }
@@ -572,11 +576,8 @@ fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
 /// light hides the patch from it. `integrator` holds the Integrator
 /// directive's parameters, `options` the command line's.
 fn floor_under_mirror(integrator: &str, options: &[&str]) -> f64 {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("mirror.pbrt");
-    std::fs::write(
-        &p,
-        format!(
+    mean_luminance_of(
+        &format!(
             "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
              Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
              Integrator {integrator}\nWorldBegin\n\
@@ -588,10 +589,8 @@ fn floor_under_mirror(integrator: &str, options: &[&str]) -> f64 {
              Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" 0\n\
              Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
         ),
+        options,
     )
-    .unwrap();
-    let img = render_to_image(&p, options);
-    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
 }
 
 #[test]
