@@ -99,11 +99,18 @@ pub fn run(
     on_tile: super::Progress,
 ) -> Result<(u32, u32)> {
     let files = &settings.files;
+    // Hashing a large scene takes a noticeable part of a second: only a
+    // render that reads or writes a checkpoint needs it.
+    let fingerprint = if files.resume.is_some() || files.checkpoint.is_some() {
+        state_file::scene_fingerprint(&scene.desc, true)
+    } else {
+        0
+    };
     let header = Header {
         kind: "checkpoint",
         magic: MAGIC,
         version: VERSION,
-        fingerprint: state_file::scene_fingerprint(&scene.desc, true),
+        fingerprint,
         key: state.key(),
     };
     let total = state.total_passes();

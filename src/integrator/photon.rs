@@ -280,10 +280,12 @@ const CAUSTIC: &str = "caustic";
 pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<PhotonMaps> {
     super::check_scene(scene, super::IntegratorKind::Photon)?;
     let ps = map_settings(settings);
-    let header = file::header(scene, file::key(&ps, settings.seed));
+    // Hashing a large scene takes a noticeable part of a second: only a
+    // render that reads or writes photons needs the header.
+    let header = || file::header(scene, file::key(&ps, settings.seed));
     if let Some(path) = &settings.files.load_photons {
         let start = std::time::Instant::now();
-        let mut maps = file::load(path, &header)?;
+        let mut maps = file::load(path, &header())?;
         let mut stats = PhotonStats::default();
         let global = if ps.photons > 0 {
             let g = file::take(&mut maps, GLOBAL, path)?;
@@ -329,7 +331,7 @@ pub fn photon_maps(scene: &Scene, settings: &super::RenderSettings) -> Result<Ph
             })
         })
         .collect();
-        file::save(path, &header, &stored)?;
+        file::save(path, &header(), &stored)?;
         stats.save_seconds = start.elapsed().as_secs_f64();
         let global = file::take(&mut stored, GLOBAL, path).ok().map(|m| m.map);
         let caustic = file::take(&mut stored, CAUSTIC, path).ok().map(|m| m.map);

@@ -25,6 +25,7 @@ use crate::sampling::hash_unit;
 pub use crate::settings::SceneSettings;
 use crate::texture::{Footprint, TexCoord, Texture};
 use mesh::MeshReport;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// How to load a scene: the mesh path that replaces the scene's own (or
@@ -936,6 +937,8 @@ pub struct Scene {
     /// Triangles in BVH order: the static BVH's, then each mover's.
     triangles: Vec<Triangle>,
     info: Vec<TriInfo>,
+    /// Vertex normals and texture coordinates by triangle (BVH order);
+    /// each is empty when no triangle has any.
     vertex_normals: Vec<Option<[Vec3; 3]>>,
     vertex_uvs: Vec<Option<[Vec2; 3]>>,
     /// dp/du of each triangle (constant over it), computed once: per hit it
@@ -999,6 +1002,31 @@ impl Mover {
     }
 }
 
+/// A table of the triangles in `order` (indices into the triangles kept,
+/// `objects.len()` of the description's, then the lights'): `of` the
+/// description's triangle for the first, `lights` for the others.
+fn gathered<T: Copy + Send + Sync>(
+    order: &[u32],
+    objects: &[u32],
+    lights: &[T],
+    of: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
+    order
+        .par_iter()
+        .map(|&j| match objects.get(j as usize) {
+            Some(&i) => of(i as usize),
+            None => lights[j as usize - objects.len()],
+        })
+        .collect()
+}
+
+/// `items` in `order` (`order[k]` is the index of the k-th), consumed.
+fn permuted<T: Copy + Send + Sync>(items: Vec<T>, order: &[u32]) -> Vec<T> {
+    // Gathers at random from large tables: bound by memory latency, which
+    // threads hide together.
+    order.par_iter().map(|&i| items[i as usize]).collect()
+}
+
 impl Scene {
     pub fn build(desc: SceneDesc) -> Result<Scene> {
         let c = &desc.camera;
@@ -1021,10 +1049,22 @@ impl Scene {
             }
         }
         let nmat = desc.materials.len() as u32;
-        let mut tris = Vec::with_capacity(desc.triangles.len());
-        let mut info = Vec::with_capacity(desc.triangles.len());
-        let mut normals = Vec::with_capacity(desc.triangles.len());
-        let mut uvs = Vec::with_capacity(desc.triangles.len());
+        // Room for the triangle lights too: one more push past a full vector
+        // would double it, hundreds of megabytes on a large scene.
+        let capacity = desc.triangles.len()
+            + desc
+                .lights
+                .iter()
+                .filter(|l| matches!(l, Light::Triangle { .. }))
+                .count();
+        let mut tris = Vec::with_capacity(capacity);
+        // The description's index of each triangle kept; what the hits
+        // read of them is gathered in the BVH's order once it is built, so
+        // that it never exists twice. The lights' is made as they are.
+        let mut objects: Vec<u32> = Vec::with_capacity(desc.triangles.len());
+        let mut info = Vec::new();
+        let mut normals = Vec::new();
+        let mut uvs = Vec::new();
         let mut dropped = 0;
         let (alphas, cut) = cutout_indices(&desc)?;
         // Which run of moving triangles each description triangle is in.
@@ -1066,15 +1106,7 @@ impl Scene {
             }
             tris.push(tri);
             runs.push(run_of[i]);
-            info.push(TriInfo {
-                material: t.material,
-                object: i as u32,
-                normal: n.normalize(),
-                light: None,
-                alpha: cut.triangles.get(i).copied().unwrap_or(SOLID),
-            });
-            normals.push(shading_normals(t.normals));
-            uvs.push(texture_uvs(t.uvs));
+            objects.push(i as u32);
         }
         let mut lights = desc.lights.clone();
         let mut spheres: Vec<SphereObject> = desc
@@ -1263,10 +1295,45 @@ impl Scene {
         }
         let mover_bvh = BoxBvh::build(&movers.iter().map(|m| m.bounds).collect::<Vec<_>>());
         let bvh_build_seconds = start.elapsed().as_secs_f64();
-        let triangles = order.iter().map(|&i| tris[i as usize]).collect();
-        let info = order.iter().map(|&i| info[i as usize]).collect();
-        let vertex_normals = order.iter().map(|&i| normals[i as usize]).collect();
-        let vertex_uvs = order.iter().map(|&i| uvs[i as usize]).collect();
+        // Each table in BVH order, its first order freed before the next is
+        // made, so that a large scene holds one spare table at a time.
+        // The largest table first, while the others are not yet made.
+        let triangles: Vec<Triangle> = permuted(tris, &order);
+        let kept = objects.len();
+        let info = (order.as_slice(), triangles.as_slice())
+            .into_par_iter()
+            .map(|(&j, tri)| match objects.get(j as usize) {
+                Some(&i) => TriInfo {
+                    material: desc.triangles[i as usize].material,
+                    object: i,
+                    normal: tri.normal_raw().normalize(),
+                    light: None,
+                    alpha: cut.triangles.get(i as usize).copied().unwrap_or(SOLID),
+                },
+                None => info[j as usize - kept],
+            })
+            .collect();
+        // A table that would hold nothing (no triangle with vertex normals,
+        // or with texture coordinates) is left empty.
+        let any_normals = normals.iter().any(Option::is_some)
+            || objects
+                .par_iter()
+                .any(|&i| shading_normals(desc.triangles[i as usize].normals).is_some());
+        let vertex_normals = match any_normals {
+            true => gathered(&order, &objects, &normals, |i| {
+                shading_normals(desc.triangles[i].normals)
+            }),
+            false => Vec::new(),
+        };
+        let any_uvs = uvs.iter().any(Option::is_some)
+            || objects
+                .par_iter()
+                .any(|&i| texture_uvs(desc.triangles[i as usize].uvs).is_some());
+        let vertex_uvs = match any_uvs {
+            true => gathered(&order, &objects, &uvs, |i| texture_uvs(desc.triangles[i].uvs)),
+            false => Vec::new(),
+        };
+        drop(objects);
         for (i, c) in desc.curves.iter().enumerate() {
             if c.material >= nmat {
                 return Err(Error::Scene(format!(
@@ -1969,8 +2036,8 @@ impl Scene {
     #[inline(always)]
     fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
-        let ns = match &self.vertex_normals[idx] {
-            Some(n) => {
+        let ns = match self.vertex_normals.get(idx) {
+            Some(Some(n)) => {
                 let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
                 // Keep the interpolated normal on the geometric side.
                 if s == Vec3::ZERO {
@@ -1981,7 +2048,7 @@ impl Scene {
                     s
                 }
             }
-            None => inf.normal,
+            _ => inf.normal,
         };
         let uv = self.triangle_uv(idx, u, v);
         let dpdu = self.dpdus[idx];
@@ -2007,14 +2074,14 @@ impl Scene {
     /// Texture coordinates at barycentrics (u, v) of triangle `slot` (BVH
     /// order), as pbrt-v4's `Triangle` computes them.
     fn triangle_uv(&self, slot: usize, b1: f32, b2: f32) -> Vec2 {
-        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT_UV);
+        let uv = self.vertex_uvs.get(slot).copied().flatten().unwrap_or(DEFAULT_UV);
         let b0 = 1.0 - b1 - b2;
         uv[0] * b0 + uv[1] * b1 + uv[2] * b2
     }
 
     /// dp/du of triangle `slot`, as pbrt-v4's `Triangle` computes it.
     fn triangle_dpdu(&self, slot: usize) -> Vec3 {
-        let uv = self.vertex_uvs[slot].unwrap_or(DEFAULT_UV);
+        let uv = self.vertex_uvs.get(slot).copied().flatten().unwrap_or(DEFAULT_UV);
         let [p0, p1, p2] = self.triangles[slot].vertices();
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
         let (dp02, dp12) = (p0 - p2, p1 - p2);

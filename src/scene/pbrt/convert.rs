@@ -1717,6 +1717,18 @@ impl<'a> Conv<'a> {
 
     fn shapes(&mut self, desc: &mut SceneDesc) -> Result<()> {
         let scene = self.scene;
+        // Room for every mesh's triangles at once: grown by doubling, the
+        // list of a large scene would take up to twice its size and be
+        // copied as it grows.
+        let meshes: usize = scene
+            .shapes
+            .iter()
+            .map(|s| match &s.geometry {
+                Geometry::Mesh(m) => m.triangles.len(),
+                _ => 0,
+            })
+            .sum();
+        desc.triangles.reserve_exact(meshes);
         for shape in &scene.shapes {
             let p: &Params = &shape.params;
             if shape.geometry == Geometry::Other {
