@@ -2665,6 +2665,7 @@ fn convert_surface(
                     if let Some(cs) = colour_space(p, "reflectance") {
                         return Ok(Err(format!("rgb in colour space \"{cs}\" is not supported")));
                     }
+                    check_albedo(p, "reflectance", loc, approximated)?;
                     match reflectance_rgb(&v) {
                         Some(c) => c,
                         None => return Ok(Err("a reflectance given as this spectrum is not supported".into())),
@@ -2732,6 +2733,7 @@ fn convert_surface(
                 Ok(r) => r,
                 Err(why) => return Ok(Err(why)),
             };
+            check_albedo(p, "reflectance", loc, approximated)?;
             let reflectance = match spectrum_texture(scene, p, "reflectance", 0.5, loc)? {
                 Ok(r) => clamped(r),
                 Err(why) => return Ok(Err(why)),
@@ -2797,6 +2799,7 @@ fn convert_surface(
             let scale = p.get_float("scale", 1.0)?;
             let mut rt = Vec::new();
             for n in ["reflectance", "transmittance"] {
+                check_albedo(p, n, loc, approximated)?;
                 match spectrum_texture(scene, p, n, 0.25, loc)? {
                     Ok(Texture::Constant(c)) => rt.push(Texture::from((c * scale).clamp(Vec3::ZERO, Vec3::ONE))),
                     Ok(t) if scale == 1.0 => rt.push(clamped(t)),
@@ -3689,6 +3692,25 @@ fn coat_medium(
         max_depth: max_depth as u32,
         samples: samples as u32,
     })))
+}
+
+/// Notes in `approximated` an `rgb` albedo parameter with a component above
+/// 1, which pbrt-v4 refuses ("used as an albedo has > 1 component"); the
+/// caller clamps it to 1, what `--lenient` renders.
+fn check_albedo(p: &Params, name: &str, loc: &Loc, approximated: &mut Vec<(Loc, String)>) -> Result<()> {
+    if let Some(SpectrumValue::Rgb(c)) = p.get_spectrum(name)? {
+        if c.max_element() > 1.0 {
+            approximated.push((
+                place(p, name, loc).clone(),
+                format!(
+                    "\"rgb {name}\" [ {} {} {} ] has a component above 1, which pbrt-v4 refuses for an albedo \
+                     (--lenient clamps it to 1)",
+                    c.x, c.y, c.z
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn reflectance_rgb(v: &SpectrumValue) -> Option<Vec3> {

@@ -1493,6 +1493,45 @@ fn interface_and_none_materials_make_no_surface() {
 }
 
 #[test]
+fn an_albedo_above_one_is_refused_at_its_place_as_pbrt_refuses_it() {
+    use crate::material::Material;
+    // pbrt-v4 exits with "used as an albedo has > 1 component"; a material
+    // reached through a mix is checked too.
+    for (text, line) in [
+        (
+            "WorldBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0.2 0.5 1.5]\nShape \"sphere\"\n",
+            2,
+        ),
+        (
+            "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\
+             MakeNamedMaterial \"b\" \"string type\" \"coateddiffuse\"\n  \"rgb reflectance\" [0 0 9]\n\
+             Material \"mix\" \"string materials\" [\"a\" \"b\"]\nShape \"sphere\"\n",
+            4,
+        ),
+        (
+            "WorldBegin\nMaterial \"diffusetransmission\" \"rgb transmittance\" [1.01 0 0]\nShape \"sphere\"\n",
+            2,
+        ),
+    ] {
+        let e = converted(text, Files::default(), false).unwrap_err();
+        assert!(
+            e.contains(&format!("scene/main.pbrt:{line}:")) && e.contains("has a component above 1"),
+            "{e}"
+        );
+        // --lenient renders it clamped to 1.
+        let c = converted(text, Files::default(), true).unwrap();
+        assert!(c.warnings.iter().any(|w| w.contains("above 1")), "{:?}", c.warnings);
+    }
+    let text = "WorldBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0.2 0.5 1.5]\nShape \"sphere\"\n";
+    let c = converted(text, Files::default(), true).unwrap();
+    let m = c.desc.materials.last().unwrap().1.clone();
+    assert_eq!(m, Material::diffuse(0.2, 0.5, 1.0));
+    // 1 itself is an albedo pbrt-v4 takes.
+    let text = "WorldBegin\nMaterial \"diffuse\" \"rgb reflectance\" [1 1 1]\nShape \"sphere\"\n";
+    assert!(converted(text, Files::default(), false).is_ok());
+}
+
+#[test]
 fn bump_maps_wrap_their_material_even_in_a_mix() {
     use crate::material::Material;
     let text = "WorldBegin\nTexture \"b\" \"float\" \"constant\" \"float value\" 0.1\n\
