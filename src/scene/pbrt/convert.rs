@@ -211,6 +211,8 @@ pub fn convert(scene: &PbrtScene, path: &Path, lenient: bool) -> Result<Converte
         }
     }
     desc.settings = c.settings()?;
+    // Held until the conversion has taken what it needs of them.
+    let _images = decode_images(scene);
     c.lights(&mut desc)?;
     c.shapes(&mut desc)?;
     if let Some(name) = &scene.camera.medium {
@@ -2597,6 +2599,48 @@ fn float_or_texture(
             Err(why) => return Ok(Err(why)),
         },
     })))
+}
+
+/// Decodes the image of every `imagemap` texture in the scene, in parallel,
+/// into the image cache: the conversion then asks for them one at a time
+/// and finds them there. Read as the conversion reads them (the file found
+/// for `filename`, the `encoding` or pbrt-v4's default for the file), but
+/// without marking the parameters read; a file that cannot be read is left
+/// for the conversion to report at its place.
+pub(super) fn decode_images(scene: &PbrtScene) -> Vec<Arc<crate::texture::TexImage>> {
+    use crate::texture::Encoding;
+    use rayon::prelude::*;
+    let string = |p: &Params, name: &str| {
+        p.iter()
+            .find(|q| q.name == name && q.ty == super::ParamType::String)
+            .and_then(|q| match &q.values {
+                super::Values::Strings(v) => v.first().cloned(),
+                _ => None,
+            })
+    };
+    let mut wanted: Vec<(std::path::PathBuf, Encoding)> = Vec::new();
+    for t in scene.textures.iter().filter(|t| t.class == "imagemap") {
+        let p = &t.params;
+        let Some(file) = string(p, "filename") else { continue };
+        let at = place(p, "filename", &t.loc);
+        let Some(path) = scene.candidates(at, &file).into_iter().find(|c| c.is_file()) else {
+            continue;
+        };
+        let lower = file.to_ascii_lowercase();
+        let eight_bit = [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
+            .iter()
+            .any(|e| lower.ends_with(e));
+        let name = string(p, "encoding").unwrap_or_else(|| if eight_bit { "sRGB" } else { "linear" }.into());
+        if let Some(encoding) = Encoding::parse(&name) {
+            if !wanted.iter().any(|(q, e)| *q == path && *e == encoding) {
+                wanted.push((path, encoding));
+            }
+        }
+    }
+    wanted
+        .par_iter()
+        .filter_map(|(path, encoding)| crate::texture::load_image(path, *encoding).ok())
+        .collect()
 }
 
 /// A material's scattering, `depth` mixes deep.

@@ -1600,6 +1600,50 @@ fn a_normal_map_wraps_its_material_read_as_linear_rgb() {
 }
 
 #[test]
+fn images_decoded_ahead_are_the_ones_the_textures_use() {
+    use crate::material::Material;
+    use crate::texture::Texture;
+    let dir = tempfile::tempdir().unwrap();
+    for (name, texel) in [("a.png", [200u8, 100, 50]), ("b.png", [10, 20, 30])] {
+        ::image::save_buffer(dir.path().join(name), &texel, 1, 1, ::image::ColorType::Rgb8).unwrap();
+    }
+    let file = dir.path().join("main.pbrt");
+    // One file under two encodings is two images; the default encoding of
+    // a PNG is sRGB.
+    std::fs::write(
+        &file,
+        "WorldBegin\n\
+         Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\"\n\
+         Texture \"a2\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \"string encoding\" \"gamma 2.2\"\n\
+         Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"b.png\" \"string encoding\" \"linear\"\n\
+         Texture \"gone\" \"spectrum\" \"imagemap\" \"string filename\" \"missing.png\"\n\
+         MakeNamedMaterial \"ma\" \"string type\" \"diffuse\" \"texture reflectance\" \"a\"\n\
+         MakeNamedMaterial \"ma2\" \"string type\" \"diffuse\" \"texture reflectance\" \"a2\"\n\
+         MakeNamedMaterial \"mb\" \"string type\" \"diffuse\" \"texture reflectance\" \"b\"\n\
+         NamedMaterial \"ma\"\nShape \"sphere\"\nNamedMaterial \"ma2\"\nShape \"sphere\"\n\
+         NamedMaterial \"mb\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let scene = super::load(&file).unwrap();
+    let ahead = convert::decode_images(&scene);
+    // The missing file is left for the conversion (which does not meet it:
+    // no material uses it).
+    assert_eq!(ahead.len(), 3);
+    let c = convert::convert(&scene, &file, false).unwrap();
+    for name in ["ma", "ma2", "mb"] {
+        let m = &c.desc.materials.iter().find(|(n, _)| n == name).unwrap().1;
+        let Material::Diffuse {
+            reflectance: Texture::Image(t),
+        } = m
+        else {
+            panic!("{m:?}")
+        };
+        // The same decoded image: the conversion found it in the cache.
+        assert!(ahead.iter().any(|a| Arc::ptr_eq(a, &t.image)), "{name}");
+    }
+}
+
+#[test]
 fn settings_and_lights_that_cannot_render_are_refused_at_their_place() {
     for (text, what) in [
         ("Sampler \"halton\" \"integer pixelsamples\" -1\nWorldBegin\n", "scene/main.pbrt:1: Sampler: pixelsamples -1: must be at least 1"),
