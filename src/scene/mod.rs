@@ -1295,9 +1295,9 @@ impl Scene {
         }
         let mover_bvh = BoxBvh::build(&movers.iter().map(|m| m.bounds).collect::<Vec<_>>());
         let bvh_build_seconds = start.elapsed().as_secs_f64();
-        // Each table in BVH order, its first order freed before the next is
-        // made, so that a large scene holds one spare table at a time.
-        // The largest table first, while the others are not yet made.
+        // The triangles, the largest table, put in BVH order while the others
+        // are not yet made; those are gathered from the description in that
+        // order.
         let triangles: Vec<Triangle> = permuted(tris, &order);
         let kept = objects.len();
         let info = (order.as_slice(), triangles.as_slice())

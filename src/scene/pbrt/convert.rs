@@ -2601,6 +2601,19 @@ fn float_or_texture(
     })))
 }
 
+/// The `encoding` of an image texture that names none: pbrt-v4's sRGB for
+/// 8-bit formats (PNG and the like), linear otherwise.
+fn default_encoding(file: &str) -> &'static str {
+    let lower = file.to_ascii_lowercase();
+    match [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
+        .iter()
+        .any(|e| lower.ends_with(e))
+    {
+        true => "sRGB",
+        false => "linear",
+    }
+}
+
 /// Decodes the image of every `imagemap` texture in the scene, in parallel,
 /// into the image cache: the conversion then asks for them one at a time
 /// and finds them there. Read as the conversion reads them (the file found
@@ -2626,11 +2639,7 @@ pub(super) fn decode_images(scene: &PbrtScene) -> Vec<Arc<crate::texture::TexIma
         let Some(path) = scene.candidates(at, &file).into_iter().find(|c| c.is_file()) else {
             continue;
         };
-        let lower = file.to_ascii_lowercase();
-        let eight_bit = [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
-            .iter()
-            .any(|e| lower.ends_with(e));
-        let name = string(p, "encoding").unwrap_or_else(|| if eight_bit { "sRGB" } else { "linear" }.into());
+        let name = string(p, "encoding").unwrap_or_else(|| default_encoding(&file).into());
         if let Some(encoding) = Encoding::parse(&name) {
             if !wanted.iter().any(|(q, e)| *q == path && *e == encoding) {
                 wanted.push((path, encoding));
@@ -3372,12 +3381,7 @@ fn texture(
                     format!("imagemap \"{name}\": unknown wrap \"{wrap_name}\""),
                 ));
             };
-            // pbrt-v4: sRGB for 8-bit (PNG and the like), linear otherwise.
-            let lower = file.to_ascii_lowercase();
-            let eight_bit = [".png", ".jpg", ".jpeg", ".tga", ".bmp"]
-                .iter()
-                .any(|e| lower.ends_with(e));
-            let enc_name = p.get_string_or("encoding", if eight_bit { "sRGB" } else { "linear" })?;
+            let enc_name = p.get_string_or("encoding", default_encoding(&file))?;
             let Some(encoding) = Encoding::parse(&enc_name) else {
                 return Err(located(
                     &t.loc,
