@@ -366,6 +366,7 @@ pub fn prepare_settings(args: &RenderArgs) -> Result<(LoadedScene, RenderSetting
     let mut settings = raytracer::settings::resolve(layers, state_files(&args.files)?)?;
     settings.crop = crop;
     loaded.desc.texture_spp = settings.samples_per_pixel();
+    loaded.desc.light_sampler = settings.light_sampler;
     match args.write_every {
         Some(_) if settings.integrator != IntegratorKind::Sppm => bail!("--write-every: only for integrator sppm"),
         Some(0) => bail!("--write-every 0: must be at least 1"),

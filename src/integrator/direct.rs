@@ -10,7 +10,7 @@
 
 use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
-use crate::light::LightSample;
+use crate::light::{LightContext, LightSample, LightSampleU, LightSamplerKind};
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{hammersley_shifted, Sampler};
 use crate::scene::{Hit, Scene};
@@ -74,7 +74,7 @@ pub fn walk_camera_path(
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     // How the last direction was chosen: `None` when specular (or the camera's).
-    let mut from: Option<(Vec3, f32)> = None;
+    let mut from: Option<(LightContext, f32)> = None;
     // The ray's differentials, while it has any: the camera's, carried
     // through specular bounces.
     let mut diffs = None;
@@ -130,7 +130,7 @@ pub fn walk_camera_path(
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             break;
         }
-        from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        from = (!bs.is_specular()).then_some((LightContext::surface(hit.p, bsdf.frame.z), bs.pdf));
         diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
             scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
         });
@@ -150,14 +150,17 @@ pub fn sample_bsdf(bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler) -> Option<BsdfS
 /// Radiance from the environment along a ray that left the scene, weighted
 /// against light sampling when the ray was BSDF-sampled at `from` (the vertex
 /// and the sampling density).
-pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(Vec3, f32)>) -> Vec3 {
+pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(LightContext, f32)>) -> Vec3 {
     let mut l = Vec3::ZERO;
     for &i in scene.infinite_lights() {
         let light = &scene.lights[i as usize];
         let le = light.le_escaped(ray.o, ray.d);
         let w = match from {
             None => 1.0,
-            Some((p, pdf)) => power_heuristic(pdf, scene.light_pmf(i as usize) * light.pdf_li_escaped(p, ray.d)),
+            Some((ctx, pdf)) => power_heuristic(
+                pdf,
+                scene.light_pmf_at(&ctx, i as usize) * light.pdf_li_escaped(ctx.p, ray.d),
+            ),
         };
         l += le * w;
     }
@@ -165,18 +168,41 @@ pub fn escaped_radiance(scene: &Scene, ray: &Ray, from: Option<(Vec3, f32)>) -> 
 }
 
 /// Radiance of light `li` where `ray` hit it, weighted as `escaped_radiance`.
-pub fn emitted_radiance(scene: &Scene, li: usize, ray: &Ray, hit: &Hit, from: Option<(Vec3, f32)>) -> Vec3 {
+pub fn emitted_radiance(scene: &Scene, li: usize, ray: &Ray, hit: &Hit, from: Option<(LightContext, f32)>) -> Vec3 {
     let light = &scene.lights[li];
     let le = light.le(hit.p, -ray.d, hit.uv);
     match from {
         None => le,
-        Some((p, pdf)) => le * power_heuristic(pdf, scene.light_pmf(li) * light.pdf_li_hit(p, ray.d, hit.p)),
+        Some((ctx, pdf)) => {
+            le * power_heuristic(
+                pdf,
+                scene.light_pmf_at(&ctx, li) * light.pdf_li_hit(ctx.p, ray.d, hit.p),
+            )
+        }
+    }
+}
+
+/// The numbers of a light sample at a vertex: one 2D sample when the
+/// choice ignores the vertex (its first number chooses the light and is
+/// reused for the point), else a number for the choice and a 2D sample for
+/// the point (`LightSampleU`).
+#[inline(always)]
+pub fn light_sample_u(scene: &Scene, sampler: &mut Sampler) -> LightSampleU {
+    if scene.light_sampler() == LightSamplerKind::Bvh {
+        let choice = sampler.next_f32();
+        LightSampleU {
+            choice,
+            point: sampler.next_2d(),
+        }
+    } else {
+        let point = sampler.next_2d();
+        LightSampleU { choice: point.x, point }
     }
 }
 
 /// Direct light reflected towards `wo` at a vertex from one light chosen by
-/// power and one sample on it, weighted against BSDF sampling by the power
-/// heuristic when `mis` (else weight 1).
+/// the scene's light sampler and one sample on it, weighted against BSDF
+/// sampling by the power heuristic when `mis` (else weight 1).
 pub fn sample_direct(
     scene: &Scene,
     hit: &Hit,
@@ -186,25 +212,24 @@ pub fn sample_direct(
     sampler: &mut Sampler,
     stats: &mut RayStats,
 ) -> Vec3 {
-    let u = sampler.next_2d();
+    let u = light_sample_u(scene, sampler);
     sample_direct_with(scene, hit, wo, bsdf, mis, u, stats)
 }
 
-/// [`sample_direct`] with its sample `u` already drawn (the light's choice in
-/// `u.x`, reused for the point on it).
+/// [`sample_direct`] with its numbers `u` already drawn.
 pub fn sample_direct_with(
     scene: &Scene,
     hit: &Hit,
     wo: Vec3,
     bsdf: &Bsdf,
     mis: bool,
-    u: Vec2,
+    u: LightSampleU,
     stats: &mut RayStats,
 ) -> Vec3 {
-    let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
+    let ctx = LightContext::surface(hit.p, bsdf.frame.z);
+    let Some((li, pmf, u)) = scene.choose_light(&ctx, u) else {
         return Vec3::ZERO;
     };
-    let u = Vec2::new(ux, u.y);
     let Some(ls) = light_sample_towards(scene, hit, wo, bsdf, li, u) else {
         return Vec3::ZERO;
     };

@@ -2,8 +2,9 @@
 //! measured against.
 //!
 //! pbrt-v4's `PathIntegrator` (13.4). At every vertex whose BSDF has a
-//! diffuse or glossy lobe, next-event estimation: one light chosen in
-//! proportion to its power, one point on it, one shadow ray. Then the BSDF is
+//! diffuse or glossy lobe, next-event estimation: one light chosen by the
+//! scene's light sampler (by power unless asked otherwise; pbrt-v4 scenes
+//! by the light tree, `light::LightTree`), one point on it, one shadow ray. Then the BSDF is
 //! sampled for the next direction and the throughput takes f |cos| / pdf. The
 //! light a path finds at such a vertex is sampled twice, by the shadow ray and
 //! by the BSDF-sampled ray when it hits a light (or leaves the scene towards
@@ -37,9 +38,10 @@
 
 use super::bdpt::{trace_light_pass, Bdpt};
 use super::checkpoint::{self, Buffer};
-use super::direct::{emitted_radiance, escaped_radiance, sample_bsdf, sample_direct_with};
+use super::direct::{emitted_radiance, escaped_radiance, light_sample_u, sample_bsdf, sample_direct_with};
 use super::{accumulate_tiles, merge_sums, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::film::{Film, PixelRect, PixelSum};
+use crate::light::LightContext;
 use crate::math::{offset_origin, Ray, Vec3};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -83,7 +85,7 @@ impl RadianceEstimator for PathTracer {
         let mut eta_scale = 1.0f32;
         // Where the last non-specular bounce left from and its density; `None`
         // after a specular bounce or for the camera ray (no light sample competed).
-        let mut from: Option<(Vec3, f32)> = None;
+        let mut from: Option<(LightContext, f32)> = None;
         // The ray's differentials, while it has any: the camera's, carried
         // through specular bounces (texture footprints).
         let mut diffs = None;
@@ -91,7 +93,7 @@ impl RadianceEstimator for PathTracer {
         // starts there, as in pbrt-v4).
         let mut rough_before = false;
         // Emission found by a BSDF-sampled ray: MIS-weighted, or all or nothing.
-        let weigh = |from: Option<(Vec3, f32)>| match (from, self.light_sampling) {
+        let weigh = |from: Option<(LightContext, f32)>| match (from, self.light_sampling) {
             (None, _) | (_, LightSampling::Mis) => (from, 1.0),
             (Some(_), LightSampling::Bsdf) => (None, 1.0),
             (Some(_), LightSampling::Light) => (None, 0.0),
@@ -137,7 +139,7 @@ impl RadianceEstimator for PathTracer {
             // the processor works through the light sample, which does not
             // depend on it, instead of holding up the next ray.
             let nee = flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf;
-            let u_light = nee.then(|| sampler.next_2d());
+            let u_light = nee.then(|| light_sample_u(scene, sampler));
             let bs = sample_bsdf(&bsdf, wo, sampler);
             if let Some(u) = u_light {
                 let mis = self.light_sampling == LightSampling::Mis;
@@ -156,7 +158,7 @@ impl RadianceEstimator for PathTracer {
             if bs.is_transmission() {
                 eta_scale *= bs.eta * bs.eta;
             }
-            from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+            from = (!bs.is_specular()).then_some((LightContext::surface(hit.p, bsdf.frame.z), bs.pdf));
             rough_before |= !bs.is_specular();
             diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
                 scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)

@@ -16,12 +16,15 @@
 //! in the path tracer. Russian roulette as there. Light a medium emits is
 //! gathered along each segment as `Medium::sample_distance_emitting` tracks it.
 
-use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, sample_bsdf, scatters_towards};
+use super::direct::{
+    emitted_radiance, escaped_radiance, light_sample_u, power_heuristic, sample_bsdf, scatters_towards,
+};
 use super::path::{PathTracer, ROULETTE_DEPTH};
 use super::{LightSampling, RayStats};
 use crate::bsdf::{Bsdf, Bxdf, NormalizedFresnelBxdf, TransportMode};
 use crate::bssrdf::Bssrdf;
-use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::light::{LightContext, LightSampleU};
+use crate::math::{offset_origin, Ray, Vec3};
 use crate::medium::{normalised, path_weight, MediumEvent};
 use crate::sampling::{Rng, Sampler};
 use crate::scene::{Hit, Scene, MAX_CROSSINGS};
@@ -54,7 +57,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     let mut medium = scene.camera_medium;
     let mut depth = 0;
     let mut eta_scale = 1.0f32;
-    let mut from: Option<(Vec3, f32)> = None;
+    let mut from: Option<(LightContext, f32)> = None;
     let mut crossings = 0;
     // Whether `ray` is still the camera's (passing through media boundaries
     // keeps it), and the differentials it carries: the camera's at its
@@ -64,7 +67,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
     // Whether the path has scattered other than specularly (regularization
     // starts there, as in pbrt-v4).
     let mut rough_before = false;
-    let weigh = |from: Option<(Vec3, f32)>| match (from, pt.light_sampling) {
+    let weigh = |from: Option<(LightContext, f32)>| match (from, pt.light_sampling) {
         (None, _) | (_, LightSampling::Mis) => (from, 1.0),
         (Some(_), LightSampling::Bsdf) => (None, 1.0),
         (Some(_), LightSampling::Light) => (None, 0.0),
@@ -108,7 +111,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                     }
                     // The phase function is sampled exactly: f / pdf = 1.
                     let (wi, pdf) = med.sample_phase(ray.d, sampler.next_2d());
-                    from = Some((p, pdf));
+                    from = Some((LightContext::medium(p), pdf));
                     rough_before = true;
                     if !roulette(&mut beta, weight(Vec3::ONE, ratio).x * eta_scale, depth, sampler) {
                         break;
@@ -170,7 +173,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         // BSDF sampled before the shadow ray is traced, so that the two
         // chains of arithmetic overlap.
         let nee = flags.is_non_specular() && pt.light_sampling != LightSampling::Bsdf;
-        let u_light = nee.then(|| sampler.next_2d());
+        let u_light = nee.then(|| light_sample_u(scene, sampler));
         let bs = sample_bsdf(&bsdf, wo, sampler);
         if let Some(u) = u_light {
             let v = Vertex::Surface {
@@ -195,7 +198,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
         if bs.is_transmission() {
             eta_scale *= bs.eta * bs.eta;
         }
-        from = (!bs.is_specular()).then_some((hit.p, bs.pdf));
+        from = (!bs.is_specular()).then_some((LightContext::surface(hit.p, bsdf.frame.z), bs.pdf));
         rough_before |= !bs.is_specular();
         diffs = diffs.filter(|_| bs.is_specular()).and_then(|d| {
             scene.specular_differentials(&hit, &d, (wo, bs.wi), bs.is_transmission(), bs.eta, bsdf.frame.z)
@@ -241,7 +244,7 @@ pub fn li(pt: &PathTracer, scene: &Scene, camera_ray: &Ray, sampler: &mut Sample
                 if !weight(beta, ratio).is_finite() || beta.max_element() <= 0.0 {
                     break;
                 }
-                from = Some((exit.p, bs.pdf));
+                from = Some((LightContext::surface(exit.p, exit_bsdf.frame.z), bs.pdf));
                 diffs = None;
                 (from_hit, wi) = (exit, bs.wi);
             }
@@ -330,25 +333,26 @@ fn roulette(beta: &mut Vec3, scale: f32, depth: u32, sampler: &mut Sampler) -> b
     true
 }
 
-/// Direct light scattered at a vertex from one light chosen by power and
-/// one sample on it, its shadow ray through the media on the way, weighted
-/// against sampling the BSDF or phase function when `mis`.
+/// Direct light scattered at a vertex from one light chosen by the scene's
+/// light sampler and one sample on it, its shadow ray through the media on
+/// the way, weighted against sampling the BSDF or phase function when `mis`.
 fn sample_direct(scene: &Scene, v: &Vertex, mis: bool, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
-    let u = sampler.next_2d();
+    let u = light_sample_u(scene, sampler);
     sample_direct_with(scene, v, mis, u, stats)
 }
 
 /// [`sample_direct`] with its sample `u` already drawn.
-fn sample_direct_with(scene: &Scene, v: &Vertex, mis: bool, u: Vec2, stats: &mut RayStats) -> Vec3 {
-    let Some((li, pmf, ux)) = scene.pick_light(u.x) else {
+fn sample_direct_with(scene: &Scene, v: &Vertex, mis: bool, u: LightSampleU, stats: &mut RayStats) -> Vec3 {
+    let ctx = match v {
+        Vertex::Surface { hit, bsdf, .. } => LightContext::surface(hit.p, bsdf.frame.z),
+        Vertex::Medium { p, .. } => LightContext::medium(*p),
+    };
+    let Some((li, pmf, u)) = scene.choose_light(&ctx, u) else {
         return Vec3::ZERO;
     };
     let light = &scene.lights[li];
-    let p = match v {
-        Vertex::Surface { hit, .. } => hit.p,
-        Vertex::Medium { p, .. } => *p,
-    };
-    let Some(ls) = light.sample_li(p, Vec2::new(ux, u.y)) else {
+    let p = ctx.p;
+    let Some(ls) = light.sample_li(p, u) else {
         return Vec3::ZERO;
     };
     let (f, pdf, origin, start) = match v {

@@ -22,11 +22,13 @@ mod emission_image;
 mod envmap;
 mod portal;
 mod projection;
+mod sampler;
 
 pub use emission_image::{EmissionImage, ImageOnSphere, ImageOnTriangle};
 pub use envmap::{EnvMap, EnvMapping};
 pub use portal::Portal;
 pub use projection::Projector;
+pub use sampler::{LightBounds, LightContext, LightSampleU, LightSamplerKind, LightTree};
 
 use crate::geometry::{Disk, Sphere};
 use crate::math::{orthonormal_basis, to_world, Ray, Vec2, Vec3};

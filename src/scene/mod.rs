@@ -16,7 +16,7 @@ use crate::geometry::curve::CurveHit;
 pub use crate::geometry::motion;
 use crate::geometry::triangle::TriHit;
 use crate::geometry::{BoxBvh, Bvh, Curve, Disk, Sphere, Triangle};
-use crate::light::Light;
+use crate::light::{Light, LightContext, LightSampleU, LightSamplerKind, LightTree};
 use crate::material::Material;
 use crate::material::{ShadingGeometry, SurfacePoint};
 use crate::math::{Ray, Vec2, Vec3};
@@ -415,6 +415,8 @@ pub struct SceneDesc {
     pub shutter: [f32; 2],
     /// The camera's motion, from where `camera` places it.
     pub camera_motion: Option<motion::Motion>,
+    /// How shadow rays choose their light; the render's settings set it.
+    pub light_sampler: LightSamplerKind,
 }
 
 /// A moving run of triangles at its motion's start, from one time of the
@@ -497,6 +499,7 @@ impl SceneDesc {
             moving_shapes: vec![],
             shutter: [0.0, 1.0],
             camera_motion: None,
+            light_sampler: LightSamplerKind::Power,
         }
     }
 
@@ -928,6 +931,8 @@ pub struct Scene {
     infinite_lights: Vec<u32>,
     /// Whether a ray can meet each light, by light index (`light_is_met`).
     lights_met: Vec<bool>,
+    /// The light tree, when shadow rays choose their light by it.
+    light_tree: Option<LightTree>,
     pub bvh: Bvh,
     /// Runs of triangles that move while the shutter is open (empty for a
     /// still scene), each with a BVH of its own.
@@ -1362,6 +1367,7 @@ impl Scene {
             light_pmfs: vec![],
             infinite_lights,
             lights_met,
+            light_tree: None,
             bvh,
             movers,
             mover_bvh,
@@ -1411,7 +1417,8 @@ impl Scene {
             }
         };
         scene.lights.iter_mut().for_each(|l| l.set_scene_bounds(world));
-        // Their power depends on it: lights are chosen by power only now.
+        // Their power depends on it: lights are chosen (by power, or through
+        // the light tree, which bounds their power too) only now.
         scene.light_cdf = scene
             .lights
             .iter()
@@ -1420,7 +1427,13 @@ impl Scene {
                 Some(*acc)
             })
             .collect();
+        if scene.desc.light_sampler == LightSamplerKind::Uniform {
+            scene.light_cdf = (1..=scene.lights.len()).map(|k| k as f32).collect();
+        }
         scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
+        if scene.desc.light_sampler == LightSamplerKind::Bvh {
+            scene.light_tree = Some(LightTree::build(&scene.lights));
+        }
         scene.dpdus = (0..scene.triangles.len()).map(|i| scene.triangle_dpdu(i)).collect();
         Ok(scene)
     }
@@ -1467,6 +1480,38 @@ impl Scene {
     /// The probability that `pick_light` chooses light `i`.
     pub fn light_pmf(&self, i: usize) -> f32 {
         self.light_pmfs[i]
+    }
+
+    /// How shadow rays choose their light.
+    pub fn light_sampler(&self) -> LightSamplerKind {
+        self.desc.light_sampler
+    }
+
+    /// Chooses the light of a shadow ray from `ctx` with `u`: its index, the
+    /// probability of the choice, and the 2D sample for the point on it.
+    /// By power or uniformly, as `pick_light` (`u.point.x` replaced by the
+    /// choice's number rescaled); by the light tree, with `u.choice` alone.
+    #[inline]
+    pub fn choose_light(&self, ctx: &LightContext, u: LightSampleU) -> Option<(usize, f32, Vec2)> {
+        match &self.light_tree {
+            Some(tree) => {
+                let (i, pmf) = tree.pick(ctx, u.choice)?;
+                Some((i, pmf, u.point))
+            }
+            None => {
+                let (i, pmf, rest) = self.pick_light(u.choice)?;
+                Some((i, pmf, Vec2::new(rest, u.point.y)))
+            }
+        }
+    }
+
+    /// The probability that `choose_light` chooses light `i` from `ctx`.
+    #[inline]
+    pub fn light_pmf_at(&self, ctx: &LightContext, i: usize) -> f32 {
+        match &self.light_tree {
+            Some(tree) => tree.pmf(ctx, i),
+            None => self.light_pmfs[i],
+        }
     }
 
     fn pmf_from_cdf(&self, i: usize) -> f32 {
@@ -2251,6 +2296,9 @@ impl Scene {
         // The count is unchanged, so this cannot fail.
         if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.desc.curves, &self.shape_motions) {
             self.shapes = shapes;
+        }
+        if self.light_tree.is_some() {
+            self.light_tree = Some(LightTree::build(&self.lights));
         }
     }
 

@@ -246,6 +246,8 @@ pub struct RenderSettings {
     pub max_depth: Option<u32>,
     /// Path tracer: how direct light is sampled.
     pub light_sampling: LightSampling,
+    /// How shadow rays choose their light (`SceneDesc::light_sampler`).
+    pub light_sampler: crate::light::LightSamplerKind,
     /// Path tracers: microfacet surfaces made glossy after a path's first
     /// non-specular bounce (pbrt-v4's `regularize`).
     pub regularize: bool,
@@ -331,6 +333,10 @@ impl RenderSettings {
         }
         if let Some(m) = self.max_component {
             v.push(("max_component", Value::Real(m)));
+        }
+        // Absent for power, so older checkpoints still match.
+        if self.light_sampler != crate::light::LightSamplerKind::Power {
+            v.push(("light_sampler", Value::Name(self.light_sampler.name())));
         }
         // Absent when off, so older checkpoints still match.
         if self.regularize {
@@ -710,6 +716,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         spp: int("spp").unwrap_or_default() as u32,
         max_depth: int("max_depth").map(|d| d as u32),
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
+        light_sampler: crate::light::LightSamplerKind::from_name(choice("light_sampler")).unwrap_or_default(),
         regularize: flag("regularize"),
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         max_component: real("max_component"),

@@ -76,6 +76,18 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &["path"],
     },
     Spec {
+        name: "light_sampler",
+        kind: Kind::Choice(&crate::light::LightSamplerKind::NAMES),
+        default: DefaultValue::Name("power"),
+        doc: "How a shadow ray that samples one light chooses it (path tracers; glossy surfaces in the others; bdpt's \
+              light subpaths start by power unless uniform): power (in proportion to each light's power), uniform \
+              (every light alike), bvh (a tree over the lights' bounds of emission, in proportion to what each may \
+              bring to the point lit: pbrt-v4's default, for scenes of many lights); a pbrt-v4 scene takes its \
+              Integrator's \"lightsampler\", bvh without one",
+        in_scene_file: true,
+        only_for: &[],
+    },
+    Spec {
         name: "regularize",
         kind: Kind::Flag,
         default: DefaultValue::Bool(false),

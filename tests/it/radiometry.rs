@@ -50,6 +50,7 @@ fn plane_scene(light: Light) -> SceneDesc {
         moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
+        light_sampler: Default::default(),
     };
     let m = d.material("plane", Material::diffuse(ALBEDO, ALBEDO, ALBEDO));
     let s = 10.0;

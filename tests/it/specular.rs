@@ -64,6 +64,7 @@ fn mirror_at_45_degrees_shows_the_wall_beside_it() {
         moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
+        light_sampler: Default::default(),
     };
     let mirror = d.material("mirror", Material::mirror(Vec3::ONE));
     let wall = d.material("wall", Material::diffuse(albedo.x, albedo.y, albedo.z));
@@ -140,6 +141,7 @@ fn path_tracer_sees_a_light_in_a_mirror() {
         moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
+        light_sampler: Default::default(),
     };
     let reflectance = Vec3::new(0.5, 0.8, 1.0);
     let mirror = d.material("mirror", Material::mirror(reflectance));

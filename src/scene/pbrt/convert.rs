@@ -46,7 +46,7 @@ use crate::error::{Error, Result};
 use crate::geometry::curve::bezier_part;
 use crate::geometry::motion::Motion;
 use crate::geometry::{Curve, Sphere};
-use crate::light::{EmissionImage, Emits, ImageOnSphere, ImageOnTriangle, Light};
+use crate::light::{EmissionImage, Emits, ImageOnSphere, ImageOnTriangle, Light, LightSamplerKind};
 use crate::material::{CoatMedium, ConductorFresnel, Material, MaterialRoughness, Roughness};
 use crate::math::{Vec2, Vec3};
 use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, MediumInterface, TemperatureGrid};
@@ -1156,12 +1156,27 @@ impl<'a> Conv<'a> {
                 set(self, Some(&iloc), "integrator", Value::Name("path"));
             }
         }
-        for (n, t) in [("lightsampler", super::ParamType::String)] {
-            if ip.has(n) {
-                self.warn(place(ip, n, &iloc), format!("Integrator: \"{n}\" is ignored"));
-                ip.mark_used(n, t);
+        // pbrt-v4's light samplers; its default is the tree.
+        let at = ip.loc_of("lightsampler").or(i.loc.as_ref()).cloned();
+        let chosen = match ip.get_string_or("lightsampler", "bvh")?.as_str() {
+            "exhaustive" => {
+                self.warn(
+                    place(ip, "lightsampler", &iloc),
+                    "Integrator: lightsampler \"exhaustive\" is rendered with \"bvh\"",
+                );
+                "bvh"
             }
-        }
+            name => match LightSamplerKind::from_name(name) {
+                Some(kind) => kind.name(),
+                None => {
+                    return Err(located(
+                        place(ip, "lightsampler", &iloc),
+                        format!("Integrator: unknown lightsampler \"{name}\" (uniform, power, bvh, exhaustive)"),
+                    ))
+                }
+            },
+        };
+        set(self, at.as_ref(), "light_sampler", Value::Name(chosen));
         self.read.push(ip);
         for o in scene.options.iter().filter(|o| o.name != "seed") {
             self.warn(&o.loc, format!("Option \"{}\" is ignored", o.name));
@@ -5039,6 +5054,41 @@ mod tests {
             "{e}"
         );
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn the_light_sampler_is_the_files_and_the_tree_without_one() {
+        let d = ok("WorldBegin\n").desc.settings;
+        assert_eq!(d.preset.get("light_sampler").map(|v| v.0), Some(Value::Name("bvh")));
+        for (name, ours) in [("power", "power"), ("uniform", "uniform"), ("bvh", "bvh")] {
+            let c = ok(&format!(
+                "Integrator \"path\" \"string lightsampler\" \"{name}\"\nWorldBegin\n"
+            ));
+            let s = &c.desc.settings.scene_file;
+            assert_eq!(s.get("light_sampler").map(|v| v.0), Some(Value::Name(ours)), "{name}");
+            assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+        }
+        // pbrt-v4's exhaustive sampler weighs every light as the tree's
+        // leaves are weighed; the tree stands in for it, with a word.
+        let c = ok("Integrator \"path\" \"string lightsampler\" \"exhaustive\"\nWorldBegin\n");
+        assert_eq!(
+            c.desc.settings.scene_file.get("light_sampler").map(|v| v.0),
+            Some(Value::Name("bvh"))
+        );
+        assert!(c
+            .warnings
+            .iter()
+            .any(|w| w.contains("main.pbrt:1") && w.contains("exhaustive")));
+        let e = convert_text(
+            "Integrator \"path\"\n  \"string lightsampler\" \"nearest\"\nWorldBegin\n",
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("main.pbrt:2") && e.contains("unknown lightsampler \"nearest\""),
+            "{e}"
+        );
     }
 
     #[test]
