@@ -99,6 +99,9 @@ pub struct LightBounds {
     two_sided: bool,
 }
 
+/// The largest importance: four of them still sum to a finite number.
+const MAX_IMPORTANCE: f32 = 1e30;
+
 /// cos(max(0, a - b)) from the sines and cosines of a and b in [0, pi].
 #[inline(always)]
 fn cos_sub_clamped(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
@@ -222,8 +225,7 @@ impl LightBounds {
         let r2 = 0.25 * (self.max - self.min).length_squared();
         let d2 = dc2.max(r2);
         if dc2 <= r2 {
-            let i = self.phi / d2;
-            return if i.is_finite() { i } else { f32::MAX };
+            return (self.phi / d2).min(MAX_IMPORTANCE);
         }
         let wi = to_p / dc2.sqrt();
         let sin2_u = r2 / dc2;
@@ -250,10 +252,10 @@ impl LightBounds {
             let sin_i = sin_from_cos(cos_i);
             importance *= cos_sub_clamped(sin_i, cos_i, sin_u, cos_u).max(0.0);
         }
-        if importance.is_finite() {
-            importance.max(0.0)
+        if importance.is_nan() {
+            0.0
         } else {
-            f32::MAX
+            importance.clamp(0.0, MAX_IMPORTANCE)
         }
     }
 
@@ -422,7 +424,7 @@ impl Node {
         }
         let i = Vec4::select(inside, self.phi / d2, outside);
         // Overflow counts as the most; no power (an empty lane) as none.
-        let i = Vec4::select(i.cmpeq(Vec4::INFINITY), Vec4::splat(f32::MAX), i);
+        let i = i.min(Vec4::splat(MAX_IMPORTANCE));
         Vec4::select(self.phi.cmpgt(zero) & i.cmpgt(zero), i, zero)
     }
 
@@ -430,9 +432,9 @@ impl Node {
     /// can light it.
     #[inline]
     fn probabilities(&self, ctx: &LightContext) -> Option<[f32; 4]> {
-        let i = self.importance(ctx).to_array().map(f64::from);
-        let sum = i[0] + i[1] + i[2] + i[3];
-        (sum > 0.0).then(|| i.map(|x| (x / sum) as f32))
+        let i = self.importance(ctx);
+        let sum = i.element_sum();
+        (sum > 0.0).then(|| (i / sum).to_array())
     }
 }
 
