@@ -605,11 +605,6 @@ impl LightTree {
         n / 2
     }
 
-    /// Whether no light can be chosen.
-    pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty() && self.infinite.is_empty()
-    }
-
     /// The probability of choosing an infinite light (each as likely as
     /// the tree).
     fn p_infinite(&self) -> f32 {
@@ -680,11 +675,6 @@ impl LightTree {
             }
             _ => 0.0,
         }
-    }
-
-    /// Nodes of four lanes, for statistics and the tests.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
     }
 }
 
