@@ -1427,9 +1427,6 @@ impl Scene {
                 Some(*acc)
             })
             .collect();
-        if scene.desc.light_sampler == LightSamplerKind::Uniform {
-            scene.light_cdf = (1..=scene.lights.len()).map(|k| k as f32).collect();
-        }
         scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
         if scene.desc.light_sampler == LightSamplerKind::Bvh {
             scene.light_tree = Some(LightTree::build(&scene.lights));
@@ -1491,26 +1488,34 @@ impl Scene {
     /// probability of the choice, and the 2D sample for the point on it.
     /// By power or uniformly, as `pick_light` (`u.point.x` replaced by the
     /// choice's number rescaled); by the light tree, with `u.choice` alone.
+    /// `pick_light` and `light_pmf` stay by power whatever the sampler, for
+    /// bdpt's light subpaths, as pbrt-v4's BDPT chooses.
     #[inline]
     pub fn choose_light(&self, ctx: &LightContext, u: LightSampleU) -> Option<(usize, f32, Vec2)> {
-        match &self.light_tree {
-            Some(tree) => {
-                let (i, pmf) = tree.pick(ctx, u.choice)?;
-                Some((i, pmf, u.point))
-            }
-            None => {
-                let (i, pmf, rest) = self.pick_light(u.choice)?;
-                Some((i, pmf, Vec2::new(rest, u.point.y)))
-            }
+        if let Some(tree) = &self.light_tree {
+            let (i, pmf) = tree.pick(ctx, u.choice)?;
+            return Some((i, pmf, u.point));
         }
+        let (i, pmf, rest) = match self.desc.light_sampler {
+            LightSamplerKind::Uniform if !self.lights.is_empty() => {
+                let n = self.lights.len();
+                let x = u.choice * n as f32;
+                let i = (x as usize).min(n - 1);
+                let rest = (x - i as f32).clamp(0.0, crate::sampling::ONE_MINUS_EPS);
+                (i, 1.0 / n as f32, rest)
+            }
+            _ => self.pick_light(u.choice)?,
+        };
+        Some((i, pmf, Vec2::new(rest, u.point.y)))
     }
 
     /// The probability that `choose_light` chooses light `i` from `ctx`.
     #[inline]
     pub fn light_pmf_at(&self, ctx: &LightContext, i: usize) -> f32 {
-        match &self.light_tree {
-            Some(tree) => tree.pmf(ctx, i),
-            None => self.light_pmfs[i],
+        match (&self.light_tree, self.desc.light_sampler) {
+            (Some(tree), _) => tree.pmf(ctx, i),
+            (None, LightSamplerKind::Uniform) => 1.0 / self.lights.len() as f32,
+            (None, _) => self.light_pmfs[i],
         }
     }
 

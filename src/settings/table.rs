@@ -79,8 +79,8 @@ pub const SETTINGS: &[Spec] = &[
         name: "light_sampler",
         kind: Kind::Choice(&crate::light::LightSamplerKind::NAMES),
         default: DefaultValue::Name("power"),
-        doc: "How a shadow ray that samples one light chooses it (path tracers; glossy surfaces in the others; bdpt's \
-              light subpaths start by power unless uniform): power (in proportion to each light's power), uniform \
+        doc: "How a shadow ray that samples one light chooses it (path tracers; glossy surfaces in the others; bdpt \
+              chooses by power whatever this says, as pbrt-v4's does): power (in proportion to each light's power), uniform \
               (every light alike), bvh (a tree over the lights' bounds of emission, in proportion to what each may \
               bring to the point lit: pbrt-v4's default, for scenes of many lights); a pbrt-v4 scene takes its \
               Integrator's \"lightsampler\", bvh without one",

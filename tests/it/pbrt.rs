@@ -2131,6 +2131,27 @@ fn choosing_lamps_by_the_light_tree_converges_to_the_same_floor_with_less_noise(
             "depth {depth}: uniform / power mean {ratio}"
         );
     }
+    // bdpt chooses by power whatever the sampler, as pbrt-v4's BDPT does.
+    let scene = floor_under_lamps(dir.path(), "\"bdpt\" \"integer maxdepth\" [ 3 ]");
+    let bdpt = |sampler: &str| {
+        let out = dir.path().join(format!("bdpt-{sampler}.pfm"));
+        let args = [
+            "--scene",
+            scene.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--light-sampler",
+            sampler,
+        ];
+        let o = raytracer(&[&args[..], &["-q", "-o", out.to_str().unwrap()]].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let by_power = bdpt("power");
+    assert!(
+        by_power == bdpt("uniform") && by_power == bdpt("bvh"),
+        "bdpt's image depends on the light sampler"
+    );
     // In fog: lamps chosen for points in the medium (no normal there, so no
     // cosine at the point) and MIS weights of phase-sampled rays that meet
     // a lamp. Choosing by power is the noisy one here (fireflies where the
