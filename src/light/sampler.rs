@@ -326,6 +326,11 @@ fn cone_union(a: (Vec3, f32), b: (Vec3, f32)) -> (Vec3, f32) {
     (w, theta_o.cos())
 }
 
+/// The bounds of a non-empty set of lights together.
+fn union_of(items: &[(u32, LightBounds)]) -> LightBounds {
+    items[1..].iter().fold(items[0].1, |acc, (_, b)| acc.union(b))
+}
+
 /// The bucket of a centre `c` along an axis whose centres span [lo, hi].
 fn bucket_of(c: f32, lo: f32, hi: f32) -> usize {
     (((c - lo) / (hi - lo) * BUCKETS as f32) as usize).min(BUCKETS - 1)
@@ -516,7 +521,7 @@ impl LightTree {
         self.nodes.push(Node::new(&[]));
         let mut lanes_of = Vec::with_capacity(4);
         for (k, g) in groups.into_iter().enumerate() {
-            let bounds = g[1..].iter().fold(g[0].1, |acc, (_, b)| acc.union(b));
+            let bounds = union_of(g);
             let path = lanes | (k as u64) << (2 * level);
             let child = if let [(light, _)] = g {
                 self.places[*light as usize] = Place::Tree {
@@ -540,7 +545,7 @@ impl LightTree {
     /// else in halves by count.
     fn split(&self, items: &mut [(u32, LightBounds)], cuts: usize) -> usize {
         let n = items.len();
-        let bounds = items[1..].iter().fold(items[0].1, |acc, (_, b)| acc.union(b));
+        let bounds = union_of(items);
         let (cmin, cmax) = items
             .iter()
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
