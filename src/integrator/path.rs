@@ -4,8 +4,9 @@
 //! pbrt-v4's `PathIntegrator` (13.4). At every vertex whose BSDF has a
 //! diffuse or glossy lobe, next-event estimation: one light chosen by the
 //! scene's light sampler (by power unless asked otherwise; pbrt-v4 scenes
-//! by the light tree, `light::LightTree`), one point on it, one shadow ray. Then the BSDF is
-//! sampled for the next direction and the throughput takes f |cos| / pdf. The
+//! by the light tree, `light::LightTree`), one point on it, one shadow ray.
+//! Then the BSDF is sampled for the next direction and the throughput takes
+//! f |cos| / pdf. The
 //! light a path finds at such a vertex is sampled twice, by the shadow ray and
 //! by the BSDF-sampled ray when it hits a light (or leaves the scene towards
 //! an environment light), and the two are combined by multiple importance
