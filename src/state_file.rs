@@ -83,7 +83,7 @@ pub fn scene_fingerprint(desc: &SceneDesc, camera: bool) -> u64 {
         h.bytes(format!("{m:?}").as_bytes());
     }
     h.u32(desc.triangles.len() as u32);
-    for t in &desc.triangles {
+    for t in desc.triangles.iter() {
         t.vertices.iter().for_each(|&v| h.vec3(v));
         match t.normals {
             Some(ns) => {
@@ -670,7 +670,9 @@ mod tests {
         assert_eq!(scene_fingerprint(&a, false), scene_fingerprint(&b, false));
         assert_ne!(scene_fingerprint(&a, true), scene_fingerprint(&b, true));
         let mut c = a.clone();
-        c.triangles[3].vertices[1].y += 1e-6;
+        let mut t = c.triangles.get(3).unwrap();
+        t.vertices[1].y += 1e-6;
+        c.triangles.set(3, t);
         assert_ne!(scene_fingerprint(&a, false), scene_fingerprint(&c, false));
         let mut d = a.clone();
         d.set_light_radius(0.0);

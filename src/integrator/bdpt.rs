@@ -1109,8 +1109,9 @@ mod tests {
         (d.camera.width, d.camera.height) = (24, 24);
         let end = Mat4::from_translation(Vec3::new(0.4, 0.0, 0.2)) * Mat4::from_rotation_y(0.8);
         let block = 10..20;
-        let centre = d.triangles[block.clone()]
-            .iter()
+        let centre = d
+            .triangles
+            .range(block.clone())
             .flat_map(|t| t.vertices)
             .fold(Vec3::ZERO, |a, v| a + v / 30.0);
         d.moving.push(crate::scene::MovingTriangles {

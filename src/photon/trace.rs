@@ -498,8 +498,10 @@ mod tests {
             cos_falloff_end: 0.9998,
         });
         // Quad placed at its start: x from -4.5 to 5.5.
-        for t in &mut d.triangles[2..4] {
+        for i in 2..4 {
+            let mut t = d.triangles.get(i).unwrap();
             t.vertices = t.vertices.map(|v| v + Vec3::new(0.5, 0.0, 0.0));
+            d.triangles.set(i, t);
         }
         let scene = crate::scene::Scene::build(d).unwrap();
         let t = trace(&scene, &settings(20_000, 1, false), 5);

@@ -138,7 +138,7 @@ mod tests {
         // Floor triangles lie on y = +1, the left (purple) wall on x = -1.
         let floor = d.materials.iter().position(|(n, _)| n == "floor").unwrap() as u32;
         let left = d.materials.iter().position(|(n, _)| n == "left_wall").unwrap() as u32;
-        for t in &d.triangles {
+        for t in d.triangles.iter() {
             if t.material == floor {
                 assert!(t.vertices.iter().all(|v| (v.y - 1.0).abs() < 1e-6));
             }
@@ -147,8 +147,9 @@ mod tests {
             }
         }
         // Blocks stand on the floor.
-        let max_y = d.triangles[10..]
-            .iter()
+        let max_y = d
+            .triangles
+            .range(10..d.triangles.len())
             .flat_map(|t| t.vertices)
             .map(|v| v.y)
             .fold(f32::MIN, f32::max);
@@ -191,7 +192,7 @@ mod tests {
         desc.camera.height = n;
         let bunny = desc.materials.iter().position(|(name, _)| name == "bunny").unwrap() as u32;
         let mut room = desc.clone();
-        room.triangles.retain(|t| t.material != bunny);
+        room.triangles = room.triangles.iter().filter(|t| t.material != bunny).collect();
         assert_eq!(desc.triangles.len() - room.triangles.len(), 69_451);
         let mut bounds = crate::math::Aabb::EMPTY;
         for t in desc.triangles.iter().filter(|t| t.material == bunny) {

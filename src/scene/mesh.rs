@@ -11,7 +11,7 @@ mod obj;
 pub mod ply;
 
 use super::transform::Transform;
-use super::{SceneDesc, TriangleDesc};
+use super::{FaceUvs, SceneDesc};
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::math::{Aabb, Vec2, Vec3};
@@ -196,6 +196,11 @@ impl Mesh {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         desc.triangles.reserve(self.triangles.len());
+        // The mesh's vertices, shared by its triangles.
+        let normals = placed.normals.as_deref().filter(|_| smooth);
+        let base = desc
+            .triangles
+            .add_vertices(&placed.positions, normals, self.uvs.as_deref());
         for part in &self.parts {
             let m = match (material, &part.albedo) {
                 (Some(m), _) => m,
@@ -214,23 +219,16 @@ impl Mesh {
                 }
             };
             for t in &self.triangles[part.triangles.clone()] {
-                let [a, b, c] = t.map(|i| i as usize);
-                let normals = match (&placed.normals, smooth) {
-                    (Some(n), true) => {
-                        let ns = [n[a], n[b], n[c]];
-                        // A vertex without a normal makes the triangle flat.
-                        ns.iter().all(|v| *v != Vec3::ZERO).then_some(ns)
-                    }
-                    _ => None,
+                // A vertex without a normal makes the triangle flat.
+                let smooth = match (&placed.normals, smooth) {
+                    (Some(n), true) => t.iter().all(|&i| n[i as usize] != Vec3::ZERO),
+                    _ => false,
                 };
-                let p = &placed.positions;
-                let uvs = self.uvs.as_ref().map(|uv| [uv[a], uv[b], uv[c]]);
-                desc.triangles.push(TriangleDesc {
-                    vertices: [p[a], p[b], p[c]],
-                    normals,
-                    uvs,
-                    material: m,
-                });
+                let uvs = match self.uvs {
+                    Some(_) => FaceUvs::Vertices,
+                    None => FaceUvs::None,
+                };
+                desc.triangles.push_face(base, *t, smooth, uvs, m);
             }
         }
         Ok(())

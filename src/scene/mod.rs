@@ -7,6 +7,7 @@ pub mod file;
 pub mod mesh;
 pub mod pbrt;
 pub mod transform;
+pub mod triangles;
 
 use crate::bsdf::BxdfFlags;
 use crate::camera::Camera;
@@ -27,6 +28,7 @@ use crate::texture::{Footprint, TexCoord, Texture};
 use mesh::MeshReport;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+pub use triangles::{FaceUvs, Triangles};
 
 /// How to load a scene: the mesh path that replaces the scene's own (or
 /// supplies one a built-in scene needs), and whether meshes are smooth-shaded.
@@ -376,7 +378,7 @@ pub struct SceneDesc {
     pub name: String,
     pub camera: CameraDesc,
     pub materials: Vec<(String, Material)>,
-    pub triangles: Vec<TriangleDesc>,
+    pub triangles: Triangles,
     pub spheres: Vec<SphereDesc>,
     pub disks: Vec<DiskDesc>,
     pub curves: Vec<CurveDesc>,
@@ -482,7 +484,7 @@ impl SceneDesc {
             name: name.into(),
             camera,
             materials: vec![],
-            triangles: vec![],
+            triangles: Triangles::new(),
             spheres: vec![],
             disks: vec![],
             curves: vec![],
@@ -1309,7 +1311,7 @@ impl Scene {
             .into_par_iter()
             .map(|(&j, tri)| match objects.get(j as usize) {
                 Some(&i) => TriInfo {
-                    material: desc.triangles[i as usize].material,
+                    material: desc.triangles.material(i as usize).unwrap_or_default(),
                     object: i,
                     normal: tri.normal_raw().normalize(),
                     light: None,
@@ -1323,19 +1325,19 @@ impl Scene {
         let any_normals = normals.iter().any(Option::is_some)
             || objects
                 .par_iter()
-                .any(|&i| shading_normals(desc.triangles[i as usize].normals).is_some());
+                .any(|&i| shading_normals(desc.triangles.normals(i as usize)).is_some());
         let vertex_normals = match any_normals {
             true => gathered(&order, &objects, &normals, |i| {
-                shading_normals(desc.triangles[i].normals)
+                shading_normals(desc.triangles.normals(i))
             }),
             false => Vec::new(),
         };
         let any_uvs = uvs.iter().any(Option::is_some)
             || objects
                 .par_iter()
-                .any(|&i| texture_uvs(desc.triangles[i as usize].uvs).is_some());
+                .any(|&i| texture_uvs(desc.triangles.uvs(i as usize)).is_some());
         let vertex_uvs = match any_uvs {
-            true => gathered(&order, &objects, &uvs, |i| texture_uvs(desc.triangles[i].uvs)),
+            true => gathered(&order, &objects, &uvs, |i| texture_uvs(desc.triangles.uvs(i))),
             false => Vec::new(),
         };
         drop(objects);
@@ -2013,8 +2015,8 @@ impl Scene {
             PrimKind::Triangle => {
                 let t = self.desc.triangles.get(hit.object as usize)?;
                 match self.motion_of(hit.object) {
-                    None => triangle_shading(t, hit),
-                    Some(m) => moved_shading(hit, m.relative(hit.time), |h| triangle_shading(t, h)),
+                    None => triangle_shading(&t, hit),
+                    Some(m) => moved_shading(hit, m.relative(hit.time), |h| triangle_shading(&t, h)),
                 }
             }
             PrimKind::Sphere | PrimKind::Disk => {

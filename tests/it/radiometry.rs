@@ -33,7 +33,7 @@ fn plane_scene(light: Light) -> SceneDesc {
             realistic: None,
         },
         materials: vec![],
-        triangles: vec![],
+        triangles: Default::default(),
         spheres: vec![],
         disks: vec![],
         curves: vec![],

@@ -108,7 +108,7 @@ fn brute(d: &SceneDesc, ray: &Ray, t_min: f32, t_max: f32, skip_light: Option<us
             best = Some((t, id));
         }
     };
-    for tri in &d.triangles {
+    for tri in d.triangles.iter() {
         let [a, b, c] = tri.vertices;
         take(
             Triangle::new(a, b, c).intersect_mt(ray, t_min, t_best).map(|h| h.t),

@@ -563,8 +563,9 @@ fn shapes(
                 ShapeKind::Sphere => desc.spheres[sphere].sphere.centre,
                 ShapeKind::Disk => desc.disks[disk].centre,
                 _ => {
-                    let (lo, hi) = desc.triangles[triangles.clone()]
-                        .iter()
+                    let (lo, hi) = desc
+                        .triangles
+                        .range(triangles.clone())
                         .flat_map(|t| t.vertices)
                         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
                             (lo.min(v), hi.max(v))

@@ -161,13 +161,13 @@ fn every_shape_and_light_type_is_read() {
     assert!(matches!(d.lights[1], Light::Sphere { sphere, .. } if sphere.radius == 0.25));
     // 1 triangle + 2 for the quad + 12 for the box + 1 from the mesh.
     assert_eq!(d.triangles.len(), 16);
-    assert_eq!(d.triangles[0].normals, Some([Vec3::Z; 3]));
+    assert_eq!(d.triangles.normals(0), Some([Vec3::Z; 3]));
     assert_eq!(
-        d.triangles[2].vertices,
+        d.triangles.vertices(2).unwrap(),
         [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
     );
     let mut b = crate::math::Aabb::EMPTY;
-    for t in &d.triangles[3..15] {
+    for t in d.triangles.range(3..15) {
         t.vertices.iter().for_each(|&v| b.grow(v));
         // Every box face lies in one of the box's planes.
         let n = crate::geometry::Triangle::new(t.vertices[0], t.vertices[1], t.vertices[2]).normal_raw();
@@ -176,7 +176,7 @@ fn every_shape_and_light_type_is_read() {
     assert_eq!((b.min, b.max), (Vec3::splat(-1.0), Vec3::new(1.0, 2.0, 3.0)));
     assert_eq!(d.spheres.len(), 1);
     // The mesh, scaled then moved, takes its MTL colour as a material.
-    let m = &d.triangles[15];
+    let m = &d.triangles.get(15).unwrap();
     assert_eq!(
         m.vertices,
         [
@@ -306,7 +306,11 @@ fn smooth_passes_vertex_normals_on_only_when_asked() {
             smooth: smooth_opt,
             lenient: false,
         };
-        parse(&dir.path().join("s.toml"), &text, &opts).unwrap().desc.triangles[0].normals
+        parse(&dir.path().join("s.toml"), &text, &opts)
+            .unwrap()
+            .desc
+            .triangles
+            .normals(0)
     };
     assert_eq!(scene("", false), None);
     assert_eq!(scene("smooth = false\n", false), None);

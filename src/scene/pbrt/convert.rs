@@ -53,7 +53,7 @@ use crate::medium::{nanovdb, Density, Emission as MediumEmission, Medium, Medium
 use crate::scene::mesh::MeshReport;
 use crate::scene::FilmCrop;
 use crate::scene::{
-    Boundary, CameraDesc, CutShapes, Cutout, LoadOptions, LoadedScene, SceneDesc, SphereDesc, TriangleDesc, DEFAULT_UV,
+    Boundary, CameraDesc, CutShapes, Cutout, FaceUvs, LoadOptions, LoadedScene, SceneDesc, SphereDesc, DEFAULT_UV,
 };
 use crate::scene::{CurveDesc, DiskDesc, LightSurface, MovingShape, MovingTriangles};
 use crate::settings::{Origin, SceneSettings, Value};
@@ -1933,6 +1933,10 @@ impl<'a> Conv<'a> {
                         let material = self.surface_material(desc, shape.material, no_surface)?;
                         let first = desc.triangles.len();
                         let flip = shape.flips_normals();
+                        // The mesh's vertices, shared by its triangles.
+                        let base = desc
+                            .triangles
+                            .add_vertices(&world, normals.as_deref(), mesh.uvs.as_deref());
                         for (k, t) in mesh.triangles.iter().enumerate() {
                             // Wound so that the geometric normal lies on the
                             // side of pbrt-v4's surface normal: the vertex
@@ -1952,16 +1956,12 @@ impl<'a> Conv<'a> {
                             let t = if turn { [t[0], t[2], t[1]] } else { *t };
                             // A triangle turned keeps the coordinates of
                             // its vertices, pbrt-v4's default ones too.
-                            let uvs = match (mesh.triangle_uvs(k), turn) {
-                                (Some([a, b, c]), true) => Some([a, c, b]),
-                                (None, true) => Some([DEFAULT_UV[0], DEFAULT_UV[2], DEFAULT_UV[1]]),
-                                (uvs, false) => uvs,
-                            };
-                            let tri = TriangleDesc {
-                                vertices: t.map(|i| world[i as usize]),
-                                normals: normals.as_ref().map(|ns| t.map(|i| ns[i as usize])),
-                                uvs,
-                                material,
+                            let uvs = match (mesh.uvs.is_some(), mesh.triangle_uvs(k), turn) {
+                                (true, _, _) => FaceUvs::Vertices,
+                                (false, Some([a, b, c]), true) => FaceUvs::Own([a, c, b]),
+                                (false, None, true) => FaceUvs::Own([DEFAULT_UV[0], DEFAULT_UV[2], DEFAULT_UV[1]]),
+                                (false, Some(uvs), false) => FaceUvs::Own(uvs),
+                                (false, None, false) => FaceUvs::None,
                             };
                             if let Some(mi) = interface {
                                 // pbrt-v4's normal, whose side is outside: the
@@ -1978,7 +1978,7 @@ impl<'a> Conv<'a> {
                                     }),
                                 }
                             }
-                            desc.triangles.push(tri);
+                            desc.triangles.push_face(base, t, normals.is_some(), uvs, material);
                         }
                         if let Some(alpha) = alpha {
                             let shapes = CutShapes::Triangles(first..desc.triangles.len());
@@ -3815,17 +3815,8 @@ fn reflect(desc: &mut SceneDesc) {
     let o = c.position;
     let point = |p: Vec3| p - 2.0 * (p - o).dot(n) * n;
     let vector = |v: Vec3| v - 2.0 * v.dot(n) * n;
-    for t in &mut desc.triangles {
-        let [a, b, c] = t.vertices.map(point);
-        t.vertices = [a, c, b];
-        if let Some(ns) = &mut t.normals {
-            let [a, b, c] = ns.map(vector);
-            *ns = [a, c, b];
-        }
-        // The default coordinates too follow their vertices.
-        let [a, b, c] = t.uvs.unwrap_or(DEFAULT_UV);
-        t.uvs = Some([a, c, b]);
-    }
+    // The default coordinates too follow their vertices.
+    desc.triangles.reflect(point, vector, DEFAULT_UV);
     let r = Mat4::from_cols(
         vector(Vec3::X).extend(0.0),
         vector(Vec3::Y).extend(0.0),

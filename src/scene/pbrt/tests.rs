@@ -1720,7 +1720,7 @@ fn loop_subdivision_surfaces_become_limit_triangles_facing_as_pbrts() {
     // (x negated); mirrored back, points are pbrt's.
     assert!(c.mirrored);
     let centre = Vec3::splat(0.25);
-    for t in tris {
+    for t in tris.iter() {
         let ns = t.normals.expect("limit normals").map(|n| n * Vec3::new(-1.0, 1.0, 1.0));
         let v = t.vertices.map(|p| p * Vec3::new(-1.0, 1.0, 1.0));
         // The mirror reverses the winding too.
@@ -2189,7 +2189,7 @@ fn media_are_read_with_their_boundaries_oriented_as_pbrt_orients_them() {
         },
     ];
     assert_eq!(d.boundaries, expected);
-    let [p0, p1, p2] = d.triangles[1].vertices;
+    let [p0, p1, p2] = d.triangles.vertices(1).unwrap();
     assert!((p1 - p0).cross(p2 - p0).z < 0.0);
     assert_eq!(d.materials[d.spheres[0].material as usize].1, Material::Interface);
     assert_ne!(d.materials[d.spheres[1].material as usize].1, Material::Interface);
@@ -2256,7 +2256,7 @@ fn triangles_are_wound_to_face_pbrts_surface_normal() {
         assert!((z - w).abs() < 1e-6, "triangle {i}: {z:?}");
     }
     // Normals and texture coordinates go with their vertices.
-    let t = &c.desc.triangles[2];
+    let t = &c.desc.triangles.get(2).unwrap();
     assert_eq!(t.normals, Some([Vec3::NEG_Z; 3]));
 }
 
