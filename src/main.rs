@@ -370,6 +370,13 @@ fn info(args: &cli::SceneArgs) -> Result<()> {
         scene.triangle_count(),
         scene.dropped_triangles
     );
+    let listed = &scene.desc.triangles;
+    println!(
+        "vertices: {} shared by the description's {} triangles ({:.2} MiB)",
+        listed.vertex_count(),
+        listed.len(),
+        listed.heap_bytes() as f64 / (1 << 20) as f64
+    );
     println!(
         "spheres: {}, disks: {} (besides the lights)",
         scene.desc.spheres.len(),

@@ -29,6 +29,7 @@ use mesh::MeshReport;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 pub use triangles::{FaceUvs, Triangles};
+use triangles::{ShadingSource, ShadingTable};
 
 /// How to load a scene: the mesh path that replaces the scene's own (or
 /// supplies one a built-in scene needs), and whether meshes are smooth-shaded.
@@ -944,10 +945,8 @@ pub struct Scene {
     /// Triangles in BVH order: the static BVH's, then each mover's.
     triangles: Vec<Triangle>,
     info: Vec<TriInfo>,
-    /// Vertex normals and texture coordinates by triangle (BVH order);
-    /// each is empty when no triangle has any.
-    vertex_normals: Vec<Option<[Vec3; 3]>>,
-    vertex_uvs: Vec<Option<[Vec2; 3]>>,
+    /// Vertex normals and texture coordinates by triangle (BVH order).
+    shading: ShadingTable,
     /// dp/du of each triangle (constant over it), computed once: per hit it
     /// was a division and most of the hit's cost on small scenes.
     dpdus: Vec<Vec3>,
@@ -1009,24 +1008,6 @@ impl Mover {
     }
 }
 
-/// A table of the triangles in `order` (indices into the triangles kept,
-/// `objects.len()` of the description's, then the lights'): `of` the
-/// description's triangle for the first, `lights` for the others.
-fn gathered<T: Copy + Send + Sync>(
-    order: &[u32],
-    objects: &[u32],
-    lights: &[T],
-    of: impl Fn(usize) -> T + Sync,
-) -> Vec<T> {
-    order
-        .par_iter()
-        .map(|&j| match objects.get(j as usize) {
-            Some(&i) => of(i as usize),
-            None => lights[j as usize - objects.len()],
-        })
-        .collect()
-}
-
 /// `items` in `order` (`order[k]` is the index of the k-th), consumed.
 fn permuted<T: Copy + Send + Sync>(items: Vec<T>, order: &[u32]) -> Vec<T> {
     // Gathers at random from large tables: bound by memory latency, which
@@ -1070,8 +1051,7 @@ impl Scene {
         // that it never exists twice. The lights' is made as they are.
         let mut objects: Vec<u32> = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::new();
-        let mut normals = Vec::new();
-        let mut uvs = Vec::new();
+        let mut light_shading = Vec::new();
         let mut dropped = 0;
         let (alphas, cut) = cutout_indices(&desc)?;
         // Which run of moving triangles each description triangle is in.
@@ -1216,11 +1196,13 @@ impl Scene {
                         light: Some(i as u32),
                         alpha: SOLID,
                     });
-                    normals.push(shading_normals(reflecting.and_then(|s| s.normals)));
                     // Hits read an emission image at these coordinates,
                     // which are the surface's own where it has any.
                     let surface_uvs = texture_uvs(reflecting.and_then(|s| s.uvs));
-                    uvs.push(image.as_ref().map(|t| t.uv).or(surface_uvs));
+                    light_shading.push((
+                        shading_normals(reflecting.and_then(|s| s.normals)),
+                        image.as_ref().map(|t| t.uv).or(surface_uvs),
+                    ));
                 }
                 Light::Disk { disk, .. } => disks.push(DiskObject {
                     disk: *disk,
@@ -1320,26 +1302,19 @@ impl Scene {
                 None => info[j as usize - kept],
             })
             .collect();
-        // A table that would hold nothing (no triangle with vertex normals,
-        // or with texture coordinates) is left empty.
-        let any_normals = normals.iter().any(Option::is_some)
-            || objects
-                .par_iter()
-                .any(|&i| shading_normals(desc.triangles.normals(i as usize)).is_some());
-        let vertex_normals = match any_normals {
-            true => gathered(&order, &objects, &normals, |i| {
-                shading_normals(desc.triangles.normals(i))
-            }),
-            false => Vec::new(),
-        };
-        let any_uvs = uvs.iter().any(Option::is_some)
-            || objects
-                .par_iter()
-                .any(|&i| texture_uvs(desc.triangles.uvs(i as usize)).is_some());
-        let vertex_uvs = match any_uvs {
-            true => gathered(&order, &objects, &uvs, |i| texture_uvs(desc.triangles.uvs(i))),
-            false => Vec::new(),
-        };
+        // What hits read of vertex normals and texture coordinates: each
+        // triangle's corners in the description's shared tables.
+        let shading = ShadingTable::gather(
+            &desc.triangles,
+            order.len(),
+            |k| match objects.get(order[k] as usize) {
+                Some(&i) => ShadingSource::Listed(i as usize),
+                None => ShadingSource::Own(order[k] as usize - kept),
+            },
+            &light_shading,
+            |ns| shading_normals(Some(ns)).is_some(),
+            |uv| texture_uvs(Some(uv)).is_some(),
+        );
         drop(objects);
         for (i, c) in desc.curves.iter().enumerate() {
             if c.material >= nmat {
@@ -1375,8 +1350,7 @@ impl Scene {
             mover_bvh,
             triangles,
             info,
-            vertex_normals,
-            vertex_uvs,
+            shading,
             dpdus: vec![],
             spheres,
             disks,
@@ -2088,8 +2062,8 @@ impl Scene {
     #[inline(always)]
     fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
-        let ns = match self.vertex_normals.get(idx) {
-            Some(Some(n)) => {
+        let ns = match self.shading.normals(&self.desc.triangles, idx) {
+            Some(n) => {
                 let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
                 // Keep the interpolated normal on the geometric side.
                 if s == Vec3::ZERO {
@@ -2126,14 +2100,14 @@ impl Scene {
     /// Texture coordinates at barycentrics (u, v) of triangle `slot` (BVH
     /// order), as pbrt-v4's `Triangle` computes them.
     fn triangle_uv(&self, slot: usize, b1: f32, b2: f32) -> Vec2 {
-        let uv = self.vertex_uvs.get(slot).copied().flatten().unwrap_or(DEFAULT_UV);
+        let uv = self.shading.uvs(&self.desc.triangles, slot).unwrap_or(DEFAULT_UV);
         let b0 = 1.0 - b1 - b2;
         uv[0] * b0 + uv[1] * b1 + uv[2] * b2
     }
 
     /// dp/du of triangle `slot`, as pbrt-v4's `Triangle` computes it.
     fn triangle_dpdu(&self, slot: usize) -> Vec3 {
-        let uv = self.vertex_uvs.get(slot).copied().flatten().unwrap_or(DEFAULT_UV);
+        let uv = self.shading.uvs(&self.desc.triangles, slot).unwrap_or(DEFAULT_UV);
         let [p0, p1, p2] = self.triangles[slot].vertices();
         let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
         let (dp02, dp12) = (p0 - p2, p1 - p2);

@@ -276,6 +276,136 @@ impl Triangles {
     }
 }
 
+/// The vertex normals and texture coordinates that hits read, for
+/// triangles in an order of their own (the BVH's): each triangle its
+/// corners into the description's shared tables (`Triangles`), 16 bytes
+/// where a copy of its normals and coordinates took 68. Triangles that are
+/// not in the description (the lights') keep theirs here.
+#[derive(Clone, Debug, Default)]
+pub struct ShadingTable {
+    /// Per triangle; empty when none has usable normals or coordinates.
+    corners: Vec<Corners>,
+    /// The lights' vertex normals and coordinates, three a triangle.
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Corners {
+    vertices: [u32; 3],
+    /// `SMOOTH`, `OWN` and the coordinates' code, as a `Face`'s.
+    kind: u32,
+}
+
+/// A `ShadingTable` face's flag: its corners are the table's own.
+const OWN: u32 = 1 << 30;
+
+/// Where a `ShadingTable`'s triangle comes from.
+pub enum ShadingSource {
+    /// The description's triangle `i`.
+    Listed(usize),
+    /// Normals and coordinates of its own, `own[k]` of `ShadingTable::gather`.
+    Own(usize),
+}
+
+impl ShadingTable {
+    /// The table of `n` triangles, triangle `k` from `source(k)`. Normals
+    /// that fail `normals_ok` are not used (flat shading), nor coordinates
+    /// that fail `uvs_ok` (the default ones); `own` holds triangles of
+    /// their own, already checked.
+    #[allow(clippy::type_complexity)]
+    pub fn gather(
+        list: &Triangles,
+        n: usize,
+        source: impl Fn(usize) -> ShadingSource + Sync + Send,
+        own: &[(Option<[Vec3; 3]>, Option<[Vec2; 3]>)],
+        normals_ok: impl Fn([Vec3; 3]) -> bool + Sync + Send,
+        uvs_ok: impl Fn([Vec2; 3]) -> bool + Sync + Send,
+    ) -> ShadingTable {
+        use rayon::prelude::*;
+        let mut table = ShadingTable::default();
+        for (k, (normals, uvs)) in own.iter().enumerate() {
+            debug_assert_eq!(table.normals.len(), 3 * k);
+            table.normals.extend(normals.unwrap_or([Vec3::ZERO; 3]));
+            table.uvs.extend(uvs.unwrap_or([Vec2::ZERO; 3]));
+        }
+        let corners: Vec<Corners> = (0..n)
+            .into_par_iter()
+            .map(|k| match source(k) {
+                ShadingSource::Listed(i) => match list.faces.get(i) {
+                    Some(f) => {
+                        let smooth = list.face_normals(f).is_some_and(&normals_ok);
+                        let uvs = match list.face_uvs(f) {
+                            Some(uv) if uvs_ok(uv) => f.kind & !SMOOTH,
+                            _ => NO_UVS,
+                        };
+                        Corners {
+                            vertices: f.vertices,
+                            kind: uvs | if smooth { SMOOTH } else { 0 },
+                        }
+                    }
+                    None => Corners {
+                        vertices: [0; 3],
+                        kind: NO_UVS,
+                    },
+                },
+                ShadingSource::Own(j) => {
+                    let (normals, uvs) = own.get(j).copied().unwrap_or((None, None));
+                    let base = 3 * j as u32;
+                    Corners {
+                        vertices: [base, base + 1, base + 2],
+                        kind: OWN
+                            | if normals.is_some() { SMOOTH } else { 0 }
+                            | if uvs.is_some() { VERTEX_UVS } else { NO_UVS },
+                    }
+                }
+            })
+            .collect();
+        // A table no hit would read anything from is left empty.
+        if corners.par_iter().any(|c| c.kind & !OWN != 0) {
+            table.corners = corners;
+        }
+        table
+    }
+
+    /// Bytes held.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.corners.capacity() * size_of::<Corners>()
+            + self.normals.capacity() * size_of::<Vec3>()
+            + self.uvs.capacity() * size_of::<Vec2>()
+    }
+
+    /// Triangle `k`'s vertex normals, when it shades with them.
+    #[inline]
+    pub fn normals(&self, list: &Triangles, k: usize) -> Option<[Vec3; 3]> {
+        let c = self.corners.get(k)?;
+        if c.kind & SMOOTH == 0 {
+            return None;
+        }
+        let table = if c.kind & OWN != 0 {
+            &self.normals
+        } else {
+            &list.normals
+        };
+        Some(c.vertices.map(|v| table[v as usize]))
+    }
+
+    /// Triangle `k`'s texture coordinates, when it has any.
+    #[inline]
+    pub fn uvs(&self, list: &Triangles, k: usize) -> Option<[Vec2; 3]> {
+        let c = self.corners.get(k)?;
+        match c.kind & !(SMOOTH | OWN) {
+            NO_UVS => None,
+            VERTEX_UVS => {
+                let table = if c.kind & OWN != 0 { &self.uvs } else { &list.uvs };
+                Some(c.vertices.map(|v| table[v as usize]))
+            }
+            code => list.face_uvs.get((code - FIRST_FACE_UVS) as usize).copied(),
+        }
+    }
+}
+
 impl Extend<TriangleDesc> for Triangles {
     fn extend<I: IntoIterator<Item = TriangleDesc>>(&mut self, iter: I) {
         for t in iter {
@@ -404,5 +534,64 @@ mod tests {
         let copies: Triangles = [t.clone(), t].into_iter().collect();
         assert_eq!(shared, copies);
         assert_ne!(shared, list);
+    }
+
+    #[test]
+    fn the_shading_table_reads_each_triangle_in_its_own_order_and_drops_what_fails_its_checks() {
+        let mut list = Triangles::new();
+        let mut added = vec![];
+        for k in 0..12 {
+            let mut t = tri(k as f32, k % 2 == 0, k % 3 != 0);
+            if k == 4 {
+                // Normals that the check refuses: the triangle shades flat.
+                t.normals = Some([Vec3::ZERO, Vec3::X, Vec3::Y]);
+            }
+            if k == 5 {
+                t.uvs = Some([Vec2::NAN, Vec2::ZERO, Vec2::ONE]);
+            }
+            added.push(t.clone());
+            list.push(t);
+        }
+        let base = list.add_vertices(&[Vec3::ZERO, Vec3::X, Vec3::Y], None, None);
+        list.push_face(base, [0, 1, 2], false, FaceUvs::Own([Vec2::Y, Vec2::X, Vec2::ONE]), 3);
+        added.push(list.get(12).unwrap());
+        let own = [
+            (Some([Vec3::Z, Vec3::Y, Vec3::X]), None),
+            (None, Some([Vec2::ONE, Vec2::X, Vec2::Y])),
+        ];
+        // Listed triangles backwards, the two of their own between.
+        let order: Vec<ShadingSource> = (0..13)
+            .rev()
+            .map(ShadingSource::Listed)
+            .chain([ShadingSource::Own(1), ShadingSource::Own(0)])
+            .collect();
+        let pick = |k: usize| match order[k] {
+            ShadingSource::Listed(i) => ShadingSource::Listed(i),
+            ShadingSource::Own(j) => ShadingSource::Own(j),
+        };
+        let normals_ok = |ns: [Vec3; 3]| ns.iter().all(|n| n.length_squared() > 0.0);
+        let uvs_ok = |uv: [Vec2; 3]| uv.iter().all(|c| c.is_finite());
+        let table = ShadingTable::gather(&list, order.len(), pick, &own, normals_ok, uvs_ok);
+        for (k, source) in order.iter().enumerate() {
+            let (normals, uvs) = match *source {
+                ShadingSource::Listed(i) => (
+                    added[i].normals.filter(|&n| normals_ok(n)),
+                    added[i].uvs.filter(|&u| uvs_ok(u)),
+                ),
+                ShadingSource::Own(j) => own[j],
+            };
+            assert_eq!(table.normals(&list, k), normals, "slot {k}");
+            assert_eq!(table.uvs(&list, k), uvs, "slot {k}");
+        }
+        assert_eq!(table.normals(&list, 1), None, "triangle 11: no normals");
+        assert_eq!(table.normals(&list, 8), None, "triangle 4: refused");
+        assert_eq!(table.uvs(&list, 7), None, "triangle 5: refused");
+        assert_eq!(table.uvs(&list, 14), None, "its own, without coordinates");
+        assert_eq!((table.normals(&list, 15), table.uvs(&list, 15)), (None, None));
+        assert_eq!(table.uvs(&list, 0), Some([Vec2::Y, Vec2::X, Vec2::ONE]), "a face's own");
+        // Nothing to read: an empty table.
+        let flat: Triangles = (0..3).map(|k| tri(k as f32, false, false)).collect();
+        let table = ShadingTable::gather(&flat, 3, ShadingSource::Listed, &[], normals_ok, uvs_ok);
+        assert_eq!(table.heap_bytes(), 0);
     }
 }

@@ -171,6 +171,19 @@ fn info_works_for_every_scene() {
             out.contains("69451 triangles") && out.contains("loaded in"),
             "{scene}: {out}"
         );
+        // The mesh's vertices are stored once, not once a triangle; the
+        // room's triangles bring three each.
+        let count = |prefix: &str| -> usize {
+            out.lines()
+                .find_map(|l| l.strip_prefix(prefix)?.split([' ', ',']).next()?.parse().ok())
+                .unwrap_or_else(|| panic!("{scene}: no {prefix:?} in {out}"))
+        };
+        let (vertices, triangles) = (count("vertices: "), count("triangles: "));
+        let mesh: usize = out
+            .split_once(" vertices, 69451 triangles")
+            .and_then(|(head, _)| head.rsplit('(').next()?.parse().ok())
+            .unwrap_or_else(|| panic!("{scene}: no mesh line in {out}"));
+        assert_eq!(vertices, mesh + 3 * (triangles - 69_451), "{scene}: {out}");
     }
 }
 
