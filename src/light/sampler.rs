@@ -338,7 +338,7 @@ fn bucket_of(c: f32, lo: f32, hi: f32) -> usize {
 
 /// Four children's bounds side by side, one lane each, so that their
 /// importances are found together; an empty lane has no power.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct Node {
     centre: [Vec4; 3],
     /// The radius of each box's bounding sphere, and its square.
@@ -460,11 +460,194 @@ const BUCKETS: usize = 12;
 
 /// pbrt-v4's `bvh` light sampler: lights without bounds chosen apart, the
 /// others through a tree of four children a node.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LightTree {
     nodes: Vec<Node>,
     infinite: Vec<u32>,
     places: Vec<Place>,
+}
+
+/// A tree built apart: its nodes in preorder (its root first, child
+/// indices its own), and the places of the lights at its leaves.
+struct Subtree {
+    nodes: Vec<Node>,
+    leaves: Vec<(u32, Place)>,
+}
+
+/// Sets at least this large build their children's subtrees on threads
+/// of their own; smaller ones are not worth a task.
+const PARALLEL_LIGHTS: usize = 2048;
+
+/// Builds the tree over `items` (more than one, or the whole tree's single
+/// light) at `level`, reached by `lanes`; `cuts` binary cuts so far. The
+/// nodes come in the preorder of a depth-first build whatever the threads,
+/// so the tree is the same on any machine.
+fn subtree(items: &mut [(u32, LightBounds)], level: usize, lanes: u64, cuts: usize) -> Subtree {
+    use rayon::prelude::*;
+    let parallel = items.len() >= PARALLEL_LIGHTS;
+    // Up to four groups: two cuts of the set, then of each side.
+    let mut groups: Vec<&mut [(u32, LightBounds)]> = Vec::with_capacity(4);
+    if items.len() <= 4 {
+        groups.extend(items.chunks_mut(1));
+    } else {
+        let mid = split(items, cuts);
+        let (l, r) = items.split_at_mut(mid);
+        let cut_side = |side: &mut [(u32, LightBounds)]| match side.len() {
+            1 => None,
+            _ => Some(split(side, cuts + 1)),
+        };
+        let (ml, mr) = match parallel {
+            true => rayon::join(|| cut_side(l), || cut_side(r)),
+            false => (cut_side(l), cut_side(r)),
+        };
+        for (side, m) in [(l, ml), (r, mr)] {
+            match m {
+                None => groups.push(side),
+                Some(m) => {
+                    let (a, b) = side.split_at_mut(m);
+                    groups.push(a);
+                    groups.push(b);
+                }
+            }
+        }
+    }
+    let build = |(k, g): (usize, &mut &mut [(u32, LightBounds)])| {
+        let bounds = union_of(g);
+        let path = lanes | (k as u64) << (2 * level);
+        let child = match &**g {
+            [(light, _)] => Err((
+                *light,
+                Place::Tree {
+                    lanes: path,
+                    depth: (level + 1) as u8,
+                },
+            )),
+            _ => Ok(subtree(g, level + 1, path, cuts + 2)),
+        };
+        (bounds, child)
+    };
+    let children: Vec<_> = match parallel {
+        true => groups.par_iter_mut().enumerate().map(build).collect(),
+        false => groups.iter_mut().enumerate().map(build).collect(),
+    };
+    let mut nodes = vec![Node::new(&[])];
+    let mut leaves = Vec::new();
+    let mut lanes_of = Vec::with_capacity(4);
+    for (bounds, child) in children {
+        let index = match child {
+            Err((light, place)) => {
+                leaves.push((light, place));
+                LEAF | light
+            }
+            Ok(sub) => {
+                let offset = nodes.len() as u32;
+                nodes.extend(sub.nodes.into_iter().map(|mut n| {
+                    for c in &mut n.child {
+                        if *c != EMPTY && *c & LEAF == 0 {
+                            *c += offset;
+                        }
+                    }
+                    n
+                }));
+                leaves.extend(sub.leaves);
+                offset
+            }
+        };
+        lanes_of.push((bounds, index));
+    }
+    nodes[0] = Node::new(&lanes_of);
+    Subtree { nodes, leaves }
+}
+
+/// Reorders `items` into two non-empty sides and returns the first's
+/// size: the cheapest of the bucket boundaries along each axis by
+/// Conty Estevez and Kulla's cost (power times orientation measure times
+/// surface area, each axis weighed by the box's extent over its own),
+/// else in halves by count.
+fn split(items: &mut [(u32, LightBounds)], cuts: usize) -> usize {
+    let n = items.len();
+    let bounds = union_of(items);
+    let (cmin, cmax) = items
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
+            (lo.min(b.centre()), hi.max(b.centre()))
+        });
+    let extent = bounds.max - bounds.min;
+    // The cheapest cut along one axis: (cost, cut), the later of equals.
+    let along = |axis: usize| -> Option<(f32, usize)> {
+        let (lo, hi) = (cmin[axis], cmax[axis]);
+        if hi.is_nan() || lo.is_nan() || hi <= lo {
+            return None;
+        }
+        let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
+        for (_, b) in items.iter() {
+            let k = bucket_of(b.centre()[axis], lo, hi);
+            buckets[k] = Some(buckets[k].map_or(*b, |acc| acc.union(b)));
+        }
+        let cost = |b: &LightBounds| {
+            let e = b.max - b.min;
+            let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+            b.phi * b.orientation_measure() * area
+        };
+        let join = |acc: Option<LightBounds>, b: &Option<LightBounds>| match (acc, b) {
+            (Some(a), Some(b)) => Some(a.union(b)),
+            (a, b) => a.or(*b),
+        };
+        // Each cut's two sides, swept from both ends.
+        let mut below = [None; BUCKETS];
+        let mut acc = None;
+        for k in 0..BUCKETS {
+            acc = join(acc, &buckets[k]);
+            below[k] = acc;
+        }
+        let regular = extent.max_element() / extent[axis].max(f32::MIN_POSITIVE);
+        let mut above: Option<LightBounds> = None;
+        let mut best: Option<(f32, usize)> = None;
+        for cut in (1..BUCKETS).rev() {
+            above = join(above, &buckets[cut]);
+            let (Some(l), Some(r)) = (below[cut - 1], above) else {
+                continue;
+            };
+            let c = regular * (cost(&l) + cost(&r));
+            if best.is_none_or(|(bc, _)| c <= bc) {
+                best = Some((c, cut));
+            }
+        }
+        best
+    };
+    let per_axis: [Option<(f32, usize)>; 3] = match (cuts < MAX_SAH_DEPTH, n >= PARALLEL_LIGHTS) {
+        (false, _) => [None; 3],
+        // Each axis's buckets on a thread of its own: the top of a large
+        // tree is one set, which nothing else can share out.
+        (true, true) => {
+            let ((x, y), z) = rayon::join(|| rayon::join(|| along(0), || along(1)), || along(2));
+            [x, y, z]
+        }
+        (true, false) => [along(0), along(1), along(2)],
+    };
+    // The later axis of equal costs, as one sweep over all three would take.
+    let mut best: Option<(f32, usize, usize)> = None;
+    for (axis, found) in per_axis.into_iter().enumerate() {
+        if let Some((c, cut)) = found {
+            if best.is_none_or(|(bc, _, _)| c <= bc) {
+                best = Some((c, axis, cut));
+            }
+        }
+    }
+    if let Some((_, axis, cut)) = best {
+        let (lo, hi) = (cmin[axis], cmax[axis]);
+        // A stable partition keeps the tree the same run to run.
+        let (mut left, right): (Vec<_>, Vec<_>) = items
+            .iter()
+            .partition(|(_, b)| bucket_of(b.centre()[axis], lo, hi) < cut);
+        let mid = left.len();
+        if mid > 0 && mid < n {
+            left.extend(right);
+            items.copy_from_slice(&left);
+            return mid;
+        }
+    }
+    n / 2
 }
 
 impl LightTree {
@@ -490,124 +673,13 @@ impl LightTree {
             places,
         };
         if !items.is_empty() {
-            tree.build_node(&mut items, 0, 0, 0);
+            let sub = subtree(&mut items, 0, 0, 0);
+            tree.nodes = sub.nodes;
+            for (light, place) in sub.leaves {
+                tree.places[light as usize] = place;
+            }
         }
         tree
-    }
-
-    /// Builds the node over `items` (more than one, or the whole tree's
-    /// single light) at `level`, reached by `lanes`; `cuts` binary cuts so
-    /// far. Returns its index.
-    fn build_node(&mut self, items: &mut [(u32, LightBounds)], level: usize, lanes: u64, cuts: usize) -> u32 {
-        // Up to four groups: two cuts of the set, then of each side.
-        let mut groups: Vec<&mut [(u32, LightBounds)]> = Vec::with_capacity(4);
-        if items.len() <= 4 {
-            groups.extend(items.chunks_mut(1));
-        } else {
-            let mid = self.split(items, cuts);
-            let (l, r) = items.split_at_mut(mid);
-            for side in [l, r] {
-                if side.len() == 1 {
-                    groups.push(side);
-                } else {
-                    let m = self.split(side, cuts + 1);
-                    let (a, b) = side.split_at_mut(m);
-                    groups.push(a);
-                    groups.push(b);
-                }
-            }
-        }
-        let idx = self.nodes.len() as u32;
-        self.nodes.push(Node::new(&[]));
-        let mut lanes_of = Vec::with_capacity(4);
-        for (k, g) in groups.into_iter().enumerate() {
-            let bounds = union_of(g);
-            let path = lanes | (k as u64) << (2 * level);
-            let child = if let [(light, _)] = g {
-                self.places[*light as usize] = Place::Tree {
-                    lanes: path,
-                    depth: (level + 1) as u8,
-                };
-                LEAF | *light
-            } else {
-                self.build_node(g, level + 1, path, cuts + 2)
-            };
-            lanes_of.push((bounds, child));
-        }
-        self.nodes[idx as usize] = Node::new(&lanes_of);
-        idx
-    }
-
-    /// Reorders `items` into two non-empty sides and returns the first's
-    /// size: the cheapest of the bucket boundaries along each axis by
-    /// Conty Estevez and Kulla's cost (power times orientation measure times
-    /// surface area, each axis weighed by the box's extent over its own),
-    /// else in halves by count.
-    fn split(&self, items: &mut [(u32, LightBounds)], cuts: usize) -> usize {
-        let n = items.len();
-        let bounds = union_of(items);
-        let (cmin, cmax) = items
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
-                (lo.min(b.centre()), hi.max(b.centre()))
-            });
-        let extent = bounds.max - bounds.min;
-        let mut best: Option<(f32, usize, usize)> = None;
-        if cuts < MAX_SAH_DEPTH {
-            for axis in 0..3 {
-                let (lo, hi) = (cmin[axis], cmax[axis]);
-                if hi.is_nan() || lo.is_nan() || hi <= lo {
-                    continue;
-                }
-                let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
-                for (_, b) in items.iter() {
-                    let k = bucket_of(b.centre()[axis], lo, hi);
-                    buckets[k] = Some(buckets[k].map_or(*b, |acc| acc.union(b)));
-                }
-                let cost = |b: &LightBounds| {
-                    let e = b.max - b.min;
-                    let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
-                    b.phi * b.orientation_measure() * area
-                };
-                let join = |acc: Option<LightBounds>, b: &Option<LightBounds>| match (acc, b) {
-                    (Some(a), Some(b)) => Some(a.union(b)),
-                    (a, b) => a.or(*b),
-                };
-                // Each cut's two sides, swept from both ends.
-                let mut below = [None; BUCKETS];
-                let mut acc = None;
-                for k in 0..BUCKETS {
-                    acc = join(acc, &buckets[k]);
-                    below[k] = acc;
-                }
-                let regular = extent.max_element() / extent[axis].max(f32::MIN_POSITIVE);
-                let mut above: Option<LightBounds> = None;
-                for cut in (1..BUCKETS).rev() {
-                    above = join(above, &buckets[cut]);
-                    let (Some(l), Some(r)) = (below[cut - 1], above) else {
-                        continue;
-                    };
-                    let c = regular * (cost(&l) + cost(&r));
-                    if best.is_none_or(|(bc, _, _)| c <= bc) {
-                        best = Some((c, axis, cut));
-                    }
-                }
-            }
-        }
-        if let Some((_, axis, cut)) = best {
-            let (lo, hi) = (cmin[axis], cmax[axis]);
-            // A stable partition keeps the tree the same run to run.
-            let (mut left, right): (Vec<_>, Vec<_>) = items
-                .iter()
-                .partition(|(_, b)| bucket_of(b.centre()[axis], lo, hi) < cut);
-            let mid = left.len();
-            if mid > 0 && mid < n {
-                left.extend(right);
-                items.copy_from_slice(&left);
-                return mid;
-            }
-        }
-        n / 2
     }
 
     /// The probability of choosing an infinite light (each as likely as
@@ -774,6 +846,42 @@ mod tests {
             LightContext::medium(p)
         } else {
             LightContext::surface(p, unit(rng))
+        }
+    }
+
+    #[test]
+    fn the_tree_is_the_same_on_one_thread_and_on_many() {
+        // Enough lights for the parallel build, and a set too small for it.
+        for n in [PARALLEL_LIGHTS * 3 + 7, 300] {
+            let ls = lights(&mut Rng::new(n as u64, 5), n);
+            let on = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| LightTree::build(&ls))
+            };
+            let one = on(1);
+            assert_eq!(one, on(3), "{n} lights");
+            // Every light the tree holds has its place, and no two the same.
+            let mut paths: Vec<_> = one
+                .places
+                .iter()
+                .filter_map(|p| match p {
+                    Place::Tree { lanes, depth } => Some((*lanes, *depth)),
+                    _ => None,
+                })
+                .collect();
+            let held = paths.len();
+            paths.sort_unstable();
+            paths.dedup();
+            assert_eq!(paths.len(), held);
+            assert!(held >= n - n / 6, "{held} of {n}");
+            // Each walk ends where the light's stored path leads.
+            let mut rng = Rng::new(n as u64, 6);
+            for k in 0..500 {
+                let ctx = context(&mut rng, k);
+                if let Some((light, p)) = one.pick(&ctx, rng.next_f32()) {
+                    assert_eq!(one.pmf(&ctx, light), p, "light {light}");
+                }
+            }
         }
     }
 
