@@ -53,7 +53,7 @@ pub fn place_and_build(mesh: &Mesh) {
             realistic: None,
         },
         materials: vec![],
-        triangles: vec![],
+        triangles: Default::default(),
         spheres: vec![],
         disks: vec![],
         curves: vec![],
