@@ -70,6 +70,7 @@ pub fn place_and_build(mesh: &Mesh) {
         moving_shapes: vec![],
         shutter: [0.0, 1.0],
         camera_motion: None,
+        light_sampler: Default::default(),
     };
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
     if mesh
