@@ -594,4 +594,39 @@ mod tests {
         let table = ShadingTable::gather(&flat, 3, ShadingSource::Listed, &[], normals_ok, uvs_ok);
         assert_eq!(table.heap_bytes(), 0);
     }
+
+    #[test]
+    fn a_mesh_costs_twenty_bytes_a_triangle_and_its_vertices_once() {
+        // A grid of n x n quads: (n + 1)^2 vertices, 2 n^2 triangles.
+        let n = 100u32;
+        let side = n + 1;
+        let positions: Vec<Vec3> = (0..side * side)
+            .map(|k| Vec3::new((k % side) as f32, (k / side) as f32, 0.0))
+            .collect();
+        let normals = vec![Vec3::Z; positions.len()];
+        let uvs: Vec<Vec2> = positions.iter().map(|p| p.truncate() / n as f32).collect();
+        let mut list = Triangles::new();
+        list.reserve_exact(2 * (n * n) as usize);
+        let base = list.add_vertices(&positions, Some(&normals), Some(&uvs));
+        for y in 0..n {
+            for x in 0..n {
+                let k = y * side + x;
+                list.push_face(base, [k, k + 1, k + side + 1], true, FaceUvs::Vertices, 0);
+                list.push_face(base, [k, k + side + 1, k + side], true, FaceUvs::Vertices, 0);
+            }
+        }
+        let (faces, vertices) = (list.len(), list.vertex_count());
+        assert_eq!((faces, vertices), (20_000, 10_201));
+        // Positions, normals and coordinates: 32 bytes a vertex, allowing
+        // for the vectors' growth; 20 bytes a triangle.
+        let bytes = list.heap_bytes();
+        assert!(bytes <= 20 * faces + 2 * 32 * vertices, "{bytes} bytes");
+        assert!(
+            bytes < 40 * faces,
+            "{bytes} bytes: a copy a triangle would take 108 each"
+        );
+        let table = ShadingTable::gather(&list, faces, ShadingSource::Listed, &[], |_| true, |_| true);
+        assert_eq!(table.heap_bytes(), 16 * faces);
+        assert_eq!(table.normals(&list, 7), Some([Vec3::Z; 3]));
+    }
 }
