@@ -8,7 +8,7 @@ use raytracer::material::Material;
 use raytracer::math::Vec3;
 use raytracer::scene::mesh::{FileSource, Mesh};
 use raytracer::scene::transform::Transform;
-use raytracer::scene::{CameraDesc, Scene, SceneDesc, SceneSettings};
+use raytracer::scene::{CameraDesc, Scene, SceneDesc};
 use std::collections::BTreeMap;
 use std::io::{Error, ErrorKind};
 use std::path::{Path, PathBuf};
@@ -37,9 +37,11 @@ pub fn split_mtl(data: &[u8]) -> (&[u8], Option<&[u8]>) {
 /// Places a loaded mesh in a scene and builds its BVH, as a render would.
 pub fn place_and_build(mesh: &Mesh) {
     let _ = mesh.bounds();
-    let mut desc = SceneDesc {
-        name: "fuzz".into(),
-        camera: CameraDesc {
+    // Built by the library's own constructor, so that a field added to the
+    // description cannot leave this crate behind.
+    let mut desc = SceneDesc::empty(
+        "fuzz",
+        CameraDesc {
             position: Vec3::new(0.0, 0.0, -5.0),
             look_at: Vec3::ZERO,
             up: Vec3::new(0.0, -1.0, 0.0),
@@ -52,26 +54,7 @@ pub fn place_and_build(mesh: &Mesh) {
             spherical: None,
             realistic: None,
         },
-        materials: vec![],
-        triangles: Default::default(),
-        spheres: vec![],
-        disks: vec![],
-        curves: vec![],
-        lights: vec![],
-        light_surfaces: vec![],
-        invisible_lights: vec![],
-        cutouts: vec![],
-        media: vec![],
-        camera_medium: None,
-        boundaries: vec![],
-        settings: SceneSettings::default(),
-        texture_spp: 64,
-        moving: vec![],
-        moving_shapes: vec![],
-        shutter: [0.0, 1.0],
-        camera_motion: None,
-        light_sampler: Default::default(),
-    };
+    );
     let m = desc.material("grey", Material::diffuse(0.5, 0.5, 0.5));
     if mesh
         .add_to_scene(&mut desc, &Transform::default(), Some(m), true)
