@@ -133,7 +133,8 @@ pub struct TexImage {
     pub path: PathBuf,
     pub width: u32,
     pub height: u32,
-    pub pixels: Vec<Vec3>,
+    /// Linear RGB, first row at the top (`pixel`, `pixels`).
+    texels: Texels,
     /// FNV-1a 64 of the file's bytes and the encoding: two images with the
     /// same hash hold the same pixels.
     pub hash: u64,
@@ -153,6 +154,30 @@ pub struct TexImage {
     /// The MIP map's levels above the finest (the image itself), built at
     /// the first lookup that needs one.
     pyramid: OnceLock<Vec<MipLevel>>,
+}
+
+/// An image's texels: linear floats, or the bytes of an 8-bit file with
+/// the table that decodes them (what a float copy gave, value for value, in
+/// a quarter of the memory: textures are most of a large scene's).
+enum Texels {
+    Linear(Vec<Vec3>),
+    Bytes {
+        texels: Vec<[u8; 3]>,
+        table: Box<[f32; 256]>,
+    },
+}
+
+impl Texels {
+    #[inline]
+    fn get(&self, i: usize) -> Vec3 {
+        match self {
+            Texels::Linear(p) => p[i],
+            Texels::Bytes { texels, table } => {
+                let [r, g, b] = texels[i];
+                Vec3::new(table[r as usize], table[g as usize], table[b as usize])
+            }
+        }
+    }
 }
 
 /// One level of a MIP map above the finest: linear RGB, first row at the
@@ -223,25 +248,40 @@ impl TexImage {
                 h.bytes(&c.to_bits().to_le_bytes());
             }
         }
-        Self::finish(PathBuf::from(name), width, height, pixels, h.0, false, Encoding::Linear)
+        Self::finish(
+            PathBuf::from(name),
+            width,
+            height,
+            Texels::Linear(pixels),
+            h.0,
+            false,
+            Encoding::Linear,
+        )
     }
 
     fn finish(
         path: PathBuf,
         width: u32,
         height: u32,
-        pixels: Vec<Vec3>,
+        texels: Texels,
         hash: u64,
         integer: bool,
         encoding: Encoding,
     ) -> TexImage {
-        let max = pixels.iter().fold(Vec3::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
-        let min = pixels.iter().fold(Vec3::splat(f32::INFINITY), |a, &p| a.min(p));
+        let (mut max, mut min) = (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY));
+        let n = match &texels {
+            Texels::Linear(p) => p.len(),
+            Texels::Bytes { texels, .. } => texels.len(),
+        };
+        for i in 0..n {
+            let p = texels.get(i);
+            (max, min) = (max.max(p), min.min(p));
+        }
         TexImage {
             path,
             width,
             height,
-            pixels,
+            texels,
             hash,
             integer,
             encoding,
@@ -253,10 +293,32 @@ impl TexImage {
         }
     }
 
+    /// Texel `i` (row by row from the top), linear.
+    #[inline]
+    pub fn pixel(&self, i: usize) -> Vec3 {
+        self.texels.get(i)
+    }
+
+    /// Bytes the texels take (an 8-bit file's keep their bytes).
+    pub fn texel_bytes(&self) -> usize {
+        match &self.texels {
+            Texels::Linear(p) => p.len() * std::mem::size_of::<Vec3>(),
+            Texels::Bytes { texels, table } => texels.len() * 3 + std::mem::size_of_val(&**table),
+        }
+    }
+
+    /// Every texel, linear, row by row from the top: a copy.
+    pub fn pixels(&self) -> Vec<Vec3> {
+        match &self.texels {
+            Texels::Linear(p) => p.clone(),
+            Texels::Bytes { texels, .. } => (0..texels.len()).map(|i| self.texels.get(i)).collect(),
+        }
+    }
+
     /// Bilinear lookup at image coordinates `st` in [0, 1]^2 (t down from the
     /// top row), as pbrt-v4's `Image::Bilerp`.
     pub fn bilerp(&self, st: Vec2, wrap: WrapMode) -> Vec3 {
-        self.bilerp_with(st, wrap, |i| self.pixels[i])
+        self.bilerp_with(st, wrap, |i| self.texels.get(i))
     }
 
     fn bilerp_with<T>(&self, st: Vec2, wrap: WrapMode, texel: impl Fn(usize) -> T) -> T
@@ -315,7 +377,7 @@ impl TexImage {
             return (Vec3::ZERO, self.alpha.as_ref().map(|_| 0.0));
         };
         match level {
-            0 => (self.pixels[i], self.alpha.as_ref().map(|a| a[i])),
+            0 => (self.pixel(i), self.alpha.as_ref().map(|a| a[i])),
             k => {
                 let l = &self.pyramid()[k - 1];
                 (l.pixels[i], l.alpha.as_ref().map(|a| a[i]))
@@ -446,7 +508,7 @@ fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
                 let (i, j) = (k as u32 % sx, k as u32 / sx);
                 if exact {
                     let t = texel(x * sx + i, y * sy + j);
-                    c += img.pixels[t];
+                    c += img.pixel(t);
                     a += alpha.map_or(0.0, |al| al[t]);
                 } else {
                     c += img.bilerp(st, WrapMode::Clamp);
@@ -809,7 +871,7 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
             path.to_path_buf(),
             film.width,
             film.height,
-            film.pixels,
+            Texels::Linear(film.pixels),
             h.0,
             false,
             Encoding::Linear,
@@ -850,10 +912,24 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
         Some(t) => t[(v * 255.0).round().clamp(0.0, 255.0) as usize],
         None => enc.to_linear(v),
     };
-    let pixels = rgb
-        .pixels()
-        .map(|p| Vec3::new(lin(p.0[0]), lin(p.0[1]), lin(p.0[2])))
-        .collect();
+    let texels = match &table {
+        // The bytes the table reads, found as `lin` finds them.
+        Some(t) => {
+            let byte = |v: f32| (v * 255.0).round().clamp(0.0, 255.0) as u8;
+            let texels = rgb
+                .pixels()
+                .map(|p| [byte(p.0[0]), byte(p.0[1]), byte(p.0[2])])
+                .collect();
+            let mut table = Box::new([0.0; 256]);
+            table.copy_from_slice(t);
+            Texels::Bytes { texels, table }
+        }
+        None => Texels::Linear(
+            rgb.pixels()
+                .map(|p| Vec3::new(lin(p.0[0]), lin(p.0[1]), lin(p.0[2])))
+                .collect(),
+        ),
+    };
     // Decoded as the colour is: pbrt-v4 applies an 8-bit image's encoding to
     // each of its channels, alpha included.
     let alpha = rgba
@@ -862,7 +938,7 @@ pub fn decode_bytes(path: &Path, bytes: &[u8], encoding: Encoding, on_disk: bool
     h.bytes(&[enc.key().0]);
     h.bytes(&enc.key().1.to_le_bytes());
     let eight_bit = table.is_some();
-    let mut image = TexImage::finish(path.to_path_buf(), width, height, pixels, h.0, integer, enc);
+    let mut image = TexImage::finish(path.to_path_buf(), width, height, texels, h.0, integer, enc);
     image.alpha = alpha;
     image.eight_bit = eight_bit;
     Ok(image)
@@ -877,6 +953,44 @@ mod tests {
         // One row: black on the left, white on the right.
         let img = TexImage::from_pixels("two", 2, 1, vec![Vec3::ZERO, Vec3::ONE]);
         ImageTexture::new(Arc::new(img), &ImageOptions::default())
+    }
+
+    #[test]
+    fn an_eight_bit_image_keeps_its_bytes_and_gives_what_decoding_to_floats_gave() {
+        let dir = tempfile::tempdir().unwrap();
+        // Every byte value in every channel, in a 16 x 16 image.
+        let px: Vec<u8> = (0..256u32)
+            .flat_map(|i| [i as u8, (255 - i) as u8, (i * 7 % 256) as u8])
+            .collect();
+        for (k, encoding) in [Encoding::Srgb, Encoding::Linear, Encoding::Gamma(2.2)]
+            .into_iter()
+            .enumerate()
+        {
+            let png = dir.path().join(format!("b{k}.png"));
+            ::image::save_buffer(&png, &px, 16, 16, ::image::ColorType::Rgb8).unwrap();
+            let img = load_image(&png, encoding).unwrap();
+            assert_eq!(
+                img.texel_bytes(),
+                256 * 3 + 256 * 4,
+                "{encoding:?}: bytes and the table"
+            );
+            let (mut max, mut min) = (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY));
+            for (i, c) in px.chunks(3).enumerate() {
+                let want = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) / 255.0;
+                let want = Vec3::new(
+                    encoding.to_linear(want.x),
+                    encoding.to_linear(want.y),
+                    encoding.to_linear(want.z),
+                );
+                assert_eq!(img.pixel(i), want, "{encoding:?}: texel {i}");
+                (max, min) = (max.max(want), min.min(want));
+            }
+            assert_eq!(img.pixels().len(), 256);
+            assert_eq!((img.max, img.min), (max, min), "{encoding:?}");
+        }
+        // A float image keeps its floats.
+        let img = TexImage::from_pixels("f", 2, 1, vec![Vec3::ZERO, Vec3::splat(7.5)]);
+        assert_eq!((img.texel_bytes(), img.pixel(1)), (24, Vec3::splat(7.5)));
     }
 
     #[test]
@@ -950,12 +1064,12 @@ mod tests {
         ::image::save_buffer(&png, &px, 2, 2, ::image::ColorType::Rgb8).unwrap();
         let img = load_image(&png, Encoding::Srgb).unwrap();
         assert_eq!((img.width, img.height), (2, 2));
-        assert!((img.pixels[0] - Vec3::new(0.2158605, 0.0, 1.0)).abs().max_element() < 1e-5);
-        assert_eq!(img.pixels[2], Vec3::ONE);
+        assert!((img.pixel(0) - Vec3::new(0.2158605, 0.0, 1.0)).abs().max_element() < 1e-5);
+        assert_eq!(img.pixel(2), Vec3::ONE);
         // Loaded once: the same file and encoding give the same pixels.
         assert!(Arc::ptr_eq(&img, &load_image(&png, Encoding::Srgb).unwrap()));
         let linear = load_image(&png, Encoding::Linear).unwrap();
-        assert!((linear.pixels[0].x - 128.0 / 255.0).abs() < 1e-6);
+        assert!((linear.pixel(0).x - 128.0 / 255.0).abs() < 1e-6);
         assert_ne!(linear.hash, img.hash);
         // The Debug form names the file and size, not the pixels.
         let dbg = format!("{img:?}");
@@ -969,7 +1083,7 @@ mod tests {
                 ..Default::default()
             },
         );
-        assert!((t.evaluate(Vec2::new(0.0, 1.0)) - img.pixels[0]).abs().max_element() < 1e-6);
+        assert!((t.evaluate(Vec2::new(0.0, 1.0)) - img.pixel(0)).abs().max_element() < 1e-6);
         assert_eq!(t.evaluate(Vec2::new(0.0, 0.0)), Vec3::ONE);
 
         for name in ["a.tga", "a.jpg"] {
@@ -978,9 +1092,9 @@ mod tests {
             let i = load_image(&p, Encoding::Srgb).unwrap();
             assert_eq!((i.width, i.height), (2, 2), "{name}");
             // JPEG is lossy (and 2 x 2 shares its colour): the white corner stays bright.
-            assert!(i.pixels[2].x > 0.8 && i.pixels[1].x < 0.1, "{name}: {:?}", i.pixels);
+            assert!(i.pixel(2).x > 0.8 && i.pixel(1).x < 0.1, "{name}: {:?}", i.pixels());
             if name == "a.tga" {
-                assert_eq!(i.pixels, img.pixels);
+                assert_eq!(i.pixels(), img.pixels());
             }
         }
 
@@ -994,7 +1108,7 @@ mod tests {
             // Float images are linear whatever the encoding says.
             let i = load_image(&p, Encoding::Srgb).unwrap();
             assert_eq!((i.width, i.height), (3, 2), "{name}");
-            assert_eq!(i.pixels, film.pixels, "{name}");
+            assert_eq!(i.pixels(), film.pixels, "{name}");
             assert_eq!(i.max, Vec3::new(5.0, 12.5, 0.125));
             let t = ImageTexture::open(&p, &ImageOptions::default()).unwrap();
             assert_eq!(t.max_value(), Vec3::new(5.0, 12.5, 0.125));

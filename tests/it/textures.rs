@@ -326,7 +326,7 @@ fn a_normal_map_beside_the_scene_tilts_the_shading_normal_of_any_material() {
     };
     assert!(matches!(*base, Material::Conductor { .. }));
     // Read as linear values, not decoded as sRGB.
-    assert_eq!(map.pixels[0], Vec3::new(1.0, 128.0 / 255.0, 128.0 / 255.0));
+    assert_eq!(map.pixel(0), Vec3::new(1.0, 128.0 / 255.0, 128.0 / 255.0));
     // Seen by a ray, the quad's shading normal leans along dp/du (+x) as far
     // as the map says: (2 x 1 - 1, 2 x 128/255 - 1, 2 x 128/255 - 1) normalised.
     let scene = Scene::build(loaded.desc.clone()).unwrap();

@@ -1091,7 +1091,7 @@ fn environment_map(
         }
     };
     let img = light_image(src, file, "infinite light: environment map")?;
-    EnvMap::new(img.width, img.height, img.pixels.clone(), mapping, file)
+    EnvMap::new(img.width, img.height, img.pixels(), mapping, file)
         .map_err(|m| format!("infinite light: environment map {}: {m}", img.path.display()))
 }
 
@@ -1099,7 +1099,7 @@ fn environment_map(
 fn emission_image(src: &Source, file: &str, kind: &str) -> std::result::Result<crate::light::EmissionImage, String> {
     let what = format!("{kind} light: emission image");
     let img = light_image(src, file, &what)?;
-    crate::light::EmissionImage::new(img.width, img.height, img.pixels.clone())
+    crate::light::EmissionImage::new(img.width, img.height, img.pixels())
         .map_err(|m| format!("{what} {}: {m}", img.path.display()))
 }
 

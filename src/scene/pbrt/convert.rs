@@ -814,7 +814,7 @@ impl<'a> Conv<'a> {
                         };
                         let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb)
                             .map_err(|e| located(&at, format!("Camera \"realistic\": aperture: {e}")))?;
-                        let grey = img.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+                        let grey = img.pixels().iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
                         Aperture::normalized(&name, img.width as usize, img.height as usize, grey)
                     }
                 };
@@ -1378,7 +1378,7 @@ impl<'a> Conv<'a> {
         let img = crate::texture::load_image(&path, crate::texture::Encoding::Srgb)
             .map_err(|e| located(at, format!("{kind}: image \"{file}\": {e}")))?;
         let mut film = crate::film::Film::new(img.width, img.height);
-        film.pixels.clone_from(&img.pixels);
+        film.pixels = img.pixels();
         Ok(film)
     }
 

@@ -1596,7 +1596,7 @@ fn a_normal_map_wraps_its_material_read_as_linear_rgb() {
         panic!("{m:?}")
     };
     assert!(matches!(**base, Material::Conductor { .. }), "{base:?}");
-    assert_eq!(map.pixels[0], Vec3::new(128.0, 64.0, 255.0) / 255.0);
+    assert_eq!(map.pixel(0), Vec3::new(128.0, 64.0, 255.0) / 255.0);
 }
 
 #[test]
