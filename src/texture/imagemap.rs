@@ -168,6 +168,18 @@ enum Texels {
 }
 
 impl Texels {
+    fn len(&self) -> usize {
+        match self {
+            Texels::Linear(p) => p.len(),
+            Texels::Bytes { texels, .. } => texels.len(),
+        }
+    }
+
+    /// Every texel, linear, in order.
+    fn all(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..self.len()).map(|i| self.get(i))
+    }
+
     #[inline]
     fn get(&self, i: usize) -> Vec3 {
         match self {
@@ -181,11 +193,12 @@ impl Texels {
 }
 
 /// One level of a MIP map above the finest: linear RGB, first row at the
-/// top, and the alpha channel if the image has one.
+/// top (an 8-bit image's levels in its bytes too), and the alpha channel if
+/// the image has one.
 struct MipLevel {
     width: u32,
     height: u32,
-    pixels: Vec<Vec3>,
+    pixels: Texels,
     alpha: Option<Vec<f32>>,
 }
 
@@ -269,12 +282,7 @@ impl TexImage {
         encoding: Encoding,
     ) -> TexImage {
         let (mut max, mut min) = (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY));
-        let n = match &texels {
-            Texels::Linear(p) => p.len(),
-            Texels::Bytes { texels, .. } => texels.len(),
-        };
-        for i in 0..n {
-            let p = texels.get(i);
+        for p in texels.all() {
             (max, min) = (max.max(p), min.min(p));
         }
         TexImage {
@@ -311,7 +319,7 @@ impl TexImage {
     pub fn pixels(&self) -> Vec<Vec3> {
         match &self.texels {
             Texels::Linear(p) => p.clone(),
-            Texels::Bytes { texels, .. } => (0..texels.len()).map(|i| self.texels.get(i)).collect(),
+            Texels::Bytes { .. } => self.texels.all().collect(),
         }
     }
 
@@ -347,7 +355,7 @@ impl TexImage {
             return self.bilerp(st, wrap);
         }
         let l = &self.pyramid()[level - 1];
-        bilerp_grid(l.width, l.height, st, wrap, |i| l.pixels[i])
+        bilerp_grid(l.width, l.height, st, wrap, |i| l.pixels.get(i))
     }
 
     fn level_bilerp_scalar(&self, level: usize, st: Vec2, wrap: WrapMode) -> f32 {
@@ -380,7 +388,7 @@ impl TexImage {
             0 => (self.pixel(i), self.alpha.as_ref().map(|a| a[i])),
             k => {
                 let l = &self.pyramid()[k - 1];
-                (l.pixels[i], l.alpha.as_ref().map(|a| a[i]))
+                (l.pixels.get(i), l.alpha.as_ref().map(|a| a[i]))
             }
         }
     }
@@ -529,13 +537,33 @@ fn build_pyramid(img: &TexImage) -> Vec<MipLevel> {
             v
         }
     };
+    // An 8-bit image's levels keep the bytes `quantise` rounds to, read
+    // through the image's own table: the same values in a quarter of the
+    // memory.
+    let table = match &img.texels {
+        Texels::Bytes { table, .. } if img.eight_bit => Some(table),
+        _ => None,
+    };
+    let byte = |v: f32| {
+        (img.encoding.encode(v.clamp(0.0, 1.0)) * 255.0)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
     let store = |w: u32, h: u32, pixels: &[Vec3], alpha: Option<&Vec<f32>>| MipLevel {
         width: w,
         height: h,
-        pixels: pixels
-            .iter()
-            .map(|c| Vec3::new(quantise(c.x), quantise(c.y), quantise(c.z)))
-            .collect(),
+        pixels: match table {
+            Some(table) => Texels::Bytes {
+                texels: pixels.iter().map(|c| [byte(c.x), byte(c.y), byte(c.z)]).collect(),
+                table: table.clone(),
+            },
+            None => Texels::Linear(
+                pixels
+                    .iter()
+                    .map(|c| Vec3::new(quantise(c.x), quantise(c.y), quantise(c.z)))
+                    .collect(),
+            ),
+        },
         alpha: alpha.map(|a| a.iter().map(|&v| quantise(v)).collect()),
     };
     let mut levels = vec![store(w1, h1, &first, first_alpha.as_ref())];
@@ -1269,7 +1297,7 @@ mod tests {
             [(2, 1), (1, 1)]
         );
         for l in levels {
-            for p in &l.pixels {
+            for p in l.pixels.all() {
                 let stored = p.x * 255.0;
                 assert!((stored - stored.round()).abs() < 1e-3, "{stored} is not an 8-bit value");
             }
@@ -1287,11 +1315,13 @@ mod tests {
         let level1 = [eight((v[0] + v[1]) * 0.5), eight((v[2] + v[3]) * 0.5)];
         let top = eight(((v[0] + v[1]) * 0.5 + (v[2] + v[3]) * 0.5) * 0.5);
         let got = four.pyramid();
-        assert_eq!([got[0].pixels[0].x, got[0].pixels[1].x], level1);
-        assert_eq!(got[1].pixels[0].x, top);
+        assert_eq!([got[0].pixels.get(0).x, got[0].pixels.get(1).x], level1);
+        assert_eq!(got[1].pixels.get(0).x, top);
+        // Kept as bytes, and equal to the quantised floats they stand for.
+        assert!(matches!(got[0].pixels, Texels::Bytes { .. }));
         // sRGB levels are quantised in the encoding: values stay on its grid.
         let srgb = load_image(&path, Encoding::Srgb).unwrap();
-        for p in &srgb.pyramid()[0].pixels {
+        for p in srgb.pyramid()[0].pixels.all() {
             let stored = Encoding::Srgb.encode(p.x) * 255.0;
             assert!((stored - stored.round()).abs() < 1e-2, "{stored}");
         }
