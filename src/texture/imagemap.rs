@@ -317,10 +317,7 @@ impl TexImage {
 
     /// Every texel, linear, row by row from the top: a copy.
     pub fn pixels(&self) -> Vec<Vec3> {
-        match &self.texels {
-            Texels::Linear(p) => p.clone(),
-            Texels::Bytes { .. } => self.texels.all().collect(),
-        }
+        self.texels.all().collect()
     }
 
     /// Bilinear lookup at image coordinates `st` in [0, 1]^2 (t down from the
