@@ -474,6 +474,13 @@ struct Subtree {
     leaves: Vec<(u32, Place)>,
 }
 
+/// A lane's child as a subtree builds it: a light and its place, or a
+/// subtree of its own.
+enum Child {
+    Light(u32, Place),
+    Tree(Subtree),
+}
+
 /// Sets at least this large build their children's subtrees on threads
 /// of their own; smaller ones are not worth a task.
 const PARALLEL_LIGHTS: usize = 2048;
@@ -515,14 +522,14 @@ fn subtree(items: &mut [(u32, LightBounds)], level: usize, lanes: u64, cuts: usi
         let bounds = union_of(g);
         let path = lanes | (k as u64) << (2 * level);
         let child = match &**g {
-            [(light, _)] => Err((
+            [(light, _)] => Child::Light(
                 *light,
                 Place::Tree {
                     lanes: path,
                     depth: (level + 1) as u8,
                 },
-            )),
-            _ => Ok(subtree(g, level + 1, path, cuts + 2)),
+            ),
+            _ => Child::Tree(subtree(g, level + 1, path, cuts + 2)),
         };
         (bounds, child)
     };
@@ -535,11 +542,11 @@ fn subtree(items: &mut [(u32, LightBounds)], level: usize, lanes: u64, cuts: usi
     let mut lanes_of = Vec::with_capacity(4);
     for (bounds, child) in children {
         let index = match child {
-            Err((light, place)) => {
+            Child::Light(light, place) => {
                 leaves.push((light, place));
                 LEAF | light
             }
-            Ok(sub) => {
+            Child::Tree(sub) => {
                 let offset = nodes.len() as u32;
                 nodes.extend(sub.nodes.into_iter().map(|mut n| {
                     for c in &mut n.child {
