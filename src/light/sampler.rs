@@ -11,6 +11,9 @@
 //! facing it, where choosing by power spends most shadow rays on lights far
 //! away or turned away.
 //!
+//! A leaf of the tree is one light, or the two triangles of a quad chosen
+//! between by their power (`Unit`).
+//!
 //! Lights without bounds (distant and infinite ones) are chosen apart from
 //! the tree, each as likely as the whole tree, as pbrt-v4 chooses them.
 //! Each bound is conservative: a light that can light a point has an
@@ -350,7 +353,7 @@ struct Node {
     cos_e: Vec4,
     phi: Vec4,
     two_sided: BVec4A,
-    /// Each lane's child: a node, or with `LEAF` set a light.
+    /// Each lane's child: a node, or with `LEAF` set a unit of lights.
     child: [u32; 4],
 }
 
@@ -444,12 +447,47 @@ impl Node {
 }
 
 /// Where a light is in the choice: apart from the tree, or at the end of a
-/// path through it (two bits a level: the lane taken).
+/// path through it (two bits a level: the lane taken), chosen there with
+/// `share` of its leaf's probability.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Place {
     None,
     Infinite,
-    Tree { lanes: u64, depth: u8 },
+    Tree { lanes: u64, depth: u8, share: f32 },
+}
+
+/// What a leaf of the tree holds: one light, or the two triangles of a
+/// quad, `first` chosen with probability `share` (its part of the pair's
+/// power) and `second` otherwise. A quad is one light to the eye, and
+/// weighing its halves apart would cost a weighing at every point lit for
+/// nothing: their bounds are the quad's but for its extent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Unit {
+    first: u32,
+    second: u32,
+    share: f32,
+}
+
+/// Whether lights `a` and `b` make a quad: triangles sharing an edge,
+/// facing the same way in one plane, emitting on the same sides.
+fn make_quad(a: &Light, b: &Light) -> bool {
+    let (
+        Light::Triangle {
+            vertices: va,
+            two_sided: sa,
+            ..
+        },
+        Light::Triangle {
+            vertices: vb,
+            two_sided: sb,
+            ..
+        },
+    ) = (a, b)
+    else {
+        return false;
+    };
+    let shared = vb.iter().filter(|v| va.contains(v)).count();
+    sa == sb && shared == 2 && super::triangle_normal(va).dot(super::triangle_normal(vb)) > 1.0 - 1e-5
 }
 
 /// Deeper than this (in binary cuts) the build halves sets by count, so
@@ -463,6 +501,10 @@ const BUCKETS: usize = 12;
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightTree {
     nodes: Vec<Node>,
+    /// The leaves' lights, by the index a leaf's child holds.
+    units: Vec<Unit>,
+    /// The tree is one leaf: nothing to weigh, its light is the choice.
+    single: bool,
     infinite: Vec<u32>,
     places: Vec<Place>,
 }
@@ -527,6 +569,7 @@ fn subtree(items: &mut [(u32, LightBounds)], level: usize, lanes: u64, cuts: usi
                 Place::Tree {
                     lanes: path,
                     depth: (level + 1) as u8,
+                    share: 1.0,
                 },
             ),
             _ => Child::Tree(subtree(g, level + 1, path, cuts + 2)),
@@ -661,10 +704,10 @@ impl LightTree {
     pub fn build(lights: &[Light]) -> LightTree {
         let mut places = vec![Place::None; lights.len()];
         let mut infinite = Vec::new();
-        let mut items = Vec::new();
+        let mut bounded = Vec::new();
         for (i, light) in lights.iter().enumerate() {
             match LightBounds::of(light) {
-                Some(b) => items.push((i as u32, b)),
+                Some(b) => bounded.push((i as u32, b)),
                 None if matches!(light, Light::Distant { .. } | Light::Infinite { .. })
                     && light.power().max_element() > 0.0 =>
                 {
@@ -674,16 +717,62 @@ impl LightTree {
                 None => {}
             }
         }
+        // A quad's two triangles come one after the other from every mesh
+        // loader: one leaf, chosen between by power.
+        let mut units = Vec::with_capacity(bounded.len());
+        let mut items = Vec::with_capacity(bounded.len());
+        let mut k = 0;
+        while k < bounded.len() {
+            let (a, ba) = bounded[k];
+            let unit = items.len() as u32;
+            match bounded.get(k + 1) {
+                Some(&(b, bb)) if b == a + 1 && make_quad(&lights[a as usize], &lights[b as usize]) => {
+                    units.push(Unit {
+                        first: a,
+                        second: b,
+                        share: ba.phi / (ba.phi + bb.phi),
+                    });
+                    items.push((unit, ba.union(&bb)));
+                    k += 2;
+                }
+                _ => {
+                    units.push(Unit {
+                        first: a,
+                        second: EMPTY,
+                        share: 1.0,
+                    });
+                    items.push((unit, ba));
+                    k += 1;
+                }
+            }
+        }
         let mut tree = LightTree {
             nodes: Vec::with_capacity(items.len() / 2 + 1),
+            single: items.len() == 1,
+            units,
             infinite,
             places,
         };
         if !items.is_empty() {
             let sub = subtree(&mut items, 0, 0, 0);
             tree.nodes = sub.nodes;
-            for (light, place) in sub.leaves {
-                tree.places[light as usize] = place;
+            for (unit, place) in sub.leaves {
+                let Place::Tree { lanes, depth, .. } = place else {
+                    continue;
+                };
+                let u = tree.units[unit as usize];
+                tree.places[u.first as usize] = Place::Tree {
+                    lanes,
+                    depth,
+                    share: u.share,
+                };
+                if u.second != EMPTY {
+                    tree.places[u.second as usize] = Place::Tree {
+                        lanes,
+                        depth,
+                        share: 1.0 - u.share,
+                    };
+                }
             }
         }
         tree
@@ -711,7 +800,10 @@ impl LightTree {
         let mut u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPS);
         let mut pmf = 1.0 - p_inf;
         let mut node = &self.nodes[0];
-        loop {
+        let leaf = loop {
+            if self.single {
+                break node.child[0];
+            }
             let p = node.probabilities(ctx)?;
             // The lane whose share of [0, 1) holds u; rounding may leave u
             // past the last share, which then takes it.
@@ -730,9 +822,17 @@ impl LightTree {
             pmf *= p[k];
             let child = node.child[k];
             if child & LEAF != 0 {
-                return Some(((child & !LEAF) as usize, pmf));
+                break child;
             }
             node = &self.nodes[child as usize];
+        };
+        let unit = self.units[(leaf & !LEAF) as usize];
+        if unit.second == EMPTY {
+            Some((unit.first as usize, pmf))
+        } else if u < unit.share {
+            Some((unit.first as usize, pmf * unit.share))
+        } else {
+            Some((unit.second as usize, pmf * (1.0 - unit.share)))
         }
     }
 
@@ -740,10 +840,13 @@ impl LightTree {
     pub fn pmf(&self, ctx: &LightContext, light: usize) -> f32 {
         match self.places.get(light) {
             Some(Place::Infinite) => self.p_infinite() / self.infinite.len() as f32,
-            Some(&Place::Tree { lanes, depth }) => {
+            Some(&Place::Tree { lanes, depth, share }) => {
                 let mut pmf = 1.0 - self.p_infinite();
                 let mut node = &self.nodes[0];
                 for level in 0..depth as u32 {
+                    if self.single {
+                        break;
+                    }
                     let Some(p) = node.probabilities(ctx) else {
                         return 0.0;
                     };
@@ -755,7 +858,7 @@ impl LightTree {
                     }
                     node = &self.nodes[child as usize];
                 }
-                pmf
+                pmf * share
             }
             _ => 0.0,
         }
@@ -794,8 +897,16 @@ mod tests {
             let l = match k % 6 {
                 0 | 1 => {
                     let (a, b) = (unit(rng) * 0.3, unit(rng) * 0.3);
+                    // Every other second triangle the other half of the
+                    // first's parallelogram: a quad, when both emit alike.
+                    let vertices = match ls.last() {
+                        Some(Light::Triangle {
+                            vertices: [p, q, r], ..
+                        }) if k % 12 == 7 => [*q, *q + (*r - *p), *r],
+                        _ => [c, c + a, c + b],
+                    };
                     Light::Triangle {
-                        vertices: [c, c + a, c + b],
+                        vertices,
                         radiance: Vec3::splat(1.0 + 9.0 * rng.next_f32()),
                         two_sided: k % 4 == 1,
                         image: None,
@@ -867,19 +978,27 @@ mod tests {
             };
             let one = on(1);
             assert_eq!(one, on(3), "{n} lights");
-            // Every light the tree holds has its place, and no two the same.
+            // Every light the tree holds has its place, and no two the same
+            // but a quad's halves, which share a leaf and its probability.
             let mut paths: Vec<_> = one
                 .places
                 .iter()
                 .filter_map(|p| match p {
-                    Place::Tree { lanes, depth } => Some((*lanes, *depth)),
+                    Place::Tree { lanes, depth, share } => Some((*lanes, *depth, *share)),
                     _ => None,
                 })
                 .collect();
             let held = paths.len();
-            paths.sort_unstable();
-            paths.dedup();
-            assert_eq!(paths.len(), held);
+            paths.sort_unstable_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2)));
+            let mut quads = 0;
+            for w in paths.windows(2) {
+                if (w[0].0, w[0].1) == (w[1].0, w[1].1) {
+                    quads += 1;
+                    assert_eq!(w[0].2 + w[1].2, 1.0, "a quad's shares");
+                }
+            }
+            assert_eq!(one.units.len(), held - quads);
+            assert!(quads >= n / 24, "{quads} quads of {n} lights");
             assert!(held >= n - n / 6, "{held} of {n}");
             // Each walk ends where the light's stored path leads.
             let mut rng = Rng::new(n as u64, 6);
@@ -1008,19 +1127,72 @@ mod tests {
         }
         assert!(checked > 10_000, "{checked}");
         // And lights facing away are ruled out: a one-sided triangle seen from
-        // behind brings nothing, and its tree of one says so.
-        let t = Light::Triangle {
-            vertices: [Vec3::ZERO, Vec3::X, Vec3::Y],
+        // behind brings nothing, and the tree says so.
+        let t = |z: f32| Light::Triangle {
+            vertices: [Vec3::new(0.0, 0.0, z), Vec3::new(1.0, 0.0, z), Vec3::new(0.0, 1.0, z)],
             radiance: Vec3::ONE,
             two_sided: false,
             image: None,
         };
-        let tree = LightTree::build(std::slice::from_ref(&t));
-        assert!(tree.pmf(&LightContext::medium(Vec3::new(0.2, 0.2, 1.0)), 0) == 1.0);
-        assert!(tree.pmf(&LightContext::medium(Vec3::new(0.2, 0.2, -1.0)), 0) == 0.0);
+        let tree = LightTree::build(&[t(0.0), t(-3.0)]);
+        let front = tree.pmf(&LightContext::medium(Vec3::new(0.2, 0.2, 1.0)), 0);
+        assert!(front > 0.5 && front < 1.0, "{front}");
+        let behind = LightContext::medium(Vec3::new(0.2, 0.2, -1.0));
+        assert_eq!(tree.pmf(&behind, 0), 0.0);
+        assert_eq!(tree.pmf(&behind, 1), 1.0);
         assert!(tree
-            .pick(&LightContext::medium(Vec3::new(0.2, 0.2, -1.0)), 0.5)
+            .pick(&LightContext::medium(Vec3::new(0.2, 0.2, -4.0)), 0.5)
             .is_none());
+        // A tree of one light has nothing to weigh: it is the choice
+        // wherever the point, and lights nothing behind it by itself.
+        let tree = LightTree::build(&[t(0.0)]);
+        assert_eq!(tree.pmf(&behind, 0), 1.0);
+        assert_eq!(tree.pick(&behind, 0.5), Some((0, 1.0)));
+    }
+
+    #[test]
+    fn a_quad_is_one_leaf_whose_halves_are_chosen_by_their_power() {
+        let quad = |radiance: [f32; 2], two_sided: [bool; 2]| {
+            let (p, q, r, s) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 2.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
+            [[p, q, r], [p, r, s]]
+                .into_iter()
+                .zip(radiance)
+                .zip(two_sided)
+                .map(|((vertices, l), two_sided)| Light::Triangle {
+                    vertices,
+                    radiance: Vec3::splat(l),
+                    two_sided,
+                    image: None,
+                })
+        };
+        let ctx = LightContext::surface(Vec3::new(0.3, 0.5, 2.0), Vec3::NEG_Z);
+        // A point light beside it: the quad's halves are weighed together.
+        let point = Light::Point {
+            position: Vec3::new(0.0, 0.0, 4.0),
+            power: Vec3::splat(40.0),
+        };
+        let mut ls: Vec<Light> = quad([1.0, 3.0], [false; 2]).collect();
+        ls.push(point.clone());
+        let tree = LightTree::build(&ls);
+        assert_eq!(tree.units.len(), 2);
+        let q = tree.pmf(&ctx, 0) + tree.pmf(&ctx, 1);
+        assert!((tree.pmf(&ctx, 0) - 0.25 * q).abs() < 1e-6 * q, "by power, 1 : 3");
+        assert!((q + tree.pmf(&ctx, 2) - 1.0).abs() < 1e-6);
+        // Numbers below the first half's share of the leaf choose it.
+        let picks: Vec<usize> = (0..100)
+            .filter_map(|j| tree.pick(&ctx, (j as f32 + 0.5) / 100.0).map(|(i, _)| i))
+            .collect();
+        for i in 0..3 {
+            let f = picks.iter().filter(|&&k| k == i).count() as f32 / 100.0;
+            assert!((f - tree.pmf(&ctx, i)).abs() <= 0.02, "light {i}: {f}");
+        }
+        // Triangles that emit on different sides, or are not one after the
+        // other, stay apart.
+        let apart: Vec<Light> = quad([1.0, 1.0], [false, true]).collect();
+        assert_eq!(LightTree::build(&apart).units.len(), 2);
+        let mut between: Vec<Light> = quad([1.0, 1.0], [false; 2]).collect();
+        between.insert(1, point);
+        assert_eq!(LightTree::build(&between).units.len(), 3);
     }
 
     #[test]
