@@ -89,12 +89,10 @@ def case_setup(scene, size):
         # The pbrt file asks for a gaussian filter, its Mitsuba version for a
         # tent of radius 1: ours renders with --filter tent so that both
         # converge to the same pixels.
-        # The pbrt file names no light sampler, so pbrt-v4's default, the
-        # light tree, would be ours too; Mitsuba chooses emitters without
-        # one, and on this one quad light the tree costs about a fifth more
-        # time for the same noise (BENCHMARKS.md, "Choosing lights by a tree"): ours
-        # chooses by power, as Mitsuba does.
-        return (["--scene", os.path.join(BITTERLI, "scene-v4.pbrt"), "--filter", "tent", "--light-sampler", "power"],
+        # The pbrt file names no light sampler, so ours is pbrt-v4's
+        # default, the light tree; a tree of this one quad light has nothing
+        # to weigh and chooses by power, as Mitsuba chooses its emitter.
+        return (["--scene", os.path.join(BITTERLI, "scene-v4.pbrt"), "--filter", "tent"],
                 os.path.join(BITTERLI, "scene-mitsuba3.xml"), "4", int(size), REF_SPP_BOX)
     if scene == "cornell-box-box":
         # The same scene with a box filter in both renderers: Mitsuba splats
@@ -107,7 +105,7 @@ def case_setup(scene, size):
         assert '<rfilter type="tent" />' in text
         with open(xml, "w") as f:
             f.write(text.replace('<rfilter type="tent" />', '<rfilter type="box" />'))
-        return (["--scene", os.path.join(BITTERLI, "scene-v4.pbrt"), "--filter", "box", "--light-sampler", "power"],
+        return (["--scene", os.path.join(BITTERLI, "scene-v4.pbrt"), "--filter", "box"],
                 xml, "4", int(size),
                 REF_SPP_BOX)
     raise SystemExit(f"unknown case scene {scene!r}")

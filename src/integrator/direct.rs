@@ -10,7 +10,7 @@
 
 use super::{RadianceEstimator, RayStats};
 use crate::bsdf::{Bsdf, BsdfSample, TransportMode};
-use crate::light::{LightContext, LightSample, LightSampleU, LightSamplerKind};
+use crate::light::{LightContext, LightSample, LightSampleU};
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{hammersley_shifted, Sampler};
 use crate::scene::{Hit, Scene};
@@ -188,7 +188,7 @@ pub fn emitted_radiance(scene: &Scene, li: usize, ray: &Ray, hit: &Hit, from: Op
 /// the point (`LightSampleU`).
 #[inline(always)]
 pub fn light_sample_u(scene: &Scene, sampler: &mut Sampler) -> LightSampleU {
-    if scene.light_sampler() == LightSamplerKind::Bvh {
+    if scene.chooses_by_tree() {
         let choice = sampler.next_f32();
         LightSampleU {
             choice,

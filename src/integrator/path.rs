@@ -637,4 +637,47 @@ mod tests {
             eprintln!("{kind:?}: standard errors (mis, light, bsdf) {errors:?}");
         }
     }
+
+    #[test]
+    fn a_tree_of_one_quad_chooses_by_power_and_two_quads_make_a_tree() {
+        use crate::light::{Light, LightSamplerKind};
+        let with = |kind: LightSamplerKind, second_quad: bool| {
+            let mut d = crate::integrator::analytic::floor_under_quad();
+            if second_quad {
+                let far: Vec<Light> = d
+                    .lights
+                    .iter()
+                    .map(|l| match l {
+                        Light::Triangle {
+                            vertices,
+                            radiance,
+                            two_sided,
+                            image,
+                        } => Light::Triangle {
+                            vertices: vertices.map(|v| v + Vec3::new(4.0, 0.0, 0.0)),
+                            radiance: *radiance,
+                            two_sided: *two_sided,
+                            image: image.clone(),
+                        },
+                        _ => unreachable!("the floor's light is a quad"),
+                    })
+                    .collect();
+                d.lights.extend(far);
+            }
+            d.light_sampler = kind;
+            crate::Scene::build(d).unwrap()
+        };
+        // The quad's two triangles are one leaf and nothing is apart from
+        // it: the tree would choose by power, so the scene does, numbers
+        // and all, and the images are the same bit for bit.
+        let tree = with(LightSamplerKind::Bvh, false);
+        assert!(!tree.chooses_by_tree());
+        let film = |scene: &crate::Scene| render(scene, &path_settings(8, None), &|| {}).unwrap().film;
+        let power = film(&with(LightSamplerKind::Power, false));
+        assert!(power.mean(0, 0, 8, 8).x > 0.0);
+        assert_eq!(film(&tree).pixels, power.pixels);
+        // Two quads apart are two leaves to weigh at every point.
+        assert!(with(LightSamplerKind::Bvh, true).chooses_by_tree());
+        assert!(!with(LightSamplerKind::Power, true).chooses_by_tree());
+    }
 }

@@ -778,6 +778,13 @@ impl LightTree {
         tree
     }
 
+    /// Whether the tree is one leaf and no light is chosen apart from it:
+    /// then it chooses each light in proportion to its power, as
+    /// [`LightSamplerKind::Power`] does.
+    pub fn is_power_choice(&self) -> bool {
+        self.single && self.infinite.is_empty()
+    }
+
     /// The probability of choosing an infinite light (each as likely as
     /// the tree).
     fn p_infinite(&self) -> f32 {

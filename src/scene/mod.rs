@@ -699,6 +699,16 @@ fn placed_hit(h: Hit, to_world: glam::Mat4) -> Hit {
 /// the texture coordinates; with vertex normals, pbrt-v4's shading frame
 /// (dp/du made perpendicular to the shading normal, dp/dv their cross
 /// product) and the normals' derivatives.
+/// The light tree the scene's sampler asks for, unless it has nothing to
+/// weigh: a tree of one leaf (a light, or a quad's two triangles) and no
+/// lights apart from it chooses as choosing by power does, and then does so
+/// without the tree's number of its own.
+fn light_tree(lights: &[Light], kind: LightSamplerKind) -> Option<LightTree> {
+    (kind == LightSamplerKind::Bvh)
+        .then(|| LightTree::build(lights))
+        .filter(|t| !t.is_power_choice())
+}
+
 fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let uv = t.uvs.unwrap_or(DEFAULT_UV);
     let [p0, p1, p2] = t.vertices;
@@ -1404,9 +1414,7 @@ impl Scene {
             })
             .collect();
         scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
-        if scene.desc.light_sampler == LightSamplerKind::Bvh {
-            scene.light_tree = Some(LightTree::build(&scene.lights));
-        }
+        scene.light_tree = light_tree(&scene.lights, scene.desc.light_sampler);
         scene.dpdus = (0..scene.triangles.len()).map(|i| scene.triangle_dpdu(i)).collect();
         Ok(scene)
     }
@@ -1458,6 +1466,13 @@ impl Scene {
     /// How shadow rays choose their light.
     pub fn light_sampler(&self) -> LightSamplerKind {
         self.desc.light_sampler
+    }
+
+    /// Whether shadow rays choose their light through the light tree: asked
+    /// for, and with more than one leaf or lights apart from it to choose
+    /// among (a tree of one leaf would choose by power).
+    pub fn chooses_by_tree(&self) -> bool {
+        self.light_tree.is_some()
     }
 
     /// Chooses the light of a shadow ray from `ctx` with `u`: its index, the
@@ -2278,9 +2293,7 @@ impl Scene {
         if let Ok(shapes) = shape_bvh(&self.spheres, &self.disks, &self.desc.curves, &self.shape_motions) {
             self.shapes = shapes;
         }
-        if self.light_tree.is_some() {
-            self.light_tree = Some(LightTree::build(&self.lights));
-        }
+        self.light_tree = light_tree(&self.lights, self.desc.light_sampler);
     }
 
     /// Bounding box of all geometry (triangles, spheres and lights).
