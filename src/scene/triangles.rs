@@ -388,7 +388,7 @@ impl ShadingTable {
         } else {
             &list.normals
         };
-        Some(c.vertices.map(|v| table[v as usize]))
+        Some(gather(table, c.vertices))
     }
 
     /// Triangle `k`'s texture coordinates, when it has any.
@@ -399,11 +399,18 @@ impl ShadingTable {
             NO_UVS => None,
             VERTEX_UVS => {
                 let table = if c.kind & OWN != 0 { &self.uvs } else { &list.uvs };
-                Some(c.vertices.map(|v| table[v as usize]))
+                Some(gather(table, c.vertices))
             }
             code => list.face_uvs.get((code - FIRST_FACE_UVS) as usize).copied(),
         }
     }
+}
+
+/// A triangle's three entries of a vertex table, written out: `[_; 3]::map`
+/// with its bounds checks stayed a call of its own on every hit.
+#[inline(always)]
+fn gather<T: Copy>(table: &[T], [a, b, c]: [u32; 3]) -> [T; 3] {
+    [table[a as usize], table[b as usize], table[c as usize]]
 }
 
 impl Extend<TriangleDesc> for Triangles {
