@@ -112,6 +112,19 @@ struct ObjectDef {
     shapes: Vec<PendingShape>,
 }
 
+/// A `plymesh` file read while the scene is, decoded with the others once
+/// it has been: decoding is most of the reading of a scene of many meshes,
+/// and the files decode apart, on every core.
+struct PlyJob {
+    path: PathBuf,
+    bytes: Vec<u8>,
+    loc: Loc,
+    name: String,
+    /// What the shapes hold for the mesh until it is decoded (one of its
+    /// own, known by its address).
+    stand_in: Arc<TriMesh>,
+}
+
 /// The files being read by one `parse` pass: Includes stack on it.
 struct Stream {
     lexers: Vec<Lexer>,
@@ -131,6 +144,7 @@ pub struct Builder<'a> {
     items: Vec<Item>,
     texture_names: HashSet<(String, TextureKind)>,
     ply_cache: HashMap<PathBuf, Arc<TriMesh>>,
+    ply_jobs: Vec<PlyJob>,
     last_loc: Loc,
     scene: PbrtScene,
 }
@@ -244,6 +258,7 @@ impl<'a> Builder<'a> {
             items: vec![],
             texture_names: HashSet::new(),
             ply_cache: HashMap::new(),
+            ply_jobs: Vec::new(),
             last_loc: Loc::new(main_file, 1, 1),
             scene: PbrtScene {
                 camera: Camera {
@@ -1343,39 +1358,73 @@ impl<'a> Builder<'a> {
         if let Some(m) = self.ply_cache.get(&path) {
             return Ok(m.clone());
         }
-        let read = ply::read(&path, &bytes, ply::Polygons::TrianglesAndQuads)
-            .map_err(|e| PbrtError::at(loc, format!("plymesh \"{name}\": {e}")))?;
-        if read.skipped_faces > 0 {
-            self.warn(
-                loc,
-                format!(
-                    "plymesh \"{name}\": {} faces of other than 3 or 4 vertices skipped (as pbrt-v4 does)",
-                    read.skipped_faces
-                ),
-            );
-        }
-        for note in read.normals_note().into_iter().chain(read.trailing_note()) {
-            self.warn(loc, format!("plymesh \"{name}\": {note}"));
-        }
-        if read.triangles.is_empty() {
-            self.warn(loc, format!("plymesh \"{name}\": the mesh has no faces"));
-        }
-        let mut second_halves = read.second_halves;
-        if !second_halves.is_empty() {
-            second_halves.resize(read.triangles.len(), false);
-        }
-        let mesh = Arc::new(TriMesh {
-            positions: read.positions,
-            normals: read.normals,
-            uvs: read.uvs,
-            triangles: read.triangles,
-            quads_split: read.quads,
-            second_halves,
+        let stand_in = Arc::new(TriMesh {
+            positions: Vec::new(),
+            normals: None,
+            uvs: None,
+            triangles: Vec::new(),
+            quads_split: 0,
+            second_halves: Vec::new(),
             file: Some(path.clone()),
             quadric: false,
         });
-        self.ply_cache.insert(path, mesh.clone());
-        Ok(mesh)
+        self.ply_cache.insert(path.clone(), stand_in.clone());
+        self.ply_jobs.push(PlyJob {
+            path,
+            bytes,
+            loc: loc.clone(),
+            name: name.to_string(),
+            stand_in: stand_in.clone(),
+        });
+        Ok(stand_in)
+    }
+
+    /// Decodes every `plymesh` file read, in parallel; the first error in
+    /// the order of the files, and each file's warnings in that order. The
+    /// meshes by the address of their stand-ins.
+    fn decode_plys(&mut self) -> Result<HashMap<usize, Arc<TriMesh>>> {
+        use rayon::prelude::*;
+        let jobs = std::mem::take(&mut self.ply_jobs);
+        let reads: Vec<_> = jobs
+            .par_iter()
+            .map(|j| ply::read(&j.path, &j.bytes, ply::Polygons::TrianglesAndQuads))
+            .collect();
+        let mut meshes = HashMap::with_capacity(jobs.len());
+        for (job, read) in jobs.into_iter().zip(reads) {
+            let (loc, name) = (&job.loc, &job.name);
+            let read = read.map_err(|e| PbrtError::at(loc, format!("plymesh \"{name}\": {e}")))?;
+            if read.skipped_faces > 0 {
+                self.warn(
+                    loc,
+                    format!(
+                        "plymesh \"{name}\": {} faces of other than 3 or 4 vertices skipped (as pbrt-v4 does)",
+                        read.skipped_faces
+                    ),
+                );
+            }
+            for note in read.normals_note().into_iter().chain(read.trailing_note()) {
+                self.warn(loc, format!("plymesh \"{name}\": {note}"));
+            }
+            if read.triangles.is_empty() {
+                self.warn(loc, format!("plymesh \"{name}\": the mesh has no faces"));
+            }
+            let mut second_halves = read.second_halves;
+            if !second_halves.is_empty() {
+                second_halves.resize(read.triangles.len(), false);
+            }
+            let mesh = Arc::new(TriMesh {
+                positions: read.positions,
+                normals: read.normals,
+                uvs: read.uvs,
+                triangles: read.triangles,
+                quads_split: read.quads,
+                second_halves,
+                file: Some(job.path),
+                quadric: false,
+            });
+            meshes.insert(Arc::as_ptr(&job.stand_in) as usize, mesh);
+        }
+        Ok(meshes)
     }
 
     fn resolve_material(&self, r: &MaterialRef, loc: &Loc) -> Result<usize> {
@@ -1391,6 +1440,7 @@ impl<'a> Builder<'a> {
     }
 
     fn finish(mut self) -> Result<PbrtScene> {
+        let meshes = self.decode_plys()?;
         if let Some((_, kind, loc)) = self.pushed.last() {
             let what = if *kind == Pushed::Object {
                 "ObjectBegin without ObjectEnd"
@@ -1443,6 +1493,13 @@ impl<'a> Builder<'a> {
         for (_, def) in self.objects.values() {
             for p in def.iter() {
                 self.resolve_material(&p.material, &p.shape.loc)?;
+            }
+        }
+        for s in &mut shapes {
+            if let Geometry::Mesh(m) = &s.geometry {
+                if let Some(mesh) = meshes.get(&(Arc::as_ptr(m) as usize)) {
+                    s.geometry = Geometry::Mesh(mesh.clone());
+                }
             }
         }
         self.scene.shapes = shapes;

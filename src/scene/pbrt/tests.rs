@@ -1113,6 +1113,65 @@ fn ply_meshes_read_uv_normals_quads_and_gzip() {
     assert_eq!(s.files.len(), 4);
 }
 
+#[test]
+fn many_ply_files_decode_together_into_their_own_shapes_with_warnings_and_errors_in_file_order() {
+    // Forty files, each a quad moved by its number, the odd ones with a
+    // face to skip (a warning each), and one inside an object instanced twice.
+    let quad = |k: usize, skip: bool| {
+        let faces = if skip {
+            "4 0 1 2 3 7\n5 0 1 2 3 4 9\n"
+        } else {
+            "4 0 1 2 3 7\n"
+        };
+        ply_ascii(faces, if skip { 2 } else { 1 }).replacen("0 0 0 0 0 1 0 0", &format!("{k} 0 0 0 0 1 0 0"), 1)
+    };
+    let mut files = Files::default();
+    let mut text =
+        String::from("WorldBegin\nObjectBegin \"o\"\nShape \"plymesh\" \"string filename\" \"p39.ply\"\nObjectEnd\n");
+    for k in 0..40 {
+        files = files.with(&format!("scene/p{k}.ply"), quad(k, k % 2 == 1));
+        if k < 39 {
+            text += &format!("Shape \"plymesh\" \"string filename\" \"p{k}.ply\"\n");
+        }
+    }
+    text += "ObjectInstance \"o\"\nObjectInstance \"o\"\n";
+    let s = parse_with(&text, files).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 41);
+    for (i, shape) in s.shapes.iter().enumerate() {
+        let k = i.min(39);
+        let m = mesh(shape);
+        assert_eq!(m.positions[0].x, k as f32, "shape {i}");
+        assert_eq!(m.triangles.len(), 2, "shape {i}");
+        assert_eq!(m.file.as_deref(), Some(Path::new(&format!("scene/p{k}.ply"))));
+    }
+    // The object's file was read first (its directive comes first).
+    let skipped: Vec<&str> = s
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("faces of other than 3 or 4 vertices skipped"))
+        .map(|w| w.message.split('"').nth(1).unwrap_or(""))
+        .collect();
+    let expected: Vec<String> = std::iter::once(39)
+        .chain((1..39).step_by(2))
+        .map(|k| format!("p{k}.ply"))
+        .collect();
+    assert_eq!(skipped, expected);
+    // Of two bad files, the one named first is the error, whichever decodes first.
+    let mut files = Files::default();
+    let mut text = String::from("WorldBegin\n");
+    for k in 0..40 {
+        let body = match k {
+            12 => ply_ascii("3 0 1 9\n", 1),
+            30 => ply_ascii("3 0 1\n", 1),
+            _ => quad(k, false),
+        };
+        files = files.with(&format!("scene/p{k}.ply"), body);
+        text += &format!("Shape \"plymesh\" \"string filename\" \"p{k}.ply\"\n");
+    }
+    let e = error_with(&text, files, "scene/main.pbrt:14:1: plymesh \"p12.ply\": scene/p12.ply");
+    assert!(e.contains("vertex index 9 is out of range"), "{e}");
+}
+
 /// The binary PLY without its last index.
 fn truncated_binary() -> Vec<u8> {
     let b = ply_binary(false);
