@@ -1055,11 +1055,11 @@ impl Scene {
                 .iter()
                 .filter(|l| matches!(l, Light::Triangle { .. }))
                 .count();
-        let mut tris = Vec::with_capacity(capacity);
+        let tris = Vec::with_capacity(capacity);
         // The description's index of each triangle kept; what the hits
         // read of them is gathered in the BVH's order once it is built, so
         // that it never exists twice. The lights' is made as they are.
-        let mut objects: Vec<u32> = Vec::with_capacity(desc.triangles.len());
+        let objects: Vec<u32> = Vec::with_capacity(desc.triangles.len());
         let mut info = Vec::new();
         let mut light_shading = Vec::new();
         let mut dropped = 0;
@@ -1084,27 +1084,27 @@ impl Scene {
             }
             run_of[r.clone()].fill(k as u32);
         }
-        // The run of each triangle kept (static ones and lights: none).
-        let mut runs = Vec::with_capacity(desc.triangles.len());
-        for (i, t) in desc.triangles.iter().enumerate() {
-            if t.material >= nmat {
-                return Err(Error::Scene(format!(
-                    "triangle {i} names material {} of {nmat}",
-                    t.material
-                )));
-            }
-            let tri = Triangle::new(t.vertices[0], t.vertices[1], t.vertices[2]);
-            let n = tri.normal_raw();
-            let finite = t.vertices.iter().all(|v| v.is_finite());
-            // Zero-area and non-finite triangles cannot be hit or shaded.
-            if !finite || !n.is_finite() || n.length_squared() == 0.0 {
-                dropped += 1;
-                continue;
-            }
-            tris.push(tri);
-            runs.push(run_of[i]);
-            objects.push(i as u32);
+        let nt = desc.triangles.len();
+        if let Some((i, m)) = (0..nt)
+            .filter_map(|i| desc.triangles.material(i).map(|m| (i, m)))
+            .find(|&(_, m)| m >= nmat)
+        {
+            return Err(Error::Scene(format!("triangle {i} names material {m} of {nmat}")));
         }
+        // Zero-area and non-finite triangles cannot be hit or shaded. The
+        // rest are made on every core, in their order.
+        let mut made = (tris, objects);
+        made.par_extend((0..nt).into_par_iter().filter_map(|i| {
+            let v = desc.triangles.vertices(i)?;
+            let tri = Triangle::new(v[0], v[1], v[2]);
+            let n = tri.normal_raw();
+            let finite = v.iter().all(|p| p.is_finite());
+            (finite && n.is_finite() && n.length_squared() != 0.0).then_some((tri, i as u32))
+        }));
+        let (mut tris, objects) = made;
+        dropped += nt - objects.len();
+        // The run of each triangle kept (static ones and lights: none).
+        let mut runs: Vec<u32> = objects.iter().map(|&i| run_of[i as usize]).collect();
         let mut lights = desc.lights.clone();
         let mut spheres: Vec<SphereObject> = desc
             .spheres
@@ -1415,7 +1415,10 @@ impl Scene {
             .collect();
         scene.light_pmfs = (0..scene.light_cdf.len()).map(|i| scene.pmf_from_cdf(i)).collect();
         scene.light_tree = light_tree(&scene.lights, scene.desc.light_sampler);
-        scene.dpdus = (0..scene.triangles.len()).map(|i| scene.triangle_dpdu(i)).collect();
+        scene.dpdus = (0..scene.triangles.len())
+            .into_par_iter()
+            .map(|i| scene.triangle_dpdu(i))
+            .collect();
         Ok(scene)
     }
 
@@ -2786,6 +2789,64 @@ fn test_quad(m: u32, z: f32, size: f32) -> [TriangleDesc; 2] {
         uvs: Some(t.map(|i| c[i])),
         material: m,
     })
+}
+
+#[cfg(test)]
+mod build_tests {
+    use super::*;
+
+    #[test]
+    fn triangles_that_cannot_be_hit_are_dropped_and_the_rest_keep_their_places() {
+        // 3,000 small quads in a row at z = 0, every seventh triangle made
+        // flat and every eleventh given a corner at infinity: the rest are
+        // made on every core and must each answer to its own index.
+        let mut d = SceneDesc::empty("many", builtin::cornell().camera);
+        let m = d.material("grey", Material::diffuse(0.5, 0.5, 0.5));
+        let mut expected_drops = 0;
+        for q in 0..3000 {
+            for (h, mut t) in test_quad(m, 0.0, 0.5).into_iter().enumerate() {
+                let i = 2 * q + h;
+                for v in &mut t.vertices {
+                    v.x += q as f32;
+                }
+                if i % 7 == 3 {
+                    t.vertices[2] = t.vertices[1];
+                    expected_drops += 1;
+                } else if i % 11 == 5 {
+                    t.vertices[0].y = f32::INFINITY;
+                    expected_drops += 1;
+                }
+                d.triangles.push(t);
+            }
+        }
+        let scene = Scene::build(d.clone()).unwrap();
+        assert_eq!(scene.dropped_triangles, expected_drops);
+        assert_eq!(scene.triangles().len(), 6000 - expected_drops);
+        let mut seen = 0;
+        for i in 0..6000 {
+            let Some(v) = d.triangles.vertices(i) else { continue };
+            let dropped = i % 7 == 3 || (i % 11 == 5);
+            let c = (v[0] + v[1] + v[2]) / 3.0;
+            if dropped {
+                continue;
+            }
+            let hit = scene
+                .intersect(&Ray::new(c + Vec3::Z, -Vec3::Z), 0.0, f32::INFINITY)
+                .unwrap_or_else(|| panic!("triangle {i} is not there"));
+            assert_eq!(hit.object as usize, i);
+            seen += 1;
+        }
+        assert_eq!(seen, 6000 - expected_drops);
+        // A material out of range is named for the first triangle that has it.
+        let mut bad = d;
+        for i in [4100, 2500, 5000] {
+            let mut t = bad.triangles.get(i).unwrap();
+            t.material = 7;
+            bad.triangles.set(i, t);
+        }
+        let e = Scene::build(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("triangle 2500 names material 7 of 1"), "{e}");
+    }
 }
 
 #[cfg(test)]
