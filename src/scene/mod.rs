@@ -695,10 +695,6 @@ fn placed_hit(h: Hit, to_world: glam::Mat4) -> Hit {
     }
 }
 
-/// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
-/// the texture coordinates; with vertex normals, pbrt-v4's shading frame
-/// (dp/du made perpendicular to the shading normal, dp/dv their cross
-/// product) and the normals' derivatives.
 /// The light tree the scene's sampler asks for, unless it has nothing to
 /// weigh: a tree of one leaf (a light, or a quad's two triangles) and no
 /// lights apart from it chooses as choosing by power does, and then does so
@@ -709,6 +705,10 @@ fn light_tree(lights: &[Light], kind: LightSamplerKind) -> Option<LightTree> {
         .filter(|t| !t.is_power_choice())
 }
 
+/// pbrt-v4's `Triangle` shading geometry: the derivatives of the point along
+/// the texture coordinates; with vertex normals, pbrt-v4's shading frame
+/// (dp/du made perpendicular to the shading normal, dp/dv their cross
+/// product) and the normals' derivatives.
 fn triangle_shading(t: &TriangleDesc, hit: &Hit) -> Option<(ShadingGeometry, [Vec3; 2])> {
     let uv = t.uvs.unwrap_or(DEFAULT_UV);
     let [p0, p1, p2] = t.vertices;
