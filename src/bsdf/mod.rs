@@ -35,9 +35,9 @@
 mod coated;
 mod conductor;
 mod dielectric;
-mod diffuse;
+pub(crate) mod diffuse;
 mod dispersive;
-mod frame;
+pub(crate) mod frame;
 mod fresnel;
 mod hair;
 mod layered;

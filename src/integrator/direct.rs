@@ -315,7 +315,7 @@ fn light_sample_towards(scene: &Scene, hit: &Hit, wo: Vec3, bsdf: &Bsdf, li: usi
 /// Whether anything blocks the shadow ray from `hit` to the light sample
 /// `ls` of light `li`.
 #[inline(always)]
-fn shadow_ray_blocked(scene: &Scene, hit: &Hit, ls: &LightSample, li: usize, stats: &mut RayStats) -> bool {
+pub(super) fn shadow_ray_blocked(scene: &Scene, hit: &Hit, ls: &LightSample, li: usize, stats: &mut RayStats) -> bool {
     // Aim from the offset origin at the sampled point itself: a ray parallel
     // to wi would meet a sphere light short of it and the light would shadow
     // itself.

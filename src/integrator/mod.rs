@@ -12,6 +12,7 @@ pub mod checkpoint;
 pub mod direct;
 pub mod path;
 pub mod photon;
+pub mod plain;
 pub mod sppm;
 pub mod volpath;
 

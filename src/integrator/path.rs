@@ -205,8 +205,10 @@ impl<'a> Progressive<'a> {
             light_tracing: cam.is_pinhole(),
             regularize: settings.regularize,
         };
-        let est: Box<dyn RadianceEstimator> = match settings.integrator {
-            IntegratorKind::Bdpt => Box::new(bdpt()),
+        let plain = super::plain::PlainPathTracer::for_scene(scene, settings);
+        let est: Box<dyn RadianceEstimator> = match (settings.integrator, plain) {
+            (IntegratorKind::Bdpt, _) => Box::new(bdpt()),
+            (_, Some(plain)) => Box::new(plain),
             _ => Box::new(PathTracer {
                 max_depth: settings.max_depth,
                 light_sampling: settings.light_sampling,

@@ -1541,7 +1541,7 @@ impl Scene {
         // caller: returned from a call, the record comes back through memory,
         // written field by field and read back whole, which stalls the
         // caller until the stores reach the cache.
-        if self.movers.is_empty() && self.alphas.is_empty() && self.shapes.is_empty() {
+        if self.only_still_triangles() {
             let (slot, h) = self.bvh.intersect(ray, t_min, t_max)?;
             let tri = &self.triangles[slot as usize];
             let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
@@ -1550,6 +1550,49 @@ impl Scene {
             return Some(hit);
         }
         self.intersect_any(ray, t_min, t_max)
+    }
+
+    /// [`Scene::intersect`] for paths that read of a hit only its point,
+    /// normals, material and light (and, on a light, its texture
+    /// coordinates): in scenes of still, solid triangles alone, the rest of
+    /// the record is left out (zero).
+    #[inline(always)]
+    pub fn intersect_bare(&self, ray: &Ray) -> Option<Hit> {
+        if !self.only_still_triangles() {
+            return self.intersect_any(ray, 0.0, f32::INFINITY);
+        }
+        let (slot, h) = self.bvh.intersect(ray, 0.0, f32::INFINITY)?;
+        let idx = slot as usize;
+        let tri = &self.triangles[idx];
+        let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
+        let inf = &self.info[idx];
+        Some(Hit {
+            t: h.t,
+            p,
+            ng: inf.normal,
+            ns: self.shading_normal(idx, h.u, h.v),
+            uv: if inf.light.is_some() {
+                self.triangle_uv(idx, h.u, h.v)
+            } else {
+                Vec2::ZERO
+            },
+            dpdu: Vec3::ZERO,
+            material: inf.material,
+            object: inf.object,
+            kind: if inf.light.is_some() {
+                PrimKind::Light
+            } else {
+                PrimKind::Triangle
+            },
+            light: inf.light,
+            time: ray.time,
+        })
+    }
+
+    /// Whether the scene holds nothing but still triangles without cut-outs.
+    #[inline(always)]
+    fn only_still_triangles(&self) -> bool {
+        self.movers.is_empty() && self.alphas.is_empty() && self.shapes.is_empty()
     }
 
     /// [`Scene::intersect`] in any scene.
@@ -2080,20 +2123,7 @@ impl Scene {
     #[inline(always)]
     fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
-        let ns = match self.shading.normals(&self.desc.triangles, idx) {
-            Some(n) => {
-                let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
-                // Keep the interpolated normal on the geometric side.
-                if s == Vec3::ZERO {
-                    inf.normal
-                } else if s.dot(inf.normal) < 0.0 {
-                    -s
-                } else {
-                    s
-                }
-            }
-            _ => inf.normal,
-        };
+        let ns = self.shading_normal(idx, u, v);
         let uv = self.triangle_uv(idx, u, v);
         let dpdu = self.dpdus[idx];
         Hit {
@@ -2112,6 +2142,27 @@ impl Scene {
             },
             light: inf.light,
             time: 0.0,
+        }
+    }
+
+    /// The shading normal at barycentrics (u, v) of triangle `idx`: its
+    /// vertex normals interpolated, on the geometric normal's side; the
+    /// geometric normal where it has none.
+    #[inline(always)]
+    fn shading_normal(&self, idx: usize, u: f32, v: f32) -> Vec3 {
+        let ng = self.info[idx].normal;
+        match self.shading.normals(&self.desc.triangles, idx) {
+            Some(n) => {
+                let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
+                if s == Vec3::ZERO {
+                    ng
+                } else if s.dot(ng) < 0.0 {
+                    -s
+                } else {
+                    s
+                }
+            }
+            _ => ng,
         }
     }
 
@@ -2241,6 +2292,9 @@ impl Scene {
     /// point's distance is ill-conditioned (a tangent ray), and a relative
     /// epsilon on `t_max` then lets the light shadow itself.
     pub fn occluded_before_light(&self, ray: &Ray, t_min: f32, t_max: f32, light: u32) -> bool {
+        if self.only_still_triangles() {
+            return self.bvh.occluded(ray, t_min, t_max);
+        }
         self.shapes_block(ray, t_min, t_max, Some(light))
             || self.triangles_block(ray, t_min, t_max)
             || (!self.movers.is_empty() && self.movers_block(ray, t_min, t_max))
