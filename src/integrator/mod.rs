@@ -10,6 +10,7 @@ pub(crate) mod analytic;
 pub mod bdpt;
 pub mod checkpoint;
 pub mod direct;
+pub mod lanes;
 pub mod path;
 pub mod photon;
 pub mod plain;
@@ -173,6 +174,25 @@ impl RenderOutput {
 /// The radiance carried along one camera ray.
 pub trait RadianceEstimator: Sync {
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3;
+
+    /// Splats samples `samples` of pixels `xs` of row `y` into `block`:
+    /// [`add_pixel_samples`] pixel by pixel, unless the estimator traces
+    /// many camera rays at once.
+    #[allow(clippy::too_many_arguments)]
+    fn add_row_samples(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        xs: Range<u32>,
+        y: u32,
+        samples: Range<u32>,
+        block: &mut SplatBlock,
+        stats: &mut RayStats,
+    ) {
+        for x in xs {
+            add_pixel_samples(scene, settings, self, x, y, samples.clone(), block, stats);
+        }
+    }
 }
 
 /// Runs `f` on a pool of `threads` workers (all cores when `None`).
@@ -392,9 +412,7 @@ pub fn accumulate_tiles(
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                for x in sx0..sx1 {
-                    add_pixel_samples(scene, settings, est, x, y, samples.clone(), &mut block, &mut stats);
-                }
+                est.add_row_samples(scene, settings, sx0..sx1, y, samples.clone(), &mut block, &mut stats);
             }
             let mut pass = pass.lock().unwrap_or_else(|e| e.into_inner());
             let br = block.rect();
@@ -424,58 +442,107 @@ pub fn merge_sums(sums: &mut [PixelSum], pass: &mut [PixelSum]) {
 }
 
 /// Splats samples `samples` of pixel (x, y) into `block`, each with its
-/// [`Sampler`] keyed by (seed, pixel, s). The samples are uniform over the
-/// pixel. With the Sobol sampler the pixel position is its first 2D request
-/// (a (0, 2)-net over any power-of-two prefix of the pixel's samples). With
-/// independent samples, when the sample count is a square n^2, sample s is
-/// jittered in stratum s of an n x n grid; otherwise the pixel's samples form
-/// a Hammersley set shifted per pixel.
+/// [`Sampler`] keyed by (seed, pixel, s) ([`PixelSamples`]).
 #[allow(clippy::too_many_arguments)]
-pub fn add_pixel_samples(
+pub fn add_pixel_samples<E: RadianceEstimator + ?Sized>(
     scene: &Scene,
     settings: &RenderSettings,
-    est: &dyn RadianceEstimator,
+    est: &E,
     x: u32,
     y: u32,
     samples: Range<u32>,
     block: &mut SplatBlock,
     stats: &mut RayStats,
 ) {
-    let cam = &scene.camera;
-    let spp = settings.samples_per_pixel();
-    let sobol = settings.sampler != SamplerKind::Independent;
-    let n = (spp as f64).sqrt().round() as u32;
-    let grid = n * n == spp;
-    let pixel = y as u64 * cam.width as u64 + x as u64;
-    let shift = if grid || sobol {
-        Vec2::ZERO
-    } else {
-        Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
-    };
+    let pixel = PixelSamples::new(scene, settings, x, y);
     for s in samples {
-        let mut sampler = camera_sampler(settings.sampler, settings.seed, x, y, cam.width, spp, s);
-        let u = if sobol {
-            sampler.next_2d()
-        } else if grid {
-            stratified(s, n, sampler.next_2d())
-        } else {
-            hammersley_shifted(s, spp, shift)
-        };
-        let pos = Vec2::new(x as f32 + u.x, y as f32 + u.y);
-        let (ray, weight) = camera_ray(cam, pos, &mut sampler);
+        let mut cs = pixel.sample(scene, settings, s);
         stats.camera_rays += 1;
         // A ray the lens blocks is a sample of black, as in pbrt-v4.
-        let l = if weight > 0.0 {
-            clamp_sample(
-                est.li(scene, &ray, &mut sampler, stats) * weight,
-                settings.max_component,
-            )
+        let l = if cs.weight > 0.0 {
+            est.li(scene, &cs.ray, &mut cs.sampler, stats)
+        } else {
+            Vec3::ZERO
+        };
+        cs.splat(settings, l, block);
+    }
+}
+
+/// The camera samples of one pixel. The samples are uniform over the
+/// pixel. With the Sobol sampler the pixel position is its first 2D request
+/// (a (0, 2)-net over any power-of-two prefix of the pixel's samples). With
+/// independent samples, when the sample count is a square n^2, sample s is
+/// jittered in stratum s of an n x n grid; otherwise the pixel's samples form
+/// a Hammersley set shifted per pixel.
+pub struct PixelSamples {
+    x: u32,
+    y: u32,
+    /// n when the sample count is n^2 and the samples independent.
+    grid: Option<u32>,
+    shift: Vec2,
+}
+
+/// A camera sample before its radiance is known: the rest of its numbers,
+/// where in the pixel it lies, its ray and the ray's weight (0 where a lens
+/// blocks it).
+pub struct CameraSample {
+    pub sampler: Sampler,
+    pub px: (u32, u32),
+    pub pos: Vec2,
+    pub ray: Ray,
+    pub weight: f32,
+}
+
+impl PixelSamples {
+    pub fn new(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> Self {
+        let spp = settings.samples_per_pixel();
+        let sobol = settings.sampler != SamplerKind::Independent;
+        let n = (spp as f64).sqrt().round() as u32;
+        let grid = (!sobol && n * n == spp).then_some(n);
+        let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+        let shift = if grid.is_some() || sobol {
+            Vec2::ZERO
+        } else {
+            Rng::keyed(settings.seed, pixel, u64::MAX).next_2d()
+        };
+        PixelSamples { x, y, grid, shift }
+    }
+
+    /// Sample `s` of the pixel.
+    pub fn sample(&self, scene: &Scene, settings: &RenderSettings, s: u32) -> CameraSample {
+        let cam = &scene.camera;
+        let spp = settings.samples_per_pixel();
+        let mut sampler = camera_sampler(settings.sampler, settings.seed, self.x, self.y, cam.width, spp, s);
+        let u = if settings.sampler != SamplerKind::Independent {
+            sampler.next_2d()
+        } else if let Some(n) = self.grid {
+            stratified(s, n, sampler.next_2d())
+        } else {
+            hammersley_shifted(s, spp, self.shift)
+        };
+        let pos = Vec2::new(self.x as f32 + u.x, self.y as f32 + u.y);
+        let (ray, weight) = camera_ray(cam, pos, &mut sampler);
+        CameraSample {
+            sampler,
+            px: (self.x, self.y),
+            pos,
+            ray,
+            weight,
+        }
+    }
+}
+
+impl CameraSample {
+    /// Splats the sample, whose ray brought radiance `l`, into `block`.
+    pub fn splat(&self, settings: &RenderSettings, l: Vec3, block: &mut SplatBlock) {
+        let l = if self.weight > 0.0 {
+            clamp_sample(l * self.weight, settings.max_component)
         } else {
             Vec3::ZERO
         };
         // A NaN or infinite sample would poison the pixel; drop it.
         if l.is_finite() {
-            block.splat((x, y), pos, l);
+            block.splat(self.px, self.pos, l);
         }
     }
 }

@@ -19,21 +19,27 @@
 //! through the scene's own queries.
 
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, shadow_ray_blocked};
+use super::lanes::TriangleLight;
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
-use super::{IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use super::{add_pixel_samples, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::bsdf::diffuse::DiffuseBxdf;
 use crate::bsdf::frame::Frame;
+use crate::film::SplatBlock;
 use crate::light::{LightContext, LightSamplerKind};
 use crate::material::Material;
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere, Sampler};
 use crate::scene::{Hit, Scene};
 use std::f32::consts::FRAC_1_PI;
+use std::ops::Range;
 
 pub struct PlainPathTracer {
     max_depth: Option<u32>,
     /// Each material's reflectance, as its `DiffuseBxdf` holds it.
     reflectance: Vec<Vec3>,
+    /// The scene's lights, when paths are traced in lanes
+    /// ([`super::lanes`]): scenes of still triangles lit by triangles.
+    lanes: Option<Vec<TriangleLight>>,
 }
 
 impl PlainPathTracer {
@@ -64,14 +70,65 @@ impl PlainPathTracer {
                 _ => None,
             })
             .collect::<Option<Vec<_>>>()?;
+        let lanes = scene
+            .only_still_triangles()
+            .then(|| super::lanes::triangle_lights(scene))
+            .flatten();
         Some(PlainPathTracer {
             max_depth: settings.max_depth,
             reflectance,
+            lanes,
         })
+    }
+
+    /// The same loop, a path at a time.
+    pub fn one_at_a_time(self) -> Self {
+        PlainPathTracer { lanes: None, ..self }
+    }
+
+    /// Each material's reflectance.
+    pub fn reflectance(&self) -> &[Vec3] {
+        &self.reflectance
+    }
+
+    /// Whether it traces paths in lanes.
+    pub fn in_lanes(&self) -> bool {
+        self.lanes.is_some()
     }
 }
 
 impl RadianceEstimator for PlainPathTracer {
+    fn add_row_samples(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        xs: Range<u32>,
+        y: u32,
+        samples: Range<u32>,
+        block: &mut SplatBlock,
+        stats: &mut RayStats,
+    ) {
+        match &self.lanes {
+            Some(lights) => super::lanes::add_row_samples(
+                self.reflectance(),
+                self.max_depth,
+                lights,
+                scene,
+                settings,
+                xs,
+                y,
+                samples,
+                block,
+                stats,
+            ),
+            None => {
+                for x in xs {
+                    add_pixel_samples(scene, settings, self, x, y, samples.clone(), block, stats);
+                }
+            }
+        }
+    }
+
     fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3 {
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;

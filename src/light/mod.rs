@@ -736,21 +736,8 @@ impl Light {
                 two_sided,
                 image,
             } => {
-                // Uniform in area (pbrt-v4 6.5.4), then to solid angle at p.
-                let q = uniform_triangle(v, u);
-                let d = q - p;
-                let d2 = d.length_squared();
                 let (normal, area) = triangle_normal_area(v);
-                if d2 == 0.0 || area == 0.0 {
-                    return None;
-                }
-                let dist = d2.sqrt();
-                let wi = d / dist;
-                let cos_l = -normal.dot(wi);
-                let cos_l = if *two_sided { cos_l.abs() } else { cos_l };
-                if cos_l <= 0.0 {
-                    return None;
-                }
+                let s = triangle_point_seen(v, (normal, area), *two_sided, p, u)?;
                 let radiance = match image {
                     Some(t) => {
                         let (b0, b1) = uniform_triangle_barycentric(u);
@@ -759,10 +746,10 @@ impl Light {
                     None => *radiance,
                 };
                 Some(LightSample {
-                    wi,
-                    dist,
-                    weight: radiance * (cos_l * area / d2),
-                    pdf: d2 / (cos_l * area),
+                    wi: s.wi,
+                    dist: s.dist,
+                    weight: radiance * s.to_solid_angle,
+                    pdf: s.pdf,
                 })
             }
         }
@@ -1204,9 +1191,53 @@ fn disk_area_point(disk: &Disk, u: Vec2) -> Vec3 {
     disk.centre + (disk.axes[0] * phi.cos() + disk.axes[1] * phi.sin()) * r
 }
 
+/// A point of a triangle light seen from a point: the unit direction to it,
+/// its distance, the change from area to solid angle |cos| A / d^2, and the
+/// density in solid angle (its reciprocal).
+#[derive(Clone, Copy, Debug)]
+pub struct TrianglePoint {
+    pub wi: Vec3,
+    pub dist: f32,
+    pub to_solid_angle: f32,
+    pub pdf: f32,
+}
+
+/// The point of triangle `v` (whose unit normal and area are `normal_area`,
+/// as [`triangle_normal_area`] gives them) that `u` picks uniformly in area
+/// (pbrt-v4 6.5.4), seen from `p`; `None` when `p` sees its back and it
+/// emits only from its front, or when the triangle or the distance is zero.
+#[inline(always)]
+pub fn triangle_point_seen(
+    v: &[Vec3; 3],
+    (normal, area): (Vec3, f32),
+    two_sided: bool,
+    p: Vec3,
+    u: Vec2,
+) -> Option<TrianglePoint> {
+    let q = uniform_triangle(v, u);
+    let d = q - p;
+    let d2 = d.length_squared();
+    if d2 == 0.0 || area == 0.0 {
+        return None;
+    }
+    let dist = d2.sqrt();
+    let wi = d / dist;
+    let cos_l = -normal.dot(wi);
+    let cos_l = if two_sided { cos_l.abs() } else { cos_l };
+    if cos_l <= 0.0 {
+        return None;
+    }
+    Some(TrianglePoint {
+        wi,
+        dist,
+        to_solid_angle: cos_l * area / d2,
+        pdf: d2 / (cos_l * area),
+    })
+}
+
 /// `triangle_normal` and `triangle_area` from one cross product and one
 /// square root (light sampling needs both per sample), bit for bit the same.
-fn triangle_normal_area(v: &[Vec3; 3]) -> (Vec3, f32) {
+pub fn triangle_normal_area(v: &[Vec3; 3]) -> (Vec3, f32) {
     let c = (v[1] - v[0]).cross(v[2] - v[0]);
     let len = c.length();
     let rcp = 1.0 / len;

@@ -596,6 +596,32 @@ impl Hit {
     }
 }
 
+/// A triangle as a path meets it: its corner and edges, unit normal,
+/// vertex normals (when it shades with them), material and light.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleGeometry {
+    pub triangle: Triangle,
+    pub ng: Vec3,
+    pub normals: Option<[Vec3; 3]>,
+    pub material: u32,
+    pub light: Option<u32>,
+}
+
+/// The shading normal at barycentrics (u, v) of a triangle with vertex
+/// normals `n` and unit normal `ng`: `n` interpolated, on `ng`'s side; `ng`
+/// where the interpolation vanishes.
+#[inline(always)]
+pub fn interpolated_normal(n: [Vec3; 3], ng: Vec3, u: f32, v: f32) -> Vec3 {
+    let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
+    if s == Vec3::ZERO {
+        ng
+    } else if s.dot(ng) < 0.0 {
+        -s
+    } else {
+        s
+    }
+}
+
 /// A ray's closest hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -1562,11 +1588,17 @@ impl Scene {
             return self.intersect_any(ray, 0.0, f32::INFINITY);
         }
         let (slot, h) = self.bvh.intersect(ray, 0.0, f32::INFINITY)?;
+        Some(self.bare_hit(slot, &h, ray))
+    }
+
+    /// [`Scene::intersect_bare`]'s record of a hit `h` on triangle `slot`.
+    #[inline(always)]
+    pub fn bare_hit(&self, slot: u32, h: &TriHit, ray: &Ray) -> Hit {
         let idx = slot as usize;
         let tri = &self.triangles[idx];
         let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
         let inf = &self.info[idx];
-        Some(Hit {
+        Hit {
             t: h.t,
             p,
             ng: inf.normal,
@@ -1586,12 +1618,12 @@ impl Scene {
             },
             light: inf.light,
             time: ray.time,
-        })
+        }
     }
 
     /// Whether the scene holds nothing but still triangles without cut-outs.
     #[inline(always)]
-    fn only_still_triangles(&self) -> bool {
+    pub fn only_still_triangles(&self) -> bool {
         self.movers.is_empty() && self.alphas.is_empty() && self.shapes.is_empty()
     }
 
@@ -2152,18 +2184,31 @@ impl Scene {
     fn shading_normal(&self, idx: usize, u: f32, v: f32) -> Vec3 {
         let ng = self.info[idx].normal;
         match self.shading.normals(&self.desc.triangles, idx) {
-            Some(n) => {
-                let s = (n[0] * (1.0 - u - v) + n[1] * u + n[2] * v).normalize_or_zero();
-                if s == Vec3::ZERO {
-                    ng
-                } else if s.dot(ng) < 0.0 {
-                    -s
-                } else {
-                    s
-                }
-            }
+            Some(n) => interpolated_normal(n, ng, u, v),
             _ => ng,
         }
+    }
+
+    /// What a path traced in lanes (`integrator::lanes`) reads of triangle
+    /// `slot` (BVH order) once a ray has hit it.
+    #[inline(always)]
+    pub fn triangle_geometry(&self, slot: u32) -> TriangleGeometry {
+        let idx = slot as usize;
+        let inf = &self.info[idx];
+        TriangleGeometry {
+            triangle: self.triangles[idx],
+            ng: inf.normal,
+            normals: self.shading.normals(&self.desc.triangles, idx),
+            material: inf.material,
+            light: inf.light,
+        }
+    }
+
+    /// The closest triangle `ray` meets in a scene of still, solid triangles
+    /// alone ([`Scene::only_still_triangles`]): its slot and where.
+    #[inline(always)]
+    pub fn intersect_triangle(&self, ray: &Ray) -> Option<(u32, TriHit)> {
+        self.bvh.intersect(ray, 0.0, f32::INFINITY)
     }
 
     /// Texture coordinates at barycentrics (u, v) of triangle `slot` (BVH

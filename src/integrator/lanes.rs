@@ -1,0 +1,727 @@
+//! Plain paths ([`super::plain`]) traced eight at a time, for scenes of
+//! still triangles lit by triangle lights.
+//!
+//! Each of the eight lanes follows one camera sample's path; a lane whose
+//! path ends takes the row's next camera sample. The work of a bounce runs
+//! stage by stage over all lanes (the hit's geometry, the shading frame,
+//! the BSDF sample, the light sample and its weight, the next ray), each
+//! stage a loop over the lanes' arrays that the compiler turns into vector
+//! instructions; ray queries, the sampler's requests and a light's choice
+//! stay a lane at a time. Every lane does the same arithmetic on the same
+//! numbers as [`super::plain::PlainPathTracer::li`] on its own, so the image
+//! is that loop's bit for bit (tested), whatever the order the lanes finish in:
+//! pixel sums are exact.
+
+// A stage reads and writes a lane's entry in many arrays at once: indexing
+// by lane says so more plainly than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+use super::direct::{emitted_radiance, escaped_radiance, power_heuristic};
+use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
+use super::{CameraSample, PixelSamples, RayStats, RenderSettings};
+use crate::bsdf::frame::Frame;
+use crate::film::SplatBlock;
+use crate::light::{triangle_normal_area, triangle_point_seen, Light, LightContext};
+use crate::math::{offset_origin, Ray, Vec2, Vec3};
+use crate::sampling::cosine_hemisphere;
+use crate::scene::{interpolated_normal, Scene};
+use std::f32::consts::FRAC_1_PI;
+use std::ops::Range;
+
+/// Paths in flight at once.
+const N: usize = 8;
+
+/// A triangle light as light sampling reads it.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleLight {
+    vertices: [Vec3; 3],
+    normal_area: (Vec3, f32),
+    radiance: Vec3,
+    two_sided: bool,
+}
+
+/// The scene's lights, when every one is a triangle without an emission
+/// image (`None` otherwise).
+pub fn triangle_lights(scene: &Scene) -> Option<Vec<TriangleLight>> {
+    scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Triangle {
+                vertices,
+                radiance,
+                two_sided,
+                image: None,
+            } => Some(TriangleLight {
+                vertices: *vertices,
+                normal_area: triangle_normal_area(vertices),
+                radiance: *radiance,
+                two_sided: *two_sided,
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Three coordinates of every lane.
+#[derive(Clone, Copy, Default)]
+struct V3s {
+    x: [f32; N],
+    y: [f32; N],
+    z: [f32; N],
+}
+
+impl V3s {
+    #[inline(always)]
+    fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, v: Vec3) {
+        (self.x[i], self.y[i], self.z[i]) = (v.x, v.y, v.z);
+    }
+}
+
+/// The lanes' paths: what each carries from bounce to bounce.
+struct Paths {
+    /// The camera sample a lane traces, `None` when the lane is idle.
+    sample: [Option<CameraSample>; N],
+    o: V3s,
+    d: V3s,
+    beta: V3s,
+    l: V3s,
+    depth: [u32; N],
+    /// Where the last bounce left from and its density (`None` for a camera
+    /// ray), for the MIS weight of emission a bounce finds.
+    from: [Option<(LightContext, f32)>; N],
+}
+
+/// A bounce's hit, lane by lane.
+#[derive(Default)]
+struct Hits {
+    /// Lanes whose path goes on from this hit.
+    live: [bool; N],
+    // The triangle: corner, edges, normal, vertex normals, where it was hit.
+    v0: V3s,
+    e1: V3s,
+    e2: V3s,
+    ng: V3s,
+    smooth: [bool; N],
+    n0: V3s,
+    n1: V3s,
+    n2: V3s,
+    u: [f32; N],
+    v: [f32; N],
+    /// The reflectance's value r / pi.
+    f: V3s,
+    /// The sample numbers: the light sample's 2D, then the BSDF's.
+    u_light: [Vec2; N],
+    u_bsdf: [Vec2; N],
+}
+
+/// Where a bounce's hit leads, lane by lane: the point, the shading frame,
+/// the BSDF sample and the light sample.
+#[derive(Default)]
+struct Bounce {
+    p: V3s,
+    wo: V3s,
+    fx: V3s,
+    fy: V3s,
+    fz: V3s,
+    wo_l: V3s,
+    /// The BSDF sample: direction (shading frame), density, whether valid.
+    wi_l: V3s,
+    pdf: [f32; N],
+    sampled: [bool; N],
+    /// The light chosen, the probability of the choice and the 2D sample
+    /// for the point on it.
+    light: [u32; N],
+    pmf: [f32; N],
+    u_point: [Vec2; N],
+    chosen: [bool; N],
+    /// The light sample's radiance reflected towards the viewer if nothing
+    /// blocks it, and its shadow ray (origin, direction, length), for lanes
+    /// with `shadow` set.
+    direct: V3s,
+    so: V3s,
+    sd: V3s,
+    st: [f32; N],
+    shadow: [bool; N],
+}
+
+impl Paths {
+    fn new() -> Self {
+        Paths {
+            sample: Default::default(),
+            o: V3s::default(),
+            d: V3s::default(),
+            beta: V3s::default(),
+            l: V3s::default(),
+            depth: [0; N],
+            from: [None; N],
+        }
+    }
+
+    fn start(&mut self, i: usize, cs: CameraSample) {
+        self.o.set(i, cs.ray.o);
+        self.d.set(i, cs.ray.d);
+        self.beta.set(i, Vec3::ONE);
+        self.l.set(i, Vec3::ZERO);
+        self.depth[i] = 0;
+        self.from[i] = None;
+        self.sample[i] = Some(cs);
+    }
+
+    #[inline(always)]
+    fn ray(&self, i: usize, time: f32) -> Ray {
+        Ray::timed(self.o.get(i), self.d.get(i), time)
+    }
+
+    #[inline(always)]
+    fn add(&mut self, i: usize, l: Vec3) {
+        self.l.set(i, self.l.get(i) + l);
+    }
+
+    /// Ends lane `i`'s path: its sample is splatted and the lane is idle.
+    fn finish(&mut self, i: usize, settings: &RenderSettings, block: &mut SplatBlock) {
+        if let Some(cs) = self.sample[i].take() {
+            cs.splat(settings, self.l.get(i), block);
+        }
+    }
+}
+
+/// Traces samples `samples` of pixels `xs` of row `y` (each pixel's
+/// samples as [`PixelSamples`] makes them) through plain paths in lanes and
+/// splats them into `block`.
+#[allow(clippy::too_many_arguments)]
+pub fn add_row_samples(
+    reflectance: &[Vec3],
+    max_depth: Option<u32>,
+    lights: &[TriangleLight],
+    scene: &Scene,
+    settings: &RenderSettings,
+    xs: Range<u32>,
+    y: u32,
+    samples: Range<u32>,
+    block: &mut SplatBlock,
+    stats: &mut RayStats,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        return unsafe {
+            rows_avx2(
+                reflectance,
+                max_depth,
+                lights,
+                scene,
+                settings,
+                xs,
+                y,
+                samples,
+                block,
+                stats,
+            )
+        };
+    }
+    rows(
+        reflectance,
+        max_depth,
+        lights,
+        scene,
+        settings,
+        xs,
+        y,
+        samples,
+        block,
+        stats,
+    )
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+fn rows_avx2(
+    reflectance: &[Vec3],
+    max_depth: Option<u32>,
+    lights: &[TriangleLight],
+    scene: &Scene,
+    settings: &RenderSettings,
+    xs: Range<u32>,
+    y: u32,
+    samples: Range<u32>,
+    block: &mut SplatBlock,
+    stats: &mut RayStats,
+) {
+    rows(
+        reflectance,
+        max_depth,
+        lights,
+        scene,
+        settings,
+        xs,
+        y,
+        samples,
+        block,
+        stats,
+    )
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn rows(
+    reflectance: &[Vec3],
+    max_depth: Option<u32>,
+    lights: &[TriangleLight],
+    scene: &Scene,
+    settings: &RenderSettings,
+    xs: Range<u32>,
+    y: u32,
+    samples: Range<u32>,
+    block: &mut SplatBlock,
+    stats: &mut RayStats,
+) {
+    let mut pixels = xs.map(|x| PixelSamples::new(scene, settings, x, y));
+    let mut pixel = pixels.next();
+    let mut next_s = samples.start;
+    let mut next_sample = move || loop {
+        let p = pixel.as_ref()?;
+        if next_s < samples.end {
+            next_s += 1;
+            return Some(p.sample(scene, settings, next_s - 1));
+        }
+        pixel = pixels.next();
+        next_s = samples.start;
+    };
+    let mut paths = Paths::new();
+    loop {
+        for i in 0..N {
+            while paths.sample[i].is_none() {
+                let Some(cs) = next_sample() else {
+                    break;
+                };
+                stats.camera_rays += 1;
+                if cs.weight > 0.0 {
+                    paths.start(i, cs);
+                } else {
+                    // A ray the lens blocks is a sample of black.
+                    cs.splat(settings, Vec3::ZERO, block);
+                }
+            }
+        }
+        if paths.sample.iter().all(Option::is_none) {
+            return;
+        }
+        let hits = find_hits(reflectance, max_depth, scene, settings, &mut paths, block);
+        let mut b = Bounce::default();
+        shade(&hits, &paths, &mut b);
+        choose_lights(scene, &hits, &mut b);
+        sample_lights(scene, lights, &hits, &mut b);
+        for i in 0..N {
+            if b.shadow[i] {
+                stats.shadow_rays += 1;
+                let ray = Ray::timed(b.so.get(i), b.sd.get(i), time_of(&paths, i));
+                if !scene.occluded_before_light(&ray, 0.0, b.st[i], b.light[i]) {
+                    paths.add(i, paths.beta.get(i) * b.direct.get(i));
+                }
+            }
+        }
+        let go_on = continue_paths(&hits, &mut paths, &b);
+        for i in 0..N {
+            if !hits.live[i] {
+                continue;
+            }
+            if !go_on[i] {
+                paths.finish(i, settings, block);
+                continue;
+            }
+            let wi = paths.d.get(i);
+            if paths.depth[i] >= ROULETTE_DEPTH {
+                let beta = paths.beta.get(i);
+                let q = beta.max_element().min(MAX_SURVIVAL);
+                let Some(cs) = paths.sample[i].as_mut() else {
+                    continue;
+                };
+                if cs.sampler.next_f32() >= q {
+                    paths.finish(i, settings, block);
+                    continue;
+                }
+                paths.beta.set(i, beta / q);
+            }
+            stats.other_rays += 1;
+            paths.o.set(i, offset_origin(b.p.get(i), hits.ng.get(i), wi));
+        }
+    }
+}
+
+/// The time of lane `i`'s rays: its camera ray's.
+#[inline(always)]
+fn time_of(paths: &Paths, i: usize) -> f32 {
+    paths.sample[i].as_ref().map_or(0.0, |cs| cs.ray.time)
+}
+
+/// Traces each lane's ray, adds what it finds emitted, ends the paths that
+/// end there, and gathers the rest's hits and sample numbers.
+#[inline(always)]
+fn find_hits(
+    reflectance: &[Vec3],
+    max_depth: Option<u32>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    paths: &mut Paths,
+    block: &mut SplatBlock,
+) -> Hits {
+    let mut hits = Hits::default();
+    for i in 0..N {
+        if paths.sample[i].is_none() {
+            continue;
+        }
+        let ray = paths.ray(i, time_of(paths, i));
+        let beta = paths.beta.get(i);
+        let Some((slot, h)) = scene.intersect_triangle(&ray) else {
+            paths.add(i, beta * escaped_radiance(scene, &ray, paths.from[i]));
+            paths.finish(i, settings, block);
+            continue;
+        };
+        let g = scene.triangle_geometry(slot);
+        if let Some(li) = g.light {
+            let hit = scene.bare_hit(slot, &h, &ray);
+            paths.add(
+                i,
+                beta * emitted_radiance(scene, li as usize, &ray, &hit, paths.from[i]),
+            );
+            if !scene.reflects(&hit) {
+                paths.finish(i, settings, block);
+                continue;
+            }
+        }
+        if max_depth.is_some_and(|d| paths.depth[i] >= d) {
+            paths.finish(i, settings, block);
+            continue;
+        }
+        paths.depth[i] += 1;
+        let r = reflectance[g.material as usize];
+        if r == Vec3::ZERO {
+            paths.finish(i, settings, block);
+            continue;
+        }
+        let Some(cs) = paths.sample[i].as_mut() else {
+            continue;
+        };
+        hits.u_light[i] = cs.sampler.next_2d();
+        cs.sampler.skip_1d();
+        hits.u_bsdf[i] = cs.sampler.next_2d();
+        hits.live[i] = true;
+        hits.v0.set(i, g.triangle.v0);
+        hits.e1.set(i, g.triangle.e1);
+        hits.e2.set(i, g.triangle.e2);
+        hits.ng.set(i, g.ng);
+        if let Some([n0, n1, n2]) = g.normals {
+            hits.smooth[i] = true;
+            hits.n0.set(i, n0);
+            hits.n1.set(i, n1);
+            hits.n2.set(i, n2);
+        }
+        hits.u[i] = h.u;
+        hits.v[i] = h.v;
+        hits.f.set(i, r * FRAC_1_PI);
+    }
+    hits
+}
+
+/// The hit point, the shading frame and the BSDF sample of every lane.
+#[inline(always)]
+fn shade(h: &Hits, paths: &Paths, b: &mut Bounce) {
+    for i in 0..N {
+        let (u, v) = (h.u[i], h.v[i]);
+        b.p.set(i, h.v0.get(i) + h.e1.get(i) * u + h.e2.get(i) * v);
+        let ng = h.ng.get(i);
+        let ns = if h.smooth[i] {
+            interpolated_normal([h.n0.get(i), h.n1.get(i), h.n2.get(i)], ng, u, v)
+        } else {
+            ng
+        };
+        let wo = -paths.d.get(i);
+        let ns = if ng.dot(wo) < 0.0 { -ns } else { ns };
+        let frame = Frame::from_z(ns);
+        let wo_l = frame.to_local(wo);
+        let d = cosine_hemisphere(h.u_bsdf[i]);
+        let wi = if wo_l.z >= 0.0 { d } else { Vec3::new(d.x, d.y, -d.z) };
+        let pdf = wi.z.abs() * FRAC_1_PI;
+        b.sampled[i] = wo_l.z != 0.0 && pdf > 0.0 && pdf.is_finite() && wi.z != 0.0 && h.f.get(i) != Vec3::ZERO;
+        b.wi_l.set(i, wi);
+        b.pdf[i] = pdf;
+        b.wo.set(i, wo);
+        b.wo_l.set(i, wo_l);
+        b.fx.set(i, frame.x);
+        b.fy.set(i, frame.y);
+        b.fz.set(i, frame.z);
+    }
+}
+
+/// Each lane's light, chosen by power.
+#[inline(always)]
+fn choose_lights(scene: &Scene, h: &Hits, b: &mut Bounce) {
+    for i in 0..N {
+        if !h.live[i] {
+            continue;
+        }
+        if let Some((li, pmf, rest)) = scene.pick_light(h.u_light[i].x) {
+            b.light[i] = li as u32;
+            b.pmf[i] = pmf;
+            b.u_point[i] = Vec2::new(rest, h.u_light[i].y);
+            b.chosen[i] = true;
+        }
+    }
+}
+
+/// Each lane's light sample, weighed against BSDF sampling by the power
+/// heuristic, and its shadow ray.
+#[inline(always)]
+fn sample_lights(scene: &Scene, lights: &[TriangleLight], h: &Hits, b: &mut Bounce) {
+    for i in 0..N {
+        if !b.chosen[i] {
+            continue;
+        }
+        let li = b.light[i] as usize;
+        let Some(light) = lights.get(li) else {
+            continue;
+        };
+        let p = b.p.get(i);
+        let Some(s) = triangle_point_seen(&light.vertices, light.normal_area, light.two_sided, p, b.u_point[i]) else {
+            continue;
+        };
+        let weight = light.radiance * s.to_solid_angle;
+        let wi = s.wi;
+        let (ng, wo) = (h.ng.get(i), b.wo.get(i));
+        let frame = Frame {
+            x: b.fx.get(i),
+            y: b.fy.get(i),
+            z: b.fz.get(i),
+        };
+        let geo_same = (wi.dot(ng) > 0.0) == (wo.dot(ng) > 0.0);
+        let shade_same = (wi.dot(frame.z) > 0.0) == (wo.dot(frame.z) > 0.0);
+        if !(geo_same && shade_same && wi.dot(ng) != 0.0) {
+            continue;
+        }
+        let wo_l = b.wo_l.get(i);
+        let (f, pdf_bsdf) = if wo_l.z == 0.0 {
+            (Vec3::ZERO, 0.0)
+        } else {
+            let wi_l = frame.to_local(wi);
+            if wo_l.z * wi_l.z > 0.0 {
+                (h.f.get(i), wi_l.z.abs() * FRAC_1_PI)
+            } else {
+                (Vec3::ZERO, 0.0)
+            }
+        };
+        let pmf = b.pmf[i];
+        let w = if scene.light_is_met(li) {
+            power_heuristic(pmf * s.pdf, pdf_bsdf)
+        } else {
+            1.0
+        };
+        b.direct.set(i, f * wi.dot(frame.z).abs() * weight * (w / pmf));
+        // As `direct::shadow_ray_blocked`: aimed at the sampled point.
+        let o = offset_origin(p, ng, wi);
+        b.so.set(i, o);
+        if s.dist.is_finite() {
+            let to_light = p + wi * s.dist - o;
+            let dist = to_light.length();
+            b.sd.set(i, to_light / dist);
+            b.st[i] = dist * (1.0 - 1e-4);
+        } else {
+            b.sd.set(i, wi);
+            b.st[i] = f32::INFINITY;
+        }
+        b.shadow[i] = true;
+    }
+}
+
+/// The throughput after each lane's BSDF sample, and its next direction;
+/// whether the path goes on.
+#[inline(always)]
+fn continue_paths(h: &Hits, paths: &mut Paths, b: &Bounce) -> [bool; N] {
+    let mut go_on = [false; N];
+    for i in 0..N {
+        if !(h.live[i] && b.sampled[i]) {
+            continue;
+        }
+        let frame = Frame {
+            x: b.fx.get(i),
+            y: b.fy.get(i),
+            z: b.fz.get(i),
+        };
+        let wi = frame.to_world(b.wi_l.get(i));
+        let (ng, wo) = (h.ng.get(i), b.wo.get(i));
+        if (wi.dot(ng) > 0.0) != (wo.dot(ng) > 0.0) {
+            continue;
+        }
+        let pdf = b.pdf[i];
+        let beta = paths.beta.get(i) * (h.f.get(i) * (wi.dot(frame.z).abs() / pdf));
+        paths.beta.set(i, beta);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            continue;
+        }
+        paths.from[i] = Some((LightContext::surface(b.p.get(i), frame.z), pdf));
+        paths.d.set(i, wi);
+        go_on[i] = true;
+    }
+    go_on
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::Film;
+    use crate::integrator::path::PathTracer;
+    use crate::integrator::plain::PlainPathTracer;
+    use crate::integrator::{render_tiles, IntegratorKind, LightSampling, Progress, SamplerKind};
+    use crate::light::LightSamplerKind;
+    use crate::scene::SceneDesc;
+    use std::path::Path;
+
+    /// A box of Lambertian quads, some with vertex normals, lit by a
+    /// one-sided quad and a two-sided triangle, with a tall block inside.
+    fn boxed_room() -> SceneDesc {
+        boxed_room_with("")
+    }
+
+    /// `boxed_room`, with `extra` added to its world.
+    fn boxed_room_with(extra: &str) -> SceneDesc {
+        let quad = |p: &str, n: Option<&str>| {
+            let normals = n.map_or(String::new(), |n| format!("\"normal N\" [ {n} {n} {n} {n} ] "));
+            format!("Shape \"trianglemesh\" \"point3 P\" [ {p} ] {normals}\"integer indices\" [ 0 1 2 0 2 3 ]\n")
+        };
+        let mut text = String::from(
+            "LookAt 0 1 3.5  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n\
+             Film \"rgb\" \"integer xresolution\" 21 \"integer yresolution\" 17\nWorldBegin\n\
+             Material \"diffuse\" \"rgb reflectance\" [ 0.7 0.6 0.5 ]\n",
+        );
+        text += &quad("-1 0 -1  1 0 -1  1 0 1  -1 0 1", Some("0 1 0.1"));
+        text += &quad("-1 2 -1  -1 2 1  1 2 1  1 2 -1", None);
+        text += &quad("-1 0 4  -1 2 4  1 2 4  1 0 4", None);
+        text += "Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.5 0.1 ]\n";
+        text += &quad("-1 0 -1  -1 2 -1  1 2 -1  1 0 -1", Some("0.1 0 1"));
+        text += &quad("-1 0 -1  -1 0 4  -1 2 4  -1 2 -1", Some("1 0.2 0"));
+        text += &quad("1 0 -1  1 2 -1  1 2 4  1 0 4", None);
+        text += &quad("-0.2 0 -0.3  -0.2 1.2 -0.3  0.3 1.2 -0.5  0.3 0 -0.5", None);
+        text += "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 4 3 2 ]\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n";
+        text += &quad(
+            "-0.3 1.99 -0.3  -0.3 1.99 0.3  0.3 1.99 0.3  0.3 1.99 -0.3",
+            Some("0 -1 0"),
+        );
+        text +=
+            "AttributeEnd\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"bool twosided\" true\n";
+        text += "Shape \"trianglemesh\" \"point3 P\" [ 0.9 0.2 -0.5  0.9 0.8 -0.5  0.9 0.5 0.3 ] \"integer indices\" [ 0 1 2 ]\n";
+        text += "AttributeEnd\n";
+        text += extra;
+        let path = Path::new("lanes.pbrt");
+        let parsed = crate::scene::pbrt::parse_bytes(path, text.into_bytes(), &crate::scene::mesh::Disk)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut desc = crate::scene::pbrt::convert::convert(&parsed, path, false)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .desc;
+        desc.light_sampler = LightSamplerKind::Power;
+        desc
+    }
+
+    fn render(scene: &Scene, settings: &RenderSettings, est: &dyn crate::integrator::RadianceEstimator) -> Film {
+        render_tiles(scene, settings, est, Progress::silent()).0
+    }
+
+    #[test]
+    fn paths_in_lanes_give_the_one_path_loops_image_bit_for_bit() {
+        let scene = Scene::build(boxed_room()).unwrap();
+        for (sampler, max_depth, spp) in [
+            (SamplerKind::Sobol, None, 16),
+            (SamplerKind::ZSobol, Some(3), 8),
+            (SamplerKind::Independent, None, 9),
+        ] {
+            let settings = RenderSettings {
+                integrator: IntegratorKind::Path,
+                spp,
+                max_depth,
+                sampler,
+                ..RenderSettings::default()
+            };
+            let lanes = PlainPathTracer::for_scene(&scene, &settings).expect("a plain scene");
+            assert!(lanes.in_lanes());
+            let general = PathTracer {
+                max_depth,
+                light_sampling: LightSampling::Mis,
+                regularize: false,
+            };
+            let (a, b) = (render(&scene, &settings, &general), render(&scene, &settings, &lanes));
+            let one = render(&scene, &settings, &lanes.one_at_a_time());
+            for (other, what) in [(&a, "the general loop"), (&one, "one path at a time")] {
+                let differ = (b.pixels.iter().zip(&other.pixels))
+                    .position(|(x, y)| x.to_array().map(f32::to_bits) != y.to_array().map(f32::to_bits));
+                assert_eq!(
+                    differ, None,
+                    "{sampler:?}, {max_depth:?}: lanes against {what}, first pixel that differs"
+                );
+            }
+            let lit = b.pixels.iter().filter(|p| p.max_element() > 0.0).count();
+            assert!(lit > b.pixels.len() * 9 / 10, "{sampler:?}: {lit} pixels lit");
+        }
+    }
+
+    #[test]
+    fn the_baseline_build_of_the_lanes_sums_what_the_chosen_one_sums() {
+        let scene = Scene::build(boxed_room()).unwrap();
+        let settings = RenderSettings {
+            integrator: IntegratorKind::Path,
+            spp: 4,
+            ..RenderSettings::default()
+        };
+        let plain = PlainPathTracer::for_scene(&scene, &settings).expect("a plain scene");
+        let lights = triangle_lights(&scene).expect("triangle lights");
+        let rect = crate::film::PixelRect::full(scene.camera.width, scene.camera.height);
+        let (mut a, mut b) = (
+            SplatBlock::new(rect, settings.filter),
+            SplatBlock::new(rect, settings.filter),
+        );
+        let (mut sa, mut sb) = (RayStats::default(), RayStats::default());
+        for y in 0..scene.camera.height {
+            let xs = 0..scene.camera.width;
+            let args = (plain.reflectance(), settings.max_depth, &lights[..], &scene, &settings);
+            add_row_samples(
+                args.0,
+                args.1,
+                args.2,
+                args.3,
+                args.4,
+                xs.clone(),
+                y,
+                0..4,
+                &mut a,
+                &mut sa,
+            );
+            rows(args.0, args.1, args.2, args.3, args.4, xs, y, 0..4, &mut b, &mut sb);
+        }
+        assert!(a.sums == b.sums, "the pixel sums differ");
+        assert_eq!(sa, sb);
+        assert!(sa.shadow_rays > 0 && sa.other_rays > 0);
+    }
+
+    #[test]
+    fn only_triangles_lit_by_triangles_go_in_lanes() {
+        let path = RenderSettings {
+            integrator: IntegratorKind::Path,
+            ..RenderSettings::default()
+        };
+        let lanes = |desc: SceneDesc| {
+            PlainPathTracer::for_scene(&Scene::build(desc).unwrap(), &path).is_some_and(|p| p.in_lanes())
+        };
+        assert!(lanes(boxed_room()));
+        assert!(!lanes(boxed_room_with(
+            "LightSource \"point\" \"point3 from\" [ 0 1.5 0 ]\n"
+        )));
+        assert!(!lanes(boxed_room_with("Shape \"sphere\" \"float radius\" 0.2\n")));
+        let mut with_ball = crate::scene::builtin::cornell();
+        with_ball.light_sampler = LightSamplerKind::Power;
+        assert!(!lanes(with_ball));
+    }
+}
