@@ -3,14 +3,21 @@
 //!
 //! Each of the eight lanes follows one camera sample's path; a lane whose
 //! path ends takes the row's next camera sample. The work of a bounce runs
-//! stage by stage over all lanes (the hit's geometry, the shading frame,
-//! the BSDF sample, the light sample and its weight, the next ray), each
-//! stage a loop over the lanes' arrays that the compiler turns into vector
-//! instructions; ray queries, the sampler's requests and a light's choice
-//! stay a lane at a time. Every lane does the same arithmetic on the same
-//! numbers as [`super::plain::PlainPathTracer::li`] on its own, so the image
-//! is that loop's bit for bit (tested), whatever the order the lanes finish in:
-//! pixel sums are exact.
+//! stage by stage over all lanes: the eight rays' queries, then their hits'
+//! geometry, shading frames and BSDF samples, then the light samples and
+//! their shadow rays, then the next rays. Every lane does the same arithmetic
+//! on the same numbers as [`super::plain::PlainPathTracer::li`] on its own,
+//! so the image is that loop's bit for bit (tested), whatever the order the
+//! lanes finish in: pixel sums are exact.
+//!
+//! Each stage is a loop over the lanes' arrays, compiled for AVX2 where the
+//! CPU has it. Few of them come out as vector instructions yet (the
+//! compiler vectorizes straight-line arithmetic, not the branches of a
+//! shading frame or a light sample); the time saved, 8% on `cornell-box`
+//! (BENCHMARKS.md, "Paths eight at a time"), comes from running each kind
+//! of work eight times in a row, where the processor finds eight
+//! independent chains of it. Stages written in vector registers are the
+//! next step.
 
 // A stage reads and writes a lane's entry in many arrays at once: indexing
 // by lane says so more plainly than zipped iterators.

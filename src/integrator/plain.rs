@@ -10,7 +10,8 @@
 //! and dp/du, ray differentials, and the checks for media, transmission and
 //! regularization. On Bitterli's `cornell-box` that was a fifth of the
 //! instructions and an eighth of the time (BENCHMARKS.md, "A path loop for
-//! plain scenes"), and this loop is where paths in SIMD lanes would start.
+//! plain scenes"). Scenes of still triangles lit by triangle lights trace
+//! these paths eight at a time ([`super::lanes`]).
 //!
 //! Plain: no participating media or subsurface scattering; every material
 //! `Diffuse` with a constant reflectance; the light chosen by power (the
