@@ -8,6 +8,23 @@ use crate::material::Material;
 use crate::math::Vec3;
 use crate::scene::{CameraDesc, LightSurface, Scene, SceneDesc, SphereDesc, TriangleDesc};
 
+/// The description of a scene given as pbrt-v4 text.
+pub fn pbrt_desc(text: &str) -> SceneDesc {
+    let path = std::path::Path::new("test.pbrt");
+    let parsed = crate::scene::pbrt::parse_bytes(path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk)
+        .unwrap_or_else(|e| panic!("{e}"));
+    crate::scene::pbrt::convert::convert(&parsed, path, false)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .desc
+}
+
+/// A pbrt-v4 `trianglemesh` quad with corners `p` (twelve numbers), and
+/// vertex normal `n` (three) at every corner when given.
+pub fn pbrt_quad(p: &str, n: Option<&str>) -> String {
+    let normals = n.map_or(String::new(), |n| format!("\"normal N\" [ {n} {n} {n} {n} ] "));
+    format!("Shape \"trianglemesh\" \"point3 P\" [ {p} ] {normals}\"integer indices\" [ 0 1 2 0 2 3 ]\n")
+}
+
 fn empty(camera: CameraDesc) -> SceneDesc {
     SceneDesc::empty("analytic", camera)
 }

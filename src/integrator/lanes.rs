@@ -25,7 +25,8 @@
 
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
-use super::{CameraSample, PixelSamples, RayStats, RenderSettings};
+use super::plain::PlainPathTracer;
+use super::{CameraSample, PixelSamples, RayStats, RenderSettings, Row};
 use crate::bsdf::frame::Frame;
 use crate::film::SplatBlock;
 use crate::light::{triangle_normal_area, triangle_point_seen, Light, LightContext};
@@ -33,7 +34,6 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use crate::scene::{interpolated_normal, Scene};
 use std::f32::consts::FRAC_1_PI;
-use std::ops::Range;
 
 /// Paths in flight at once.
 const N: usize = 8;
@@ -198,166 +198,108 @@ impl Paths {
     }
 }
 
-/// Traces samples `samples` of pixels `xs` of row `y` (each pixel's
-/// samples as [`PixelSamples`] makes them) through plain paths in lanes and
-/// splats them into `block`.
-#[allow(clippy::too_many_arguments)]
-pub fn add_row_samples(
-    reflectance: &[Vec3],
-    max_depth: Option<u32>,
-    lights: &[TriangleLight],
-    scene: &Scene,
-    settings: &RenderSettings,
-    xs: Range<u32>,
-    y: u32,
-    samples: Range<u32>,
-    block: &mut SplatBlock,
-    stats: &mut RayStats,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2.
-        return unsafe {
-            rows_avx2(
-                reflectance,
-                max_depth,
-                lights,
-                scene,
-                settings,
-                xs,
-                y,
-                samples,
-                block,
-                stats,
-            )
-        };
+/// A render's paths in lanes: the plain loop's materials and depth, the
+/// scene's triangle lights.
+pub struct Job<'a> {
+    pub plain: &'a PlainPathTracer,
+    pub lights: &'a [TriangleLight],
+    pub scene: &'a Scene,
+    pub settings: &'a RenderSettings,
+}
+
+impl Job<'_> {
+    /// Traces the row's samples (each pixel's as [`PixelSamples`] makes
+    /// them) through plain paths in lanes and splats them into `block`.
+    pub fn add_row_samples(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.rows_avx2(row, block, stats) };
+        }
+        self.rows(row, block, stats);
     }
-    rows(
-        reflectance,
-        max_depth,
-        lights,
-        scene,
-        settings,
-        xs,
-        y,
-        samples,
-        block,
-        stats,
-    )
-}
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-fn rows_avx2(
-    reflectance: &[Vec3],
-    max_depth: Option<u32>,
-    lights: &[TriangleLight],
-    scene: &Scene,
-    settings: &RenderSettings,
-    xs: Range<u32>,
-    y: u32,
-    samples: Range<u32>,
-    block: &mut SplatBlock,
-    stats: &mut RayStats,
-) {
-    rows(
-        reflectance,
-        max_depth,
-        lights,
-        scene,
-        settings,
-        xs,
-        y,
-        samples,
-        block,
-        stats,
-    )
-}
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn rows_avx2(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
+        self.rows(row, block, stats);
+    }
 
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn rows(
-    reflectance: &[Vec3],
-    max_depth: Option<u32>,
-    lights: &[TriangleLight],
-    scene: &Scene,
-    settings: &RenderSettings,
-    xs: Range<u32>,
-    y: u32,
-    samples: Range<u32>,
-    block: &mut SplatBlock,
-    stats: &mut RayStats,
-) {
-    let mut pixels = xs.map(|x| PixelSamples::new(scene, settings, x, y));
-    let mut pixel = pixels.next();
-    let mut next_s = samples.start;
-    let mut next_sample = move || loop {
-        let p = pixel.as_ref()?;
-        if next_s < samples.end {
-            next_s += 1;
-            return Some(p.sample(scene, settings, next_s - 1));
-        }
-        pixel = pixels.next();
-        next_s = samples.start;
-    };
-    let mut paths = Paths::new();
-    loop {
-        for i in 0..N {
-            while paths.sample[i].is_none() {
-                let Some(cs) = next_sample() else {
-                    break;
-                };
-                stats.camera_rays += 1;
-                if cs.weight > 0.0 {
-                    paths.start(i, cs);
-                } else {
-                    // A ray the lens blocks is a sample of black.
-                    cs.splat(settings, Vec3::ZERO, block);
+    #[inline(always)]
+    fn rows(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
+        let (scene, settings) = (self.scene, self.settings);
+        let (reflectance, max_depth, lights) = (self.plain.reflectance(), self.plain.max_depth(), self.lights);
+        let (xs, y, samples) = (row.xs.clone(), row.y, row.samples.clone());
+        let mut pixels = xs.map(|x| PixelSamples::new(scene, settings, x, y));
+        let mut pixel = pixels.next();
+        let mut next_s = samples.start;
+        let mut next_sample = move || loop {
+            let p = pixel.as_ref()?;
+            if next_s < samples.end {
+                next_s += 1;
+                return Some(p.sample(scene, settings, next_s - 1));
+            }
+            pixel = pixels.next();
+            next_s = samples.start;
+        };
+        let mut paths = Paths::new();
+        loop {
+            for i in 0..N {
+                while paths.sample[i].is_none() {
+                    let Some(cs) = next_sample() else {
+                        break;
+                    };
+                    stats.camera_rays += 1;
+                    if cs.weight > 0.0 {
+                        paths.start(i, cs);
+                    } else {
+                        // A ray the lens blocks is a sample of black.
+                        cs.splat(settings, Vec3::ZERO, block);
+                    }
                 }
             }
-        }
-        if paths.sample.iter().all(Option::is_none) {
-            return;
-        }
-        let hits = find_hits(reflectance, max_depth, scene, settings, &mut paths, block);
-        let mut b = Bounce::default();
-        shade(&hits, &paths, &mut b);
-        choose_lights(scene, &hits, &mut b);
-        sample_lights(scene, lights, &hits, &mut b);
-        for i in 0..N {
-            if b.shadow[i] {
-                stats.shadow_rays += 1;
-                let ray = Ray::timed(b.so.get(i), b.sd.get(i), time_of(&paths, i));
-                if !scene.occluded_before_light(&ray, 0.0, b.st[i], b.light[i]) {
-                    paths.add(i, paths.beta.get(i) * b.direct.get(i));
+            if paths.sample.iter().all(Option::is_none) {
+                return;
+            }
+            let hits = find_hits(reflectance, max_depth, scene, settings, &mut paths, block);
+            let mut b = Bounce::default();
+            shade(&hits, &paths, &mut b);
+            choose_lights(scene, &hits, &mut b);
+            sample_lights(scene, lights, &hits, &mut b);
+            for i in 0..N {
+                if b.shadow[i] {
+                    stats.shadow_rays += 1;
+                    let ray = Ray::timed(b.so.get(i), b.sd.get(i), time_of(&paths, i));
+                    if !scene.occluded_before_light(&ray, 0.0, b.st[i], b.light[i]) {
+                        paths.add(i, paths.beta.get(i) * b.direct.get(i));
+                    }
                 }
             }
-        }
-        let go_on = continue_paths(&hits, &mut paths, &b);
-        for i in 0..N {
-            if !hits.live[i] {
-                continue;
-            }
-            if !go_on[i] {
-                paths.finish(i, settings, block);
-                continue;
-            }
-            let wi = paths.d.get(i);
-            if paths.depth[i] >= ROULETTE_DEPTH {
-                let beta = paths.beta.get(i);
-                let q = beta.max_element().min(MAX_SURVIVAL);
-                let Some(cs) = paths.sample[i].as_mut() else {
+            let go_on = continue_paths(&hits, &mut paths, &b);
+            for i in 0..N {
+                if !hits.live[i] {
                     continue;
-                };
-                if cs.sampler.next_f32() >= q {
+                }
+                if !go_on[i] {
                     paths.finish(i, settings, block);
                     continue;
                 }
-                paths.beta.set(i, beta / q);
+                let wi = paths.d.get(i);
+                if paths.depth[i] >= ROULETTE_DEPTH {
+                    let beta = paths.beta.get(i);
+                    let q = beta.max_element().min(MAX_SURVIVAL);
+                    let Some(cs) = paths.sample[i].as_mut() else {
+                        continue;
+                    };
+                    if cs.sampler.next_f32() >= q {
+                        paths.finish(i, settings, block);
+                        continue;
+                    }
+                    paths.beta.set(i, beta / q);
+                }
+                stats.other_rays += 1;
+                paths.o.set(i, offset_origin(b.p.get(i), hits.ng.get(i), wi));
             }
-            stats.other_rays += 1;
-            paths.o.set(i, offset_origin(b.p.get(i), hits.ng.get(i), wi));
         }
     }
 }
@@ -582,12 +524,11 @@ fn continue_paths(h: &Hits, paths: &mut Paths, b: &Bounce) -> [bool; N] {
 mod tests {
     use super::*;
     use crate::film::Film;
+    use crate::integrator::analytic::{pbrt_desc, pbrt_quad};
     use crate::integrator::path::PathTracer;
-    use crate::integrator::plain::PlainPathTracer;
     use crate::integrator::{render_tiles, IntegratorKind, LightSampling, Progress, SamplerKind};
     use crate::light::LightSamplerKind;
     use crate::scene::SceneDesc;
-    use std::path::Path;
 
     /// A box of Lambertian quads, some with vertex normals, lit by a
     /// one-sided quad and a two-sided triangle, with a tall block inside.
@@ -597,10 +538,7 @@ mod tests {
 
     /// `boxed_room`, with `extra` added to its world.
     fn boxed_room_with(extra: &str) -> SceneDesc {
-        let quad = |p: &str, n: Option<&str>| {
-            let normals = n.map_or(String::new(), |n| format!("\"normal N\" [ {n} {n} {n} {n} ] "));
-            format!("Shape \"trianglemesh\" \"point3 P\" [ {p} ] {normals}\"integer indices\" [ 0 1 2 0 2 3 ]\n")
-        };
+        let quad = pbrt_quad;
         let mut text = String::from(
             "LookAt 0 1 3.5  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n\
              Film \"rgb\" \"integer xresolution\" 21 \"integer yresolution\" 17\nWorldBegin\n\
@@ -624,12 +562,7 @@ mod tests {
         text += "Shape \"trianglemesh\" \"point3 P\" [ 0.9 0.2 -0.5  0.9 0.8 -0.5  0.9 0.5 0.3 ] \"integer indices\" [ 0 1 2 ]\n";
         text += "AttributeEnd\n";
         text += extra;
-        let path = Path::new("lanes.pbrt");
-        let parsed = crate::scene::pbrt::parse_bytes(path, text.into_bytes(), &crate::scene::mesh::Disk)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let mut desc = crate::scene::pbrt::convert::convert(&parsed, path, false)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc;
+        let mut desc = pbrt_desc(&text);
         desc.light_sampler = LightSamplerKind::Power;
         desc
     }
@@ -685,6 +618,12 @@ mod tests {
         };
         let plain = PlainPathTracer::for_scene(&scene, &settings).expect("a plain scene");
         let lights = triangle_lights(&scene).expect("triangle lights");
+        let job = Job {
+            plain: &plain,
+            lights: &lights,
+            scene: &scene,
+            settings: &settings,
+        };
         let rect = crate::film::PixelRect::full(scene.camera.width, scene.camera.height);
         let (mut a, mut b) = (
             SplatBlock::new(rect, settings.filter),
@@ -692,21 +631,13 @@ mod tests {
         );
         let (mut sa, mut sb) = (RayStats::default(), RayStats::default());
         for y in 0..scene.camera.height {
-            let xs = 0..scene.camera.width;
-            let args = (plain.reflectance(), settings.max_depth, &lights[..], &scene, &settings);
-            add_row_samples(
-                args.0,
-                args.1,
-                args.2,
-                args.3,
-                args.4,
-                xs.clone(),
+            let row = Row {
+                xs: 0..scene.camera.width,
                 y,
-                0..4,
-                &mut a,
-                &mut sa,
-            );
-            rows(args.0, args.1, args.2, args.3, args.4, xs, y, 0..4, &mut b, &mut sb);
+                samples: 0..4,
+            };
+            job.add_row_samples(&row, &mut a, &mut sa);
+            job.rows(&row, &mut b, &mut sb);
         }
         assert!(a.sums == b.sums, "the pixel sums differ");
         assert_eq!(sa, sb);

@@ -175,22 +175,41 @@ impl RenderOutput {
 pub trait RadianceEstimator: Sync {
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3;
 
-    /// Splats samples `samples` of pixels `xs` of row `y` into `block`:
-    /// [`add_pixel_samples`] pixel by pixel, unless the estimator traces
-    /// many camera rays at once.
-    #[allow(clippy::too_many_arguments)]
+    /// Splats a row's samples into `block`: [`add_pixel_samples`] pixel by
+    /// pixel, unless the estimator traces many camera rays at once.
     fn add_row_samples(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
-        xs: Range<u32>,
-        y: u32,
-        samples: Range<u32>,
+        row: &Row,
         block: &mut SplatBlock,
         stats: &mut RayStats,
     ) {
-        for x in xs {
-            add_pixel_samples(scene, settings, self, x, y, samples.clone(), block, stats);
+        row.add_samples(scene, settings, self, block, stats);
+    }
+}
+
+/// Samples `samples` of pixels `xs` of row `y` of the frame.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub xs: Range<u32>,
+    pub y: u32,
+    pub samples: Range<u32>,
+}
+
+impl Row {
+    /// Splats the row's samples into `block`, [`add_pixel_samples`] pixel by
+    /// pixel, each ray's radiance from `est`.
+    pub fn add_samples<E: RadianceEstimator + ?Sized>(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        est: &E,
+        block: &mut SplatBlock,
+        stats: &mut RayStats,
+    ) {
+        for x in self.xs.clone() {
+            add_pixel_samples(scene, settings, est, x, self.y, self.samples.clone(), block, stats);
         }
     }
 }
@@ -412,7 +431,12 @@ pub fn accumulate_tiles(
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                est.add_row_samples(scene, settings, sx0..sx1, y, samples.clone(), &mut block, &mut stats);
+                let row = Row {
+                    xs: sx0..sx1,
+                    y,
+                    samples: samples.clone(),
+                };
+                est.add_row_samples(scene, settings, &row, &mut block, &mut stats);
             }
             let mut pass = pass.lock().unwrap_or_else(|e| e.into_inner());
             let br = block.rect();

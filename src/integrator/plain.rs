@@ -22,7 +22,7 @@
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, shadow_ray_blocked};
 use super::lanes::TriangleLight;
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
-use super::{add_pixel_samples, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use super::{IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings, Row};
 use crate::bsdf::diffuse::DiffuseBxdf;
 use crate::bsdf::frame::Frame;
 use crate::film::SplatBlock;
@@ -32,7 +32,6 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere, Sampler};
 use crate::scene::{Hit, Scene};
 use std::f32::consts::FRAC_1_PI;
-use std::ops::Range;
 
 pub struct PlainPathTracer {
     max_depth: Option<u32>,
@@ -92,6 +91,11 @@ impl PlainPathTracer {
         &self.reflectance
     }
 
+    /// The most bounces, if limited.
+    pub fn max_depth(&self) -> Option<u32> {
+        self.max_depth
+    }
+
     /// Whether it traces paths in lanes.
     pub fn in_lanes(&self) -> bool {
         self.lanes.is_some()
@@ -103,30 +107,19 @@ impl RadianceEstimator for PlainPathTracer {
         &self,
         scene: &Scene,
         settings: &RenderSettings,
-        xs: Range<u32>,
-        y: u32,
-        samples: Range<u32>,
+        row: &Row,
         block: &mut SplatBlock,
         stats: &mut RayStats,
     ) {
         match &self.lanes {
-            Some(lights) => super::lanes::add_row_samples(
-                self.reflectance(),
-                self.max_depth,
+            Some(lights) => super::lanes::Job {
+                plain: self,
                 lights,
                 scene,
                 settings,
-                xs,
-                y,
-                samples,
-                block,
-                stats,
-            ),
-            None => {
-                for x in xs {
-                    add_pixel_samples(scene, settings, self, x, y, samples.clone(), block, stats);
-                }
             }
+            .add_row_samples(row, block, stats),
+            None => row.add_samples(scene, settings, self, block, stats),
         }
     }
 
@@ -259,28 +252,17 @@ fn direct(
 mod tests {
     use super::*;
     use crate::film::Film;
+    use crate::integrator::analytic::{pbrt_desc, pbrt_quad};
     use crate::integrator::path::PathTracer;
     use crate::integrator::{render_tiles, Progress, SamplerKind};
     use crate::scene::SceneDesc;
-    use std::path::Path;
-
-    fn pbrt_desc(text: &str) -> SceneDesc {
-        let path = Path::new("plain.pbrt");
-        let parsed = crate::scene::pbrt::parse_bytes(path, text.as_bytes().to_vec(), &crate::scene::mesh::Disk)
-            .unwrap_or_else(|e| panic!("{e}"));
-        crate::scene::pbrt::convert::convert(&parsed, path, false)
-            .unwrap_or_else(|e| panic!("{e}"))
-            .desc
-    }
 
     /// A room of Lambertian quads with vertex normals, lit by a one-sided
     /// quad, a two-sided triangle, a point light and a dim sky, and with a
     /// ball: every kind of light and shape the loop meets through the
     /// scene's own queries.
     fn room() -> SceneDesc {
-        let quad = |p: &str, n: &str| {
-            format!("Shape \"trianglemesh\" \"point3 P\" [ {p} ] \"normal N\" [ {n} {n} {n} {n} ] \"integer indices\" [ 0 1 2 0 2 3 ]\n")
-        };
+        let quad = |p: &str, n: &str| pbrt_quad(p, Some(n));
         let mut text = String::from(
             "LookAt 0 1 3.5  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n\
              Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 20\nWorldBegin\n\

@@ -1571,7 +1571,7 @@ impl Scene {
             let (slot, h) = self.bvh.intersect(ray, t_min, t_max)?;
             let tri = &self.triangles[slot as usize];
             let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
-            let mut hit = self.triangle_hit(slot as usize, h.u, h.v, h.t, p);
+            let mut hit = self.triangle_hit::<false>(slot as usize, h.u, h.v, h.t, p);
             hit.time = ray.time;
             return Some(hit);
         }
@@ -1594,31 +1594,11 @@ impl Scene {
     /// [`Scene::intersect_bare`]'s record of a hit `h` on triangle `slot`.
     #[inline(always)]
     pub fn bare_hit(&self, slot: u32, h: &TriHit, ray: &Ray) -> Hit {
-        let idx = slot as usize;
-        let tri = &self.triangles[idx];
+        let tri = &self.triangles[slot as usize];
         let p = tri.v0 + tri.e1 * h.u + tri.e2 * h.v;
-        let inf = &self.info[idx];
-        Hit {
-            t: h.t,
-            p,
-            ng: inf.normal,
-            ns: self.shading_normal(idx, h.u, h.v),
-            uv: if inf.light.is_some() {
-                self.triangle_uv(idx, h.u, h.v)
-            } else {
-                Vec2::ZERO
-            },
-            dpdu: Vec3::ZERO,
-            material: inf.material,
-            object: inf.object,
-            kind: if inf.light.is_some() {
-                PrimKind::Light
-            } else {
-                PrimKind::Triangle
-            },
-            light: inf.light,
-            time: ray.time,
-        }
+        let mut hit = self.triangle_hit::<true>(slot as usize, h.u, h.v, h.t, p);
+        hit.time = ray.time;
+        hit
     }
 
     /// Whether the scene holds nothing but still triangles without cut-outs.
@@ -1658,7 +1638,7 @@ impl Scene {
         })?;
         let (slot, u, v, to_world) = best?;
         let tri = &self.triangles[slot];
-        let h = self.triangle_hit(slot, u, v, best_t, tri.v0 + tri.e1 * u + tri.e2 * v);
+        let h = self.triangle_hit::<false>(slot, u, v, best_t, tri.v0 + tri.e1 * u + tri.e2 * v);
         Some(placed_hit(h, to_world))
     }
 
@@ -1760,7 +1740,7 @@ impl Scene {
             Found::Triangle(slot, u, v) => {
                 let tri = &self.triangles[slot];
                 let p = tri.v0 + tri.e1 * u + tri.e2 * v;
-                return Some(self.triangle_hit(slot, u, v, best_t, p));
+                return Some(self.triangle_hit::<false>(slot, u, v, best_t, p));
             }
             Found::Shape(id) => id as usize,
         };
@@ -2151,13 +2131,20 @@ impl Scene {
         }
     }
 
-    /// The hit record of triangle `slot` (BVH order) at barycentrics (u, v).
+    /// The hit record of triangle `slot` (BVH order) at barycentrics (u, v);
+    /// `BARE`: texture coordinates only on a light, no dp/du
+    /// ([`Scene::intersect_bare`]).
     #[inline(always)]
-    fn triangle_hit(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
+    fn triangle_hit<const BARE: bool>(&self, idx: usize, u: f32, v: f32, t: f32, p: Vec3) -> Hit {
         let inf = &self.info[idx];
         let ns = self.shading_normal(idx, u, v);
-        let uv = self.triangle_uv(idx, u, v);
-        let dpdu = self.dpdus[idx];
+        let (uv, dpdu) = if !BARE {
+            (self.triangle_uv(idx, u, v), self.dpdus[idx])
+        } else if inf.light.is_some() {
+            (self.triangle_uv(idx, u, v), Vec3::ZERO)
+        } else {
+            (Vec2::ZERO, Vec3::ZERO)
+        };
         Hit {
             t,
             p,
