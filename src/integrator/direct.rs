@@ -316,22 +316,30 @@ fn light_sample_towards(scene: &Scene, hit: &Hit, wo: Vec3, bsdf: &Bsdf, li: usi
 /// `ls` of light `li`.
 #[inline(always)]
 pub(super) fn shadow_ray_blocked(scene: &Scene, hit: &Hit, ls: &LightSample, li: usize, stats: &mut RayStats) -> bool {
-    // Aim from the offset origin at the sampled point itself: a ray parallel
-    // to wi would meet a sphere light short of it and the light would shadow
-    // itself.
-    let o = offset_origin(hit.p, hit.ng, ls.wi);
     stats.shadow_rays += 1;
-    if ls.dist.is_finite() {
-        let to_light = hit.p + ls.wi * ls.dist - o;
-        let dist = to_light.length();
-        scene.occluded_before_light(
-            &Ray::timed(o, to_light / dist, hit.time),
-            0.0,
-            dist * (1.0 - 1e-4),
-            li as u32,
-        )
+    let (o, d, t_max) = shadow_ray(hit.p, hit.ng, ls.wi, ls.dist);
+    let ray = Ray::timed(o, d, hit.time);
+    if t_max.is_finite() {
+        scene.occluded_before_light(&ray, 0.0, t_max, li as u32)
     } else {
-        scene.occluded(&Ray::timed(o, ls.wi, hit.time), 0.0, f32::INFINITY)
+        scene.occluded(&ray, 0.0, f32::INFINITY)
+    }
+}
+
+/// The shadow ray from `p` (geometric normal `ng`) towards a light sample
+/// in direction `wi` at distance `dist`: origin, direction and length
+/// (infinite for a light at infinity). Aimed from the offset origin at the
+/// sampled point itself: a ray parallel to wi would meet a sphere light
+/// short of it and the light would shadow itself.
+#[inline(always)]
+pub(super) fn shadow_ray(p: Vec3, ng: Vec3, wi: Vec3, dist: f32) -> (Vec3, Vec3, f32) {
+    let o = offset_origin(p, ng, wi);
+    if dist.is_finite() {
+        let to_light = p + wi * dist - o;
+        let dist = to_light.length();
+        (o, to_light / dist, dist * (1.0 - 1e-4))
+    } else {
+        (o, wi, f32::INFINITY)
     }
 }
 

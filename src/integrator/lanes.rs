@@ -23,8 +23,9 @@
 // by lane says so more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use super::direct::{emitted_radiance, escaped_radiance, power_heuristic};
+use super::direct::{emitted_radiance, escaped_radiance, shadow_ray};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
+use super::plain::lambert_light;
 use super::plain::PlainPathTracer;
 use super::{CameraSample, PixelSamples, RayStats, RenderSettings, Row};
 use crate::bsdf::frame::Frame;
@@ -270,7 +271,12 @@ impl Job<'_> {
                 if b.shadow[i] {
                     stats.shadow_rays += 1;
                     let ray = Ray::timed(b.so.get(i), b.sd.get(i), time_of(&paths, i));
-                    if !scene.occluded_before_light(&ray, 0.0, b.st[i], b.light[i]) {
+                    let blocked = if b.st[i].is_finite() {
+                        scene.occluded_before_light(&ray, 0.0, b.st[i], b.light[i])
+                    } else {
+                        scene.occluded(&ray, 0.0, f32::INFINITY)
+                    };
+                    if !blocked {
                         paths.add(i, paths.beta.get(i) * b.direct.get(i));
                     }
                 }
@@ -449,41 +455,15 @@ fn sample_lights(scene: &Scene, lights: &[TriangleLight], h: &Hits, b: &mut Boun
             y: b.fy.get(i),
             z: b.fz.get(i),
         };
-        let geo_same = (wi.dot(ng) > 0.0) == (wo.dot(ng) > 0.0);
-        let shade_same = (wi.dot(frame.z) > 0.0) == (wo.dot(frame.z) > 0.0);
-        if !(geo_same && shade_same && wi.dot(ng) != 0.0) {
+        let light = (wi, weight, s.pdf, b.pmf[i], scene.light_is_met(li));
+        let Some(l) = lambert_light(ng, wo, (b.wo_l.get(i), &frame), h.f.get(i), light) else {
             continue;
-        }
-        let wo_l = b.wo_l.get(i);
-        let (f, pdf_bsdf) = if wo_l.z == 0.0 {
-            (Vec3::ZERO, 0.0)
-        } else {
-            let wi_l = frame.to_local(wi);
-            if wo_l.z * wi_l.z > 0.0 {
-                (h.f.get(i), wi_l.z.abs() * FRAC_1_PI)
-            } else {
-                (Vec3::ZERO, 0.0)
-            }
         };
-        let pmf = b.pmf[i];
-        let w = if scene.light_is_met(li) {
-            power_heuristic(pmf * s.pdf, pdf_bsdf)
-        } else {
-            1.0
-        };
-        b.direct.set(i, f * wi.dot(frame.z).abs() * weight * (w / pmf));
-        // As `direct::shadow_ray_blocked`: aimed at the sampled point.
-        let o = offset_origin(p, ng, wi);
+        b.direct.set(i, l);
+        let (o, d, t_max) = shadow_ray(p, ng, wi, s.dist);
         b.so.set(i, o);
-        if s.dist.is_finite() {
-            let to_light = p + wi * s.dist - o;
-            let dist = to_light.length();
-            b.sd.set(i, to_light / dist);
-            b.st[i] = dist * (1.0 - 1e-4);
-        } else {
-            b.sd.set(i, wi);
-            b.st[i] = f32::INFINITY;
-        }
+        b.sd.set(i, d);
+        b.st[i] = t_max;
         b.shadow[i] = true;
     }
 }

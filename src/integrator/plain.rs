@@ -217,13 +217,36 @@ fn direct(
     let Some(ls) = scene.lights[li].sample_li(hit.p, Vec2::new(rest, u.y)) else {
         return Vec3::ZERO;
     };
-    let wi = ls.wi;
-    // Reflection on the viewer's side, the geometric and shading normals
-    // agreeing.
-    let geo_same = (wi.dot(hit.ng) > 0.0) == (wo.dot(hit.ng) > 0.0);
-    let shade_same = (wi.dot(frame.z) > 0.0) == (wo.dot(frame.z) > 0.0);
-    if !(geo_same && shade_same && wi.dot(hit.ng) != 0.0) {
+    let light = (ls.wi, ls.weight, ls.pdf, pmf, scene.light_is_met(li));
+    let Some(l) = lambert_light(hit.ng, wo, (wo_l, frame), f, light) else {
         return Vec3::ZERO;
+    };
+    if shadow_ray_blocked(scene, hit, &ls, li, stats) {
+        return Vec3::ZERO;
+    }
+    l
+}
+
+/// What a Lambertian vertex of value `f` (r / pi), with geometric normal
+/// `ng`, seen from `wo` (`wo_l` in the shading frame `frame`), reflects
+/// towards the viewer of a light sample `(wi, weight, pdf, pmf, met)`: its
+/// direction, radiance over its density, its density in solid angle, the
+/// probability of the light's choice, and whether a ray can meet the light
+/// (then the power heuristic weighs it against BSDF sampling).
+/// `None` where the BSDF cannot scatter it so: reflection on the viewer's
+/// side only, the geometric and shading normals agreeing.
+#[inline(always)]
+pub(super) fn lambert_light(
+    ng: Vec3,
+    wo: Vec3,
+    (wo_l, frame): (Vec3, &Frame),
+    f: Vec3,
+    (wi, weight, pdf, pmf, met): (Vec3, Vec3, f32, f32, bool),
+) -> Option<Vec3> {
+    let geo_same = (wi.dot(ng) > 0.0) == (wo.dot(ng) > 0.0);
+    let shade_same = (wi.dot(frame.z) > 0.0) == (wo.dot(frame.z) > 0.0);
+    if !(geo_same && shade_same && wi.dot(ng) != 0.0) {
+        return None;
     }
     // The BSDF's value and density towards the light, zero below the surface.
     let (f, pdf_bsdf) = if wo_l.z == 0.0 {
@@ -236,16 +259,8 @@ fn direct(
             (Vec3::ZERO, 0.0)
         }
     };
-    let w = if scene.light_is_met(li) {
-        power_heuristic(pmf * ls.pdf, pdf_bsdf)
-    } else {
-        1.0
-    };
-    let l = f * wi.dot(frame.z).abs() * ls.weight * (w / pmf);
-    if shadow_ray_blocked(scene, hit, &ls, li, stats) {
-        return Vec3::ZERO;
-    }
-    l
+    let w = if met { power_heuristic(pmf * pdf, pdf_bsdf) } else { 1.0 };
+    Some(f * wi.dot(frame.z).abs() * weight * (w / pmf))
 }
 
 #[cfg(test)]
