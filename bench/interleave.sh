@@ -1,23 +1,34 @@
 #!/usr/bin/env bash
-# Times two or more builds of the renderer against each other: a one-thread
-# path-traced render of Bitterli's `cornell-box` (192 x 192, 16 spp, tent),
-# each binary in turn, ROUNDS times, and prints each binary's best and mean
-# user seconds. Interleaving shares the machine's drift (10 to 20% within
+# Times two or more builds of the renderer against each other: a path-traced
+# render of Bitterli's `cornell-box` (one thread, 192 x 192, 16 spp, tent by
+# default), each binary in turn, ROUNDS times, and prints each binary's best
+# and mean seconds. Interleaving shares the machine's drift (10 to 20% within
 # minutes here) between the binaries. See BENCHMARKS.md.
 #
 # Usage: ROUNDS=6 bench/interleave.sh path/to/raytracer-a path/to/raytracer-b ...
+#   SCENE    the scene [../shared/bitterli/cornell-box/scene-v4.pbrt]
+#   THREADS  worker threads [1]; "all" for every core
+#   SIZE     width and height [192]
+#   SPP      samples per pixel [16]
+#   WALL=1   wall-clock seconds of the whole process instead of user seconds
+#            (what the pass and tile scheduling of a many-thread render costs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rounds=${ROUNDS:-6}
 scene=${SCENE:-../shared/bitterli/cornell-box/scene-v4.pbrt}
+size=${SIZE:-192}
+threads=()
+[ "${THREADS:-1}" = all ] || threads=(--threads "${THREADS:-1}")
+field=%U
+[ "${WALL:-0}" = 1 ] && field=%e
 [ $# -ge 2 ] || { echo "usage: ROUNDS=N $0 BINARY BINARY..." >&2; exit 2; }
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 for _ in $(seq 1 "$rounds"); do
     for i in $(seq 1 $#); do
         bin=${!i}
-        /usr/bin/time -f "%U" -o "$out/t" "$bin" --quiet --scene "$scene" --width 192 --height 192 \
-            --spp 16 --filter tent --integrator path --threads 1 -o "$out/img.exr"
+        /usr/bin/time -f "$field" -o "$out/t" "$bin" --quiet --scene "$scene" --width "$size" --height "$size" \
+            --spp "${SPP:-16}" --filter tent --integrator path "${threads[@]}" -o "$out/img.exr"
         echo "$i $(cat "$out/t")" >>"$out/times"
     done
 done

@@ -217,7 +217,16 @@ pub fn write_image_in_frame(
             let layer = Layer::new(
                 (w, film.height as usize),
                 attrs,
-                Encoding::SMALL_LOSSLESS,
+                // Run lengths, not deflate: a render's radiance is noisy in
+                // its low mantissa bits, which ZIP gains a few percent on
+                // (BENCHMARKS.md, "The output file") for the time of a
+                // small render's whole pass; runs still take in black
+                // backgrounds and flat areas.
+                Encoding {
+                    compression: Compression::RLE,
+                    blocks: Blocks::ScanLines,
+                    line_order: LineOrder::Increasing,
+                },
                 SpecificChannels::rgb(|pos: Vec2<usize>| {
                     let p = film.pixels[pos.y() * w + pos.x()];
                     (p.x, p.y, p.z)

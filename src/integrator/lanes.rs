@@ -2,7 +2,7 @@
 //! still triangles lit by triangle lights.
 //!
 //! Each of the eight lanes follows one camera sample's path; a lane whose
-//! path ends takes the row's next camera sample. The work of a bounce runs
+//! path ends takes the tile's next camera sample. The work of a bounce runs
 //! stage by stage over all lanes: the eight rays' queries, then their hits'
 //! geometry, shading frames and BSDF samples, then the light samples and
 //! their shadow rays, then the next rays. Every lane does the same arithmetic
@@ -27,7 +27,7 @@ use super::direct::{emitted_radiance, escaped_radiance, shadow_ray};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
 use super::plain::lambert_light;
 use super::plain::PlainPathTracer;
-use super::{CameraSample, PixelSamples, RayStats, RenderSettings, Row};
+use super::{CameraSample, PixelSamples, RayStats, RenderSettings, Tile};
 use crate::bsdf::frame::Frame;
 use crate::film::SplatBlock;
 use crate::light::{triangle_normal_area, triangle_point_seen, Light, LightContext};
@@ -35,6 +35,7 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use crate::scene::{interpolated_normal, Scene};
 use std::f32::consts::FRAC_1_PI;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Paths in flight at once.
 const N: usize = 8;
@@ -209,45 +210,64 @@ pub struct Job<'a> {
 }
 
 impl Job<'_> {
-    /// Traces the row's samples (each pixel's as [`PixelSamples`] makes
-    /// them) through plain paths in lanes and splats them into `block`.
-    pub fn add_row_samples(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
+    /// Traces the tile's samples (each pixel's as [`PixelSamples`] makes
+    /// them) through plain paths in lanes and splats them into `block`;
+    /// false when `cancel` stopped it before the last row (the paths in
+    /// flight are finished first).
+    pub fn add_tile_samples(
+        &self,
+        tile: &Tile,
+        block: &mut SplatBlock,
+        stats: &mut RayStats,
+        cancel: &AtomicBool,
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2.
-            return unsafe { self.rows_avx2(row, block, stats) };
+            return unsafe { self.rows_avx2(tile, block, stats, cancel) };
         }
-        self.rows(row, block, stats);
+        self.rows(tile, block, stats, cancel)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn rows_avx2(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
-        self.rows(row, block, stats);
+    fn rows_avx2(&self, tile: &Tile, block: &mut SplatBlock, stats: &mut RayStats, cancel: &AtomicBool) -> bool {
+        self.rows(tile, block, stats, cancel)
     }
 
     #[inline(always)]
-    fn rows(&self, row: &Row, block: &mut SplatBlock, stats: &mut RayStats) {
+    fn rows(&self, tile: &Tile, block: &mut SplatBlock, stats: &mut RayStats, cancel: &AtomicBool) -> bool {
         let (scene, settings) = (self.scene, self.settings);
         let (reflectance, max_depth, lights) = (self.plain.reflectance(), self.plain.max_depth(), self.lights);
-        let (xs, y, samples) = (row.xs.clone(), row.y, row.samples.clone());
-        let mut pixels = xs.map(|x| PixelSamples::new(scene, settings, x, y));
-        let mut pixel = pixels.next();
+        let (xs, samples) = (tile.xs.clone(), tile.samples.clone());
+        // The lanes run through the whole tile: refilled row by row, they
+        // would run part empty at the end of every row.
+        let mut pixels = tile.ys.clone().flat_map(|y| xs.clone().map(move |x| (x, y)));
+        let mut cancelled = false;
+        let mut next_pixel = |cancelled: &mut bool| {
+            let (x, y) = pixels.next()?;
+            if x == tile.xs.start && cancel.load(Ordering::Relaxed) {
+                *cancelled = true;
+                return None;
+            }
+            Some(PixelSamples::new(scene, settings, x, y))
+        };
+        let mut pixel = next_pixel(&mut cancelled);
         let mut next_s = samples.start;
-        let mut next_sample = move || loop {
+        let mut next_sample = |cancelled: &mut bool| loop {
             let p = pixel.as_ref()?;
             if next_s < samples.end {
                 next_s += 1;
                 return Some(p.sample(scene, settings, next_s - 1));
             }
-            pixel = pixels.next();
+            pixel = next_pixel(cancelled);
             next_s = samples.start;
         };
         let mut paths = Paths::new();
         loop {
             for i in 0..N {
                 while paths.sample[i].is_none() {
-                    let Some(cs) = next_sample() else {
+                    let Some(cs) = next_sample(&mut cancelled) else {
                         break;
                     };
                     stats.camera_rays += 1;
@@ -260,7 +280,7 @@ impl Job<'_> {
                 }
             }
             if paths.sample.iter().all(Option::is_none) {
-                return;
+                return !cancelled;
             }
             let hits = find_hits(reflectance, max_depth, scene, settings, &mut paths, block);
             let mut b = Bounce::default();
@@ -610,14 +630,15 @@ mod tests {
             SplatBlock::new(rect, settings.filter),
         );
         let (mut sa, mut sb) = (RayStats::default(), RayStats::default());
+        let never = AtomicBool::new(false);
         for y in 0..scene.camera.height {
-            let row = Row {
+            let tile = Tile {
                 xs: 0..scene.camera.width,
-                y,
+                ys: y..y + 1,
                 samples: 0..4,
             };
-            job.add_row_samples(&row, &mut a, &mut sa);
-            job.rows(&row, &mut b, &mut sb);
+            assert!(job.add_tile_samples(&tile, &mut a, &mut sa, &never));
+            assert!(job.rows(&tile, &mut b, &mut sb, &never));
         }
         assert!(a.sums == b.sums, "the pixel sums differ");
         assert_eq!(sa, sb);

@@ -175,31 +175,35 @@ impl RenderOutput {
 pub trait RadianceEstimator: Sync {
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Vec3;
 
-    /// Splats a row's samples into `block`: [`add_pixel_samples`] pixel by
-    /// pixel, unless the estimator traces many camera rays at once.
-    fn add_row_samples(
+    /// Splats a tile's samples into `block`: [`add_pixel_samples`] pixel by
+    /// pixel, unless the estimator traces many camera rays at once. Returns
+    /// false when `cancel` stopped it before the tile's last row.
+    fn add_tile_samples(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
-        row: &Row,
+        tile: &Tile,
         block: &mut SplatBlock,
         stats: &mut RayStats,
-    ) {
-        row.add_samples(scene, settings, self, block, stats);
+        cancel: &AtomicBool,
+    ) -> bool {
+        tile.add_samples(scene, settings, self, block, stats, cancel)
     }
 }
 
-/// Samples `samples` of pixels `xs` of row `y` of the frame.
+/// Samples `samples` of the pixels `xs` x `ys` of the frame: a tile's, and
+/// on the crop's edge those beyond it that the filter reaches in from.
 #[derive(Clone, Debug)]
-pub struct Row {
+pub struct Tile {
     pub xs: Range<u32>,
-    pub y: u32,
+    pub ys: Range<u32>,
     pub samples: Range<u32>,
 }
 
-impl Row {
-    /// Splats the row's samples into `block`, [`add_pixel_samples`] pixel by
-    /// pixel, each ray's radiance from `est`.
+impl Tile {
+    /// Splats the tile's samples into `block`, [`add_pixel_samples`] pixel
+    /// by pixel, each ray's radiance from `est`; false when `cancel` stopped
+    /// it.
     pub fn add_samples<E: RadianceEstimator + ?Sized>(
         &self,
         scene: &Scene,
@@ -207,10 +211,17 @@ impl Row {
         est: &E,
         block: &mut SplatBlock,
         stats: &mut RayStats,
-    ) {
-        for x in self.xs.clone() {
-            add_pixel_samples(scene, settings, est, x, self.y, self.samples.clone(), block, stats);
+        cancel: &AtomicBool,
+    ) -> bool {
+        for y in self.ys.clone() {
+            if cancel.load(Ordering::Relaxed) {
+                return false;
+            }
+            for x in self.xs.clone() {
+                add_pixel_samples(scene, settings, est, x, y, self.samples.clone(), block, stats);
+            }
         }
+        true
     }
 }
 
@@ -400,6 +411,9 @@ pub fn accumulate_tiles(
     let pass = std::sync::Mutex::new(sums);
     let tiles: Option<Vec<RayStats>> = (0..ntiles)
         .into_par_iter()
+        // A tile a task: threads that run out take single tiles from the
+        // others, so both finish a pass within about a tile of each other.
+        .with_max_len(1)
         .filter(|_| !on_tile.stopped())
         .map(|t| {
             // The tile's pixels in the frame.
@@ -427,16 +441,13 @@ pub fn accumulate_tiles(
             };
             let mut block = SplatBlock::new(block_rect, settings.filter);
             let mut stats = RayStats::default();
-            for y in sy0..sy1 {
-                if cancel.load(Ordering::Relaxed) {
-                    return None;
-                }
-                let row = Row {
-                    xs: sx0..sx1,
-                    y,
-                    samples: samples.clone(),
-                };
-                est.add_row_samples(scene, settings, &row, &mut block, &mut stats);
+            let tile = Tile {
+                xs: sx0..sx1,
+                ys: sy0..sy1,
+                samples: samples.clone(),
+            };
+            if !est.add_tile_samples(scene, settings, &tile, &mut block, &mut stats, cancel) {
+                return None;
             }
             let mut pass = pass.lock().unwrap_or_else(|e| e.into_inner());
             let br = block.rect();
@@ -459,10 +470,15 @@ pub fn accumulate_tiles(
 
 /// Adds `pass` to `sums`, entry by entry, and zeroes `pass` for the next use.
 pub fn merge_sums(sums: &mut [PixelSum], pass: &mut [PixelSum]) {
-    for (s, p) in sums.iter_mut().zip(pass) {
-        s.merge(p);
-        *p = PixelSum::default();
-    }
+    // On every thread: a pass of a small render is a few milliseconds, and
+    // a one-thread merge would leave the others idle for a tenth of it.
+    sums.par_iter_mut()
+        .zip(pass.par_iter_mut())
+        .with_min_len(4096)
+        .for_each(|(s, p)| {
+            s.merge(p);
+            *p = PixelSum::default();
+        });
 }
 
 /// Splats samples `samples` of pixel (x, y) into `block`, each with its

@@ -22,7 +22,7 @@
 use super::direct::{emitted_radiance, escaped_radiance, power_heuristic, shadow_ray_blocked};
 use super::lanes::TriangleLight;
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
-use super::{IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings, Row};
+use super::{IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings, Tile};
 use crate::bsdf::diffuse::DiffuseBxdf;
 use crate::bsdf::frame::Frame;
 use crate::film::SplatBlock;
@@ -32,6 +32,7 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere, Sampler};
 use crate::scene::{Hit, Scene};
 use std::f32::consts::FRAC_1_PI;
+use std::sync::atomic::AtomicBool;
 
 pub struct PlainPathTracer {
     max_depth: Option<u32>,
@@ -103,14 +104,15 @@ impl PlainPathTracer {
 }
 
 impl RadianceEstimator for PlainPathTracer {
-    fn add_row_samples(
+    fn add_tile_samples(
         &self,
         scene: &Scene,
         settings: &RenderSettings,
-        row: &Row,
+        tile: &Tile,
         block: &mut SplatBlock,
         stats: &mut RayStats,
-    ) {
+        cancel: &AtomicBool,
+    ) -> bool {
         match &self.lanes {
             Some(lights) => super::lanes::Job {
                 plain: self,
@@ -118,8 +120,8 @@ impl RadianceEstimator for PlainPathTracer {
                 scene,
                 settings,
             }
-            .add_row_samples(row, block, stats),
-            None => row.add_samples(scene, settings, self, block, stats),
+            .add_tile_samples(tile, block, stats, cancel),
+            None => tile.add_samples(scene, settings, self, block, stats, cancel),
         }
     }
 
