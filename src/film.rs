@@ -220,7 +220,9 @@ impl PixelSum {
         // The same truncation; through i64 it is a machine instruction where
         // the direct conversion is a library call.
         if x.abs() < 9.0e18 {
-            x as i64 as i128
+            // SAFETY: finite (NaN fails the test) and within i64's range;
+            // `as` would check both again.
+            unsafe { x.to_int_unchecked::<i64>() as i128 }
         } else {
             x as i128
         }

@@ -12,6 +12,7 @@ use crate::math::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// SplitMix64 finaliser: a strong 64-bit mixer for building keys.
+#[inline(always)]
 pub fn mix64(mut x: u64) -> u64 {
     x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
     x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -67,10 +68,12 @@ impl Rng {
     }
 
     /// Uniform in [0, 1).
+    #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
 
+    #[inline(always)]
     pub fn next_2d(&mut self) -> Vec2 {
         let x = self.next_f32();
         Vec2::new(x, self.next_f32())
@@ -143,6 +146,7 @@ pub fn sobol_u32(index: u32, dim: u32) -> u32 {
 }
 
 /// The xor of a byte table's entries for the four bytes of `index`.
+#[inline(always)]
 fn by_bytes(t: &[[u32; 256]; 4], index: u32) -> u32 {
     let i = index as usize;
     t[0][i & 255] ^ t[1][(i >> 8) & 255] ^ t[2][(i >> 16) & 255] ^ t[3][i >> 24]
@@ -150,6 +154,7 @@ fn by_bytes(t: &[[u32; 256]; 4], index: u32) -> u32 {
 
 /// Burley's improved Laine-Karras hash: each output bit depends only on the
 /// input bits at or below it, and it is a bijection.
+#[inline(always)]
 fn laine_karras(mut v: u32, seed: u32) -> u32 {
     v = v.wrapping_add(seed);
     v ^= v.wrapping_mul(0x6c50_b47c);
@@ -172,6 +177,7 @@ pub fn owen_scramble(x: u32, seed: u32) -> u32 {
 
 /// Three 32-bit seeds from a request's 64-bit key: the shuffle's, then the
 /// scrambles' of dimensions 0 and 1.
+#[inline(always)]
 fn seeds(key: u64) -> (u32, u32, u32) {
     let k2 = (key ^ (key >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     (key as u32, (key >> 32) as u32, (k2 >> 32) as u32)
@@ -181,6 +187,7 @@ fn seeds(key: u64) -> (u32, u32, u32) {
 /// sampler: `key` hashes (seed, pixel, dimension). The sample index comes bit
 /// reversed (`Sampler` reverses it once for all its requests), which is the
 /// order Burley's shuffle hashes it in.
+#[inline(always)]
 fn sobol_1d(rev_index: u32, key: u64) -> u32 {
     let (s0, s1, _) = seeds(key);
     // owen_scramble(index, s0), its first reversal done.
@@ -191,6 +198,7 @@ fn sobol_1d(rev_index: u32, key: u64) -> u32 {
 
 /// The point of a 2D request: Sobol dimensions 0 and 1 at the same shuffled
 /// index, each scrambled with its own seed.
+#[inline(always)]
 fn sobol_2d(rev_index: u32, key: u64) -> (u32, u32) {
     let (s0, s1, s2) = seeds(key);
     let shuffled = laine_karras(rev_index, s0).reverse_bits();
@@ -247,6 +255,7 @@ pub fn morton2(x: u32, y: u32) -> u64 {
 }
 
 /// A 0.32 fixed-point fraction as an f32 in [0, 1) (24 bits kept).
+#[inline(always)]
 fn fraction(v: u32) -> f32 {
     (v >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
@@ -359,6 +368,7 @@ impl Sampler {
     }
 
     /// The key of the next Sobol request, or `None` for the PCG32 stream.
+    #[inline(always)]
     fn next_key(&mut self) -> Option<u64> {
         if !self.sobol || self.dim >= SOBOL_DIMENSIONS {
             return None;
@@ -373,6 +383,7 @@ impl Sampler {
 
     /// Passes over the next 1D request: what follows is what it would be
     /// after `next_f32`, without computing a value nobody reads.
+    #[inline(always)]
     pub fn skip_1d(&mut self) {
         if self.sobol && self.dim < SOBOL_DIMENSIONS {
             self.dim += 1;
@@ -383,6 +394,7 @@ impl Sampler {
 
     /// The lobe-choice value of a BSDF sample: read only when the BSDF has
     /// lobes to choose between (else skipped, and 0.5).
+    #[inline(always)]
     pub fn lobe_choice(&mut self, needed: bool) -> f32 {
         if needed {
             self.next_f32()
@@ -393,6 +405,7 @@ impl Sampler {
     }
 
     /// Uniform in [0, 1).
+    #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
         match (self.next_key(), self.rev_global) {
             (Some(key), None) => fraction(sobol_1d(self.rev_index, key)),
@@ -402,6 +415,7 @@ impl Sampler {
     }
 
     /// Uniform in [0, 1)^2.
+    #[inline(always)]
     pub fn next_2d(&mut self) -> Vec2 {
         let (x, y) = match (self.next_key(), self.rev_global) {
             (Some(key), None) => sobol_2d(self.rev_index, key),
