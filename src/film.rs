@@ -232,11 +232,21 @@ impl PixelSum {
     /// [`MAX_SAMPLE`] is scaled down to it (keeping its hue), so that no sum
     /// of a pixel's samples can pass the fixed point's range and wrap.
     pub fn add(&mut self, l: Vec3, w: f32) {
-        let l = if l.max_element() > MAX_SAMPLE {
+        self.add_bounded(Self::bound(l), w);
+    }
+
+    /// `l` scaled down to [`MAX_SAMPLE`] if it is brighter.
+    fn bound(l: Vec3) -> Vec3 {
+        if l.max_element() > MAX_SAMPLE {
             l * (MAX_SAMPLE / l.max_element())
         } else {
             l
-        };
+        }
+    }
+
+    /// `add` of a radiance already `bound`.
+    #[inline(always)]
+    fn add_bounded(&mut self, l: Vec3, w: f32) {
         let w64 = w as f64;
         for (s, c) in self.rgb.iter_mut().zip(l.to_array()) {
             *s = s.wrapping_add(Self::fixed(c as f64 * w64));
@@ -309,14 +319,12 @@ impl SplatBlock {
     /// pixel it was taken in, even on its edge).
     pub fn splat(&mut self, px: (u32, u32), pos: Vec2, l: Vec3) {
         let r = self.rect;
-        let mut add = |x: u32, y: u32, w: f32| {
-            if w > 0.0 && x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1 {
-                let k = (y - r.y0) as usize * r.width() as usize + (x - r.x0) as usize;
-                self.sums[k].add(l, w);
-            }
-        };
+        let l = PixelSum::bound(l);
+        let width = r.width() as usize;
         if self.filter == Filter::Box {
-            add(px.0, px.1, 1.0);
+            if (r.x0..r.x1).contains(&px.0) && (r.y0..r.y1).contains(&px.1) {
+                self.sums[(px.1 - r.y0) as usize * width + (px.0 - r.x0) as usize].add_bounded(l, 1.0);
+            }
             return;
         }
         // The profile at each row and column the filter reaches: 2(2r + 1)
@@ -332,13 +340,15 @@ impl SplatBlock {
         }
         for (j, &py) in wy[..span].iter().enumerate() {
             let y = px.1 as i64 + j as i64 - reach;
-            if py == 0.0 || y < 0 {
+            if py == 0.0 || y < r.y0 as i64 || y >= r.y1 as i64 {
                 continue;
             }
+            let row = (y - r.y0 as i64) as usize * width;
             for (i, &pxw) in wx[..span].iter().enumerate() {
                 let x = px.0 as i64 + i as i64 - reach;
-                if x >= 0 {
-                    add(x as u32, y as u32, (pxw * py) as f32);
+                let w = (pxw * py) as f32;
+                if w > 0.0 && x >= r.x0 as i64 && x < r.x1 as i64 {
+                    self.sums[row + (x - r.x0 as i64) as usize].add_bounded(l, w);
                 }
             }
         }

@@ -293,7 +293,45 @@ pub struct Sampler {
     /// reversed.
     rev_global: Option<u64>,
     dim: u32,
-    rng: Rng,
+    rng: Stream,
+}
+
+/// A sampler's PCG32 stream, keyed when it is made but seeded only when
+/// first read: a Sobol sampler seldom reads it (past `SOBOL_DIMENSIONS`
+/// requests, or for another stream), and seeding it is four hashes.
+#[derive(Clone, Debug)]
+struct Stream {
+    /// `Rng::keyed`'s (seed, a, b).
+    key: (u64, u64, u64),
+    rng: Option<Rng>,
+}
+
+impl Stream {
+    fn keyed(seed: u64, pixel: u64, index: u64) -> Self {
+        Stream {
+            key: (seed, pixel, index),
+            rng: None,
+        }
+    }
+
+    fn seeded(rng: Rng) -> Self {
+        Stream {
+            key: (0, 0, 0),
+            rng: Some(rng),
+        }
+    }
+
+    /// The stream as it stands, seeded if it was not.
+    fn rng(&self) -> Rng {
+        let (seed, a, b) = self.key;
+        self.rng.clone().unwrap_or_else(|| Rng::keyed(seed, a, b))
+    }
+
+    #[inline(always)]
+    fn get(&mut self) -> &mut Rng {
+        let (seed, a, b) = self.key;
+        self.rng.get_or_insert_with(|| Rng::keyed(seed, a, b))
+    }
 }
 
 /// Requests a Sobol sampler answers before handing over to its PCG32 stream.
@@ -309,7 +347,7 @@ impl Sampler {
             rev_index: index.reverse_bits(),
             rev_global: None,
             dim: 0,
-            rng: Rng::keyed(seed, pixel, index as u64),
+            rng: Stream::keyed(seed, pixel, index as u64),
         }
     }
 
@@ -326,7 +364,7 @@ impl Sampler {
             rev_index: 0,
             rev_global: Some(global.reverse_bits()),
             dim: 0,
-            rng: Rng::keyed(seed, pixel, index as u64),
+            rng: Stream::keyed(seed, pixel, index as u64),
         }
     }
 
@@ -339,7 +377,7 @@ impl Sampler {
         let key = mix64(self.key ^ mix64(stream));
         // The PCG32 stream's own state keys the new one too: a sampler made
         // from a bare stream (`independent`) has no other key.
-        let mut rng = self.rng.clone();
+        let mut rng = self.rng.rng();
         let state = (rng.next_u32() as u64) << 32 | rng.next_u32() as u64;
         Sampler {
             sobol: self.sobol,
@@ -347,7 +385,11 @@ impl Sampler {
             rev_index: self.rev_index,
             rev_global: self.rev_global,
             dim: 0,
-            rng: Rng::keyed(key ^ state, stream, self.rev_global.unwrap_or(self.rev_index as u64)),
+            rng: Stream::seeded(Rng::keyed(
+                key ^ state,
+                stream,
+                self.rev_global.unwrap_or(self.rev_index as u64),
+            )),
         }
     }
 
@@ -359,7 +401,7 @@ impl Sampler {
             rev_index: 0,
             rev_global: None,
             dim: 0,
-            rng,
+            rng: Stream::seeded(rng),
         }
     }
 
@@ -388,7 +430,7 @@ impl Sampler {
         if self.sobol && self.dim < SOBOL_DIMENSIONS {
             self.dim += 1;
         } else {
-            self.rng.next_u32();
+            self.rng.get().next_u32();
         }
     }
 
@@ -410,7 +452,7 @@ impl Sampler {
         match (self.next_key(), self.rev_global) {
             (Some(key), None) => fraction(sobol_1d(self.rev_index, key)),
             (Some(key), Some(g)) => fraction(zsobol_2d(g, key).0),
-            (None, _) => self.rng.next_f32(),
+            (None, _) => self.rng.get().next_f32(),
         }
     }
 
@@ -420,7 +462,7 @@ impl Sampler {
         let (x, y) = match (self.next_key(), self.rev_global) {
             (Some(key), None) => sobol_2d(self.rev_index, key),
             (Some(key), Some(g)) => zsobol_2d(g, key),
-            (None, _) => return self.rng.next_2d(),
+            (None, _) => return self.rng.get().next_2d(),
         };
         Vec2::new(fraction(x), fraction(y))
     }
