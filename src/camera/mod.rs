@@ -272,6 +272,7 @@ impl Camera {
     /// The ray leaves the lens' centre (the pinhole's ray); a real lens'
     /// ray through the middle of its exit pupil, or where none passes there
     /// the pinhole's of the lens' focal length.
+    #[inline(always)]
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
         if let Some(lens) = &self.realistic {
             return match self.realistic_ray(lens, x, y, Vec2::splat(0.5)) {

@@ -549,6 +549,7 @@ impl PixelSamples {
     }
 
     /// Sample `s` of the pixel.
+    #[inline(always)]
     pub fn sample(&self, scene: &Scene, settings: &RenderSettings, s: u32) -> CameraSample {
         let cam = &scene.camera;
         let spp = settings.samples_per_pixel();
@@ -601,6 +602,7 @@ pub fn clamp_sample(l: Vec3, max: Option<f32>) -> Vec3 {
 /// in a render of `spp` samples a pixel. The Z-order sampler's sequence is
 /// laid out for `spp` rounded up to a power of two; samples past that (the
 /// preview's endless passes) take the Sobol sampler's points.
+#[inline(always)]
 pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, spp: u32, s: u32) -> Sampler {
     let pixel = y as u64 * width as u64 + x as u64;
     match kind {
@@ -623,12 +625,14 @@ pub fn camera_sampler(kind: SamplerKind, seed: u64, x: u32, y: u32, width: u32, 
 /// `sampler` for the point on the lens (after the pixel position, as
 /// pbrt-v4's camera sample); a pinhole takes none, so its images are what
 /// they were before lenses existed.
+#[inline(always)]
 pub fn camera_ray(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler) -> (Ray, f32) {
     camera_ray_at(cam, pos, sampler, None)
 }
 
 /// `camera_ray` at `time` where things move (`None`: a time drawn from
 /// `sampler`, uniform over the shutter).
+#[inline(always)]
 pub fn camera_ray_at(cam: &crate::camera::Camera, pos: Vec2, sampler: &mut Sampler, time: Option<f32>) -> (Ray, f32) {
     let (ray, weight) = if cam.has_lens() {
         cam.sample_ray(pos.x, pos.y, sampler.next_2d())
