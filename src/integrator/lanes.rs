@@ -36,6 +36,7 @@ use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use crate::scene::{interpolated_normal, Scene};
 use std::f32::consts::FRAC_1_PI;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Paths in flight at once.
@@ -71,6 +72,65 @@ pub fn triangle_lights(scene: &Scene) -> Option<Vec<TriangleLight>> {
             _ => None,
         })
         .collect()
+}
+
+/// A tile's camera samples, pixel after pixel, row after row (a struct
+/// rather than a closure, so that it is compiled into each copy of the
+/// lanes with their instruction sets).
+struct Feed {
+    xs: Range<u32>,
+    ys: Range<u32>,
+    samples: Range<u32>,
+    /// The pixel after the current one.
+    x: u32,
+    y: u32,
+    pixel: Option<PixelSamples>,
+    /// The current pixel's next sample.
+    s: u32,
+    /// Whether a cancel stopped it at the start of a row.
+    cancelled: bool,
+}
+
+impl Feed {
+    fn new(tile: &Tile) -> Self {
+        Feed {
+            xs: tile.xs.clone(),
+            ys: tile.ys.clone(),
+            samples: tile.samples.clone(),
+            x: tile.xs.start,
+            y: tile.ys.start,
+            pixel: None,
+            s: tile.samples.end,
+            cancelled: false,
+        }
+    }
+
+    #[inline(always)]
+    fn next(&mut self, scene: &Scene, settings: &RenderSettings, cancel: &AtomicBool) -> Option<CameraSample> {
+        loop {
+            if let Some(p) = &self.pixel {
+                if self.s < self.samples.end {
+                    self.s += 1;
+                    return Some(p.sample(scene, settings, self.s - 1));
+                }
+            }
+            if self.cancelled || self.xs.is_empty() || self.y >= self.ys.end {
+                self.pixel = None;
+                return None;
+            }
+            if self.x == self.xs.start && cancel.load(Ordering::Relaxed) {
+                self.cancelled = true;
+                self.pixel = None;
+                return None;
+            }
+            self.pixel = Some(PixelSamples::new(scene, settings, self.x, self.y));
+            self.s = self.samples.start;
+            self.x += 1;
+            if self.x == self.xs.end {
+                (self.x, self.y) = (self.xs.start, self.y + 1);
+            }
+        }
+    }
 }
 
 /// Three coordinates of every lane.
@@ -252,35 +312,14 @@ impl Job<'_> {
     fn rows(&self, tile: &Tile, block: &mut SplatBlock, stats: &mut RayStats, cancel: &AtomicBool) -> bool {
         let (scene, settings) = (self.scene, self.settings);
         let (reflectance, max_depth, lights) = (self.plain.reflectance(), self.plain.max_depth(), self.lights);
-        let (xs, samples) = (tile.xs.clone(), tile.samples.clone());
         // The lanes run through the whole tile: refilled row by row, they
         // would run part empty at the end of every row.
-        let mut pixels = tile.ys.clone().flat_map(|y| xs.clone().map(move |x| (x, y)));
-        let mut cancelled = false;
-        let mut next_pixel = |cancelled: &mut bool| {
-            let (x, y) = pixels.next()?;
-            if x == tile.xs.start && cancel.load(Ordering::Relaxed) {
-                *cancelled = true;
-                return None;
-            }
-            Some(PixelSamples::new(scene, settings, x, y))
-        };
-        let mut pixel = next_pixel(&mut cancelled);
-        let mut next_s = samples.start;
-        let mut next_sample = |cancelled: &mut bool| loop {
-            let p = pixel.as_ref()?;
-            if next_s < samples.end {
-                next_s += 1;
-                return Some(p.sample(scene, settings, next_s - 1));
-            }
-            pixel = next_pixel(cancelled);
-            next_s = samples.start;
-        };
+        let mut feed = Feed::new(tile);
         let mut paths = Paths::new();
         loop {
             for i in 0..N {
                 while paths.sample[i].is_none() {
-                    let Some(cs) = next_sample(&mut cancelled) else {
+                    let Some(cs) = feed.next(scene, settings, cancel) else {
                         break;
                     };
                     stats.camera_rays += 1;
@@ -293,7 +332,7 @@ impl Job<'_> {
                 }
             }
             if paths.sample.iter().all(Option::is_none) {
-                return !cancelled;
+                return !feed.cancelled;
             }
             let hits = find_hits(reflectance, max_depth, scene, settings, &mut paths, block);
             let mut b = Bounce::default();
