@@ -218,10 +218,10 @@ pub fn write_image_in_frame(
                 (w, film.height as usize),
                 attrs,
                 // Run lengths, not deflate: a render's radiance is noisy in
-                // its low mantissa bits, which ZIP gains a few percent on
-                // (BENCHMARKS.md, "The output file") for the time of a
-                // small render's whole pass; runs still take in black
-                // backgrounds and flat areas.
+                // its low mantissa bits, where ZIP saved 5% of the file for
+                // a fifth of a one-sample render's time (BENCHMARKS.md, "The
+                // output file"); runs still take in black backgrounds and
+                // flat areas.
                 Encoding {
                     compression: Compression::RLE,
                     blocks: Blocks::ScanLines,

@@ -470,8 +470,8 @@ pub fn accumulate_tiles(
 
 /// Adds `pass` to `sums`, entry by entry, and zeroes `pass` for the next use.
 pub fn merge_sums(sums: &mut [PixelSum], pass: &mut [PixelSum]) {
-    // On every thread: a pass of a small render is a few milliseconds, and
-    // a one-thread merge would leave the others idle for a tenth of it.
+    // On every thread: merged on one, the others would wait for it at the
+    // end of every pass (about a millisecond a pass at 256 x 256).
     sums.par_iter_mut()
         .zip(pass.par_iter_mut())
         .with_min_len(4096)
