@@ -61,13 +61,19 @@ impl Filter {
     /// The filter's 1D profile, zero from the radius on. In f64 so that the
     /// product of two is exact for the tent (two f32 factors) and the
     /// Gaussian keeps its precision until the one rounding in `eval`.
+    #[inline(always)]
     pub fn profile(self, x: f32) -> f64 {
+        if self == Filter::Tent {
+            // Zero from the radius on without a branch (whether a splat's
+            // outer column is within reach is a coin toss): 1 - |x| is
+            // +0 or negative there.
+            return (1.0 - x.abs()).max(0.0) as f64;
+        }
         if x.abs() >= self.radius() {
             return 0.0;
         }
         match self {
-            Filter::Box => 1.0,
-            Filter::Tent => (1.0 - x.abs()) as f64,
+            Filter::Box | Filter::Tent => 1.0,
             Filter::Gaussian => ((-0.5 * (x as f64 / GAUSS_SIGMA).powi(2)).exp() - GAUSS_EDGE).max(0.0),
         }
     }
@@ -332,23 +338,30 @@ impl SplatBlock {
         const MAX_SPAN: usize = 2 * MAX_REACH as usize + 1;
         let reach = self.filter.reach().min(MAX_REACH) as i64;
         let span = 2 * reach as usize + 1;
-        let (mut wx, mut wy) = ([0.0f64; MAX_SPAN], [0.0f64; MAX_SPAN]);
+        // Only the columns and rows of non-zero weight are kept, packed
+        // without branches: which of a tent's three are is where the sample
+        // lies in its pixel, a coin toss a branch would mispredict half the
+        // time. Sums are integers, so adding a weight that rounds to zero
+        // adds nothing.
+        let (mut xs, mut ys) = ([(0i64, 0.0f64); MAX_SPAN], [(0i64, 0.0f64); MAX_SPAN]);
+        let (mut nx, mut ny) = (0, 0);
         for i in 0..span {
-            let d = i as i64 - reach;
-            wx[i] = self.filter.profile(pos.x - ((px.0 as i64 + d) as f32 + 0.5));
-            wy[i] = self.filter.profile(pos.y - ((px.1 as i64 + d) as f32 + 0.5));
+            let (x, y) = (px.0 as i64 + i as i64 - reach, px.1 as i64 + i as i64 - reach);
+            let wx = self.filter.profile(pos.x - (x as f32 + 0.5));
+            let wy = self.filter.profile(pos.y - (y as f32 + 0.5));
+            xs[nx] = (x, wx);
+            ys[ny] = (y, wy);
+            nx += (wx > 0.0) as usize;
+            ny += (wy > 0.0) as usize;
         }
-        for (j, &py) in wy[..span].iter().enumerate() {
-            let y = px.1 as i64 + j as i64 - reach;
-            if py == 0.0 || y < r.y0 as i64 || y >= r.y1 as i64 {
+        for &(y, wy) in &ys[..ny] {
+            if y < r.y0 as i64 || y >= r.y1 as i64 {
                 continue;
             }
             let row = (y - r.y0 as i64) as usize * width;
-            for (i, &pxw) in wx[..span].iter().enumerate() {
-                let x = px.0 as i64 + i as i64 - reach;
-                let w = (pxw * py) as f32;
-                if w > 0.0 && x >= r.x0 as i64 && x < r.x1 as i64 {
-                    self.sums[row + (x - r.x0 as i64) as usize].add_bounded(l, w);
+            for &(x, wx) in &xs[..nx] {
+                if x >= r.x0 as i64 && x < r.x1 as i64 {
+                    self.sums[row + (x - r.x0 as i64) as usize].add_bounded(l, (wx * wy) as f32);
                 }
             }
         }

@@ -522,13 +522,13 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     // cosine and sine are the sine and cosine of that), where short
     // polynomials are as good as the library's sin and cos, and cheaper: this
     // runs at every diffuse bounce.
-    if o.x.abs() > o.y.abs() {
-        let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (o.y / o.x));
-        Vec2::new(o.x * c, o.x * s)
-    } else {
-        let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (o.x / o.y));
-        Vec2::new(o.y * s, o.y * c)
-    }
+    // The two cases as selects around one division and one polynomial:
+    // which applies is a coin toss a branch would mispredict half the time.
+    let wide = o.x.abs() > o.y.abs();
+    let (r, other) = if wide { (o.x, o.y) } else { (o.y, o.x) };
+    let (s, c) = sin_cos_quarter_pi((PI / 4.0) * (other / r));
+    let (a, b) = if wide { (c, s) } else { (s, c) };
+    Vec2::new(r * a, r * b)
 }
 
 /// sin x and cos x for |x| <= pi/4, by their Taylor series to the x^7 and

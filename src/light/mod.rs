@@ -1285,12 +1285,16 @@ pub fn uniform_triangle(v: &[Vec3; 3], u: Vec2) -> Vec3 {
 /// The barycentric coordinates (b0, b1) of `uniform_triangle`'s point.
 #[inline(always)]
 fn uniform_triangle_barycentric(u: Vec2) -> (f32, f32) {
-    if u.x < u.y {
-        let b0 = u.x / 2.0;
-        (b0, u.y - b0)
+    // The two cases as selects, each the same arithmetic on the same
+    // numbers: which one applies is a coin toss a branch would mispredict
+    // half the time.
+    let lower = u.x < u.y;
+    let half = if lower { u.x } else { u.y } / 2.0;
+    let rest = if lower { u.y } else { u.x } - half;
+    if lower {
+        (half, rest)
     } else {
-        let b1 = u.y / 2.0;
-        (u.x - b1, b1)
+        (rest, half)
     }
 }
 
