@@ -24,14 +24,13 @@
 // by lane says so more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use super::direct::{emitted_radiance, escaped_radiance, shadow_ray};
+use super::direct::{emitted_radiance, escaped_radiance};
 use super::path::{MAX_SURVIVAL, ROULETTE_DEPTH};
-use super::plain::lambert_light;
 use super::plain::PlainPathTracer;
 use super::{CameraSample, PixelSamples, RayStats, RenderSettings, Tile};
 use crate::bsdf::frame::Frame;
 use crate::film::SplatBlock;
-use crate::light::{triangle_normal_area, triangle_point_seen, Light, LightContext};
+use crate::light::{triangle_normal_area, Light, LightContext};
 use crate::math::{offset_origin, Ray, Vec2, Vec3};
 use crate::sampling::cosine_hemisphere;
 use crate::scene::{interpolated_normal, Scene};
@@ -504,9 +503,22 @@ fn choose_lights(scene: &Scene, h: &Hits, b: &mut Bounce) {
 }
 
 /// Each lane's light sample, weighed against BSDF sampling by the power
-/// heuristic, and its shadow ray.
+/// heuristic, and its shadow ray: the arithmetic of `triangle_point_seen`,
+/// `lambert_light` and `shadow_ray`, operation for operation, each step a
+/// loop over the lanes without branches (each case a select), so that the
+/// compiler makes each step a handful of vector instructions. Lanes without
+/// a light sample compute on stand-in numbers and are dropped at the end.
 #[inline(always)]
 fn sample_lights(scene: &Scene, lights: &[TriangleLight], h: &Hits, b: &mut Bounce) {
+    // The chosen lights, lane by lane.
+    let (mut v0, mut v1, mut v2, mut n, mut radiance) = (
+        V3s::default(),
+        V3s::default(),
+        V3s::default(),
+        V3s::default(),
+        V3s::default(),
+    );
+    let (mut area, mut two_sided, mut met, mut ok) = ([0.0f32; N], [false; N], [false; N], [false; N]);
     for i in 0..N {
         if !b.chosen[i] {
             continue;
@@ -515,28 +527,88 @@ fn sample_lights(scene: &Scene, lights: &[TriangleLight], h: &Hits, b: &mut Boun
         let Some(light) = lights.get(li) else {
             continue;
         };
-        let p = b.p.get(i);
-        let Some(s) = triangle_point_seen(&light.vertices, light.normal_area, light.two_sided, p, b.u_point[i]) else {
-            continue;
+        v0.set(i, light.vertices[0]);
+        v1.set(i, light.vertices[1]);
+        v2.set(i, light.vertices[2]);
+        n.set(i, light.normal_area.0);
+        area[i] = light.normal_area.1;
+        radiance.set(i, light.radiance);
+        two_sided[i] = light.two_sided;
+        met[i] = scene.light_is_met(li);
+        ok[i] = true;
+    }
+    // `uniform_triangle`: the point, from its barycentrics.
+    let (mut q, mut d, mut wi, mut weight) = (V3s::default(), V3s::default(), V3s::default(), V3s::default());
+    let (mut d2, mut dist, mut pdf) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        let u = b.u_point[i];
+        let lower = u.x < u.y;
+        let half = if lower { u.x } else { u.y } / 2.0;
+        let rest = if lower { u.y } else { u.x } - half;
+        let (b0, b1) = if lower { (half, rest) } else { (rest, half) };
+        let b2 = 1.0 - b0 - b1;
+        q.x[i] = v0.x[i] * b0 + v1.x[i] * b1 + v2.x[i] * b2;
+        q.y[i] = v0.y[i] * b0 + v1.y[i] * b1 + v2.y[i] * b2;
+        q.z[i] = v0.z[i] * b0 + v1.z[i] * b1 + v2.z[i] * b2;
+    }
+    // `triangle_point_seen`: direction, distance, cosine at the light.
+    for i in 0..N {
+        d.x[i] = q.x[i] - b.p.x[i];
+        d.y[i] = q.y[i] - b.p.y[i];
+        d.z[i] = q.z[i] - b.p.z[i];
+        d2[i] = d.x[i] * d.x[i] + d.y[i] * d.y[i] + d.z[i] * d.z[i];
+        dist[i] = d2[i].sqrt();
+        wi.x[i] = d.x[i] / dist[i];
+        wi.y[i] = d.y[i] / dist[i];
+        wi.z[i] = d.z[i] / dist[i];
+    }
+    for i in 0..N {
+        let cos_l = -(n.x[i] * wi.x[i] + n.y[i] * wi.y[i] + n.z[i] * wi.z[i]);
+        let cos_l = if two_sided[i] { cos_l.abs() } else { cos_l };
+        // A NaN passes, as it passes the scalar test (`cos_l <= 0` rejects).
+        ok[i] &= d2[i] != 0.0 && area[i] != 0.0 && (cos_l > 0.0 || cos_l.is_nan());
+        let to_solid_angle = cos_l * area[i] / d2[i];
+        pdf[i] = d2[i] / (cos_l * area[i]);
+        weight.x[i] = radiance.x[i] * to_solid_angle;
+        weight.y[i] = radiance.y[i] * to_solid_angle;
+        weight.z[i] = radiance.z[i] * to_solid_angle;
+    }
+    // `lambert_light`: the same side of both normals as the viewer, the
+    // BSDF's value and density, the power heuristic.
+    for i in 0..N {
+        let (wi, ng, wo, z) = (wi.get(i), h.ng.get(i), b.wo.get(i), b.fz.get(i));
+        let (wi_ng, wi_z) = (wi.dot(ng), wi.dot(z));
+        let geo_same = (wi_ng > 0.0) == (wo.dot(ng) > 0.0);
+        let shade_same = (wi_z > 0.0) == (wo.dot(z) > 0.0);
+        ok[i] &= geo_same && shade_same && wi_ng != 0.0;
+        // Zero below the surface, and where wo lies in it (wo_l.z = 0).
+        let above = b.wo_l.z[i] * wi_z > 0.0;
+        let f = if above { h.f.get(i) } else { Vec3::ZERO };
+        let pdf_bsdf = if above { wi_z.abs() * FRAC_1_PI } else { 0.0 };
+        let a = b.pmf[i] * pdf[i];
+        let (a2, b2) = (a * a, pdf_bsdf * pdf_bsdf);
+        let heuristic = if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
+            a2 / (a2 + b2)
+        } else if a.is_infinite() {
+            1.0
+        } else {
+            0.0
         };
-        let weight = light.radiance * s.to_solid_angle;
-        let wi = s.wi;
-        let (ng, wo) = (h.ng.get(i), b.wo.get(i));
-        let frame = Frame {
-            x: b.fx.get(i),
-            y: b.fy.get(i),
-            z: b.fz.get(i),
-        };
-        let light = (wi, weight, s.pdf, b.pmf[i], scene.light_is_met(li));
-        let Some(l) = lambert_light(ng, wo, (b.wo_l.get(i), &frame), h.f.get(i), light) else {
-            continue;
-        };
-        b.direct.set(i, l);
-        let (o, d, t_max) = shadow_ray(p, ng, wi, s.dist);
+        let w = if met[i] { heuristic } else { 1.0 };
+        b.direct.set(i, f * wi_z.abs() * weight.get(i) * (w / b.pmf[i]));
+    }
+    // `shadow_ray`: from the offset origin to the sampled point.
+    for i in 0..N {
+        let (p, ng, wi) = (b.p.get(i), h.ng.get(i), wi.get(i));
+        let eps = 1e-5 * (1.0 + p.abs().max_element());
+        let o = if ng.dot(wi) >= 0.0 { p + ng * eps } else { p - ng * eps };
+        let to_light = p + wi * dist[i] - o;
+        let len = to_light.length();
+        let finite = dist[i].is_finite();
         b.so.set(i, o);
-        b.sd.set(i, d);
-        b.st[i] = t_max;
-        b.shadow[i] = true;
+        b.sd.set(i, if finite { to_light / len } else { wi });
+        b.st[i] = if finite { len * (1.0 - 1e-4) } else { f32::INFINITY };
+        b.shadow[i] = ok[i];
     }
 }
 
