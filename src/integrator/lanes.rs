@@ -613,33 +613,29 @@ fn sample_lights(scene: &Scene, lights: &[TriangleLight], h: &Hits, b: &mut Boun
 }
 
 /// The throughput after each lane's BSDF sample, and its next direction;
-/// whether the path goes on.
+/// whether the path goes on. Without branches, as `sample_lights`: a lane
+/// whose path ends here is finished next and an idle lane is started
+/// afresh, so what is written for them is never read.
 #[inline(always)]
 fn continue_paths(h: &Hits, paths: &mut Paths, b: &Bounce) -> [bool; N] {
     let mut go_on = [false; N];
+    let mut wi = V3s::default();
     for i in 0..N {
-        if !(h.live[i] && b.sampled[i]) {
-            continue;
-        }
         let frame = Frame {
             x: b.fx.get(i),
             y: b.fy.get(i),
             z: b.fz.get(i),
         };
-        let wi = frame.to_world(b.wi_l.get(i));
-        let (ng, wo) = (h.ng.get(i), b.wo.get(i));
-        if (wi.dot(ng) > 0.0) != (wo.dot(ng) > 0.0) {
-            continue;
-        }
-        let pdf = b.pdf[i];
-        let beta = paths.beta.get(i) * (h.f.get(i) * (wi.dot(frame.z).abs() / pdf));
+        wi.set(i, frame.to_world(b.wi_l.get(i)));
+    }
+    for i in 0..N {
+        let (w, ng, wo, z) = (wi.get(i), h.ng.get(i), b.wo.get(i), b.fz.get(i));
+        let same_side = (w.dot(ng) > 0.0) == (wo.dot(ng) > 0.0);
+        let beta = paths.beta.get(i) * (h.f.get(i) * (w.dot(z).abs() / b.pdf[i]));
         paths.beta.set(i, beta);
-        if !beta.is_finite() || beta.max_element() <= 0.0 {
-            continue;
-        }
-        paths.from[i] = Some((LightContext::surface(b.p.get(i), frame.z), pdf));
-        paths.d.set(i, wi);
-        go_on[i] = true;
+        go_on[i] = h.live[i] & b.sampled[i] & same_side & beta.is_finite() & (beta.max_element() > 0.0);
+        paths.from[i] = Some((LightContext::surface(b.p.get(i), z), b.pdf[i]));
+        paths.d.set(i, w);
     }
     go_on
 }
