@@ -12,13 +12,16 @@
 //!
 //! Each stage is a loop over the lanes' arrays, compiled for AVX2 where the
 //! CPU has it, and for AVX2 with GFNI (its bit reversal makes the Sobol
-//! sampler's requests, inlined into the lanes, a fifth cheaper). Few of them come out as vector instructions yet (the
-//! compiler vectorizes straight-line arithmetic, not the branches of a
-//! shading frame or a light sample); the time saved, 8% on `cornell-box`
-//! (BENCHMARKS.md, "Paths eight at a time"), comes from running each kind
-//! of work eight times in a row, where the processor finds eight
-//! independent chains of it. Stages written in vector registers are the
-//! next step.
+//! sampler's requests, inlined into the lanes, a fifth cheaper). Running
+//! each kind of work eight times in a row lets the processor overlap eight
+//! independent chains of it (8% on `cornell-box`, BENCHMARKS.md, "Paths
+//! eight at a time"). The light samples and the next bounce's throughput
+//! are written as steps without branches, each case a select, which the
+//! compiler turns into vector instructions (eight divisions and square
+//! roots at once): 13% more (BENCHMARKS.md, "Light samples in vector
+//! registers"). Writing the shading frames and the BSDF samples so, and
+//! computing the Sobol requests side by side in AVX2, did not pay (same
+//! section).
 
 // A stage reads and writes a lane's entry in many arrays at once: indexing
 // by lane says so more plainly than zipped iterators.
