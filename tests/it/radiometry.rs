@@ -200,3 +200,47 @@ fn light_choice_follows_power_and_leaves_a_uniform_remainder() {
     }
     assert_eq!(counts, [n / 4, 0, 3 * n / 4]);
 }
+
+#[test]
+fn light_choice_at_the_cdfs_own_steps_takes_the_light_that_starts_there() {
+    // Targets on the cumulative powers themselves (quarters of a total of
+    // 16, exact in f32), where a search for the first entry above the target
+    // and one for the first at or above it part: the light that starts at
+    // the target is chosen, never one of no power, whether the scene has a
+    // few lights (counted) or many (searched).
+    let powers = [1.0f32, 0.0, 3.0, 0.0, 0.0, 2.0, 4.0, 1.0, 0.0, 3.0, 1.0, 1.0];
+    for (n, total) in [(5, 4.0f32), (12, 16.0)] {
+        let mut d = plane_scene(Light::Point {
+            position: Vec3::new(0.0, HEIGHT, 0.0),
+            power: Vec3::splat(powers[0]),
+        });
+        for &p in &powers[1..n] {
+            d.lights.push(Light::Point {
+                position: Vec3::new(1.0, HEIGHT, 0.0),
+                power: Vec3::splat(p),
+            });
+        }
+        let scene = Scene::build(d).unwrap();
+        let cdf: Vec<f32> = powers[..n]
+            .iter()
+            .scan(0.0, |acc, p| {
+                *acc += p;
+                Some(*acc)
+            })
+            .collect();
+        let steps = (4.0 * total) as u32;
+        for k in 0..steps {
+            let u = k as f32 / steps as f32;
+            let target = u * total;
+            let expected = cdf.iter().position(|&c| c > target).unwrap();
+            let (i, pmf, rest) = scene.pick_light(u).unwrap();
+            assert_eq!(i, expected, "{n} lights, u {u}");
+            assert_eq!(pmf, powers[i] / total, "{n} lights, u {u}");
+            let before = if i == 0 { 0.0 } else { cdf[i - 1] };
+            assert!(
+                (rest - (target - before) / powers[i]).abs() < 1e-6,
+                "{n} lights, u {u}: {rest}"
+            );
+        }
+    }
+}
