@@ -63,17 +63,13 @@ impl Filter {
     /// Gaussian keeps its precision until the one rounding in `eval`.
     #[inline(always)]
     pub fn profile(self, x: f32) -> f64 {
-        if self == Filter::Tent {
+        match self {
             // Zero from the radius on without a branch (whether a splat's
             // outer column is within reach is a coin toss): 1 - |x| is
             // +0 or negative there.
-            return (1.0 - x.abs()).max(0.0) as f64;
-        }
-        if x.abs() >= self.radius() {
-            return 0.0;
-        }
-        match self {
-            Filter::Box | Filter::Tent => 1.0,
+            Filter::Tent => (1.0 - x.abs()).max(0.0) as f64,
+            _ if x.abs() >= self.radius() => 0.0,
+            Filter::Box => 1.0,
             Filter::Gaussian => ((-0.5 * (x as f64 / GAUSS_SIGMA).powi(2)).exp() - GAUSS_EDGE).max(0.0),
         }
     }
