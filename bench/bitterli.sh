@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Bitterli's three pbrt-v4 scenes (../shared/bitterli/) against their reference
-# images: the path tracer, and our photon integrators and bidirectional path
-# tracer at equal wall time (issue 13, "A bench").
+# images: the path tracer (plain, and guided by caustic photons), and our
+# photon integrators and bidirectional path tracer at the plain path tracer's
+# wall time (issue 13, "A bench").
 #
 #   bench/bitterli.sh                           # all three scenes, ~10 min on 2 cores
 #   SCENES=cornell-box PATH_SPP=64 WRITE_DOCS=0 bench/bitterli.sh   # a quick look
@@ -11,6 +12,7 @@
 #                references' sizes over again, so the references are box-averaged 2 x 2)
 # PATH_SPP       the path tracer's samples a pixel, whose wall time is the
 #                budget of the other integrators [256]
+# GUIDE_PHOTONS  caustic photons guiding the path tracer's second row [100000]
 # PHOTONS        photons of the photon integrator (precomputed irradiance) [1000000]
 # SPPM_PHOTONS   photons per SPPM pass [200000]
 # MAX_LUMINANCE  `compare --max-luminance` [4]

@@ -253,6 +253,7 @@ mod tests {
                 max_depth: None,
                 light_sampling: Default::default(),
                 regularize: false,
+                guide: None,
             };
             let (one_pass, ..) = render_tiles(&scene, &settings, &est, crate::integrator::Progress::silent());
             let out = render(&scene, &settings, &|| {}).unwrap();

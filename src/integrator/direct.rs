@@ -226,6 +226,24 @@ pub fn sample_direct_with(
     u: LightSampleU,
     stats: &mut RayStats,
 ) -> Vec3 {
+    sample_direct_mixed(scene, hit, wo, bsdf, mis, u, stats, |_, pdf| pdf)
+}
+
+/// [`sample_direct_with`] where the vertex's next direction is sampled by a
+/// mixture of the BSDF and something else: `mixed(wi, pdf_bsdf)` is the
+/// mixture's density, which the light sample's MIS weight is taken against.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn sample_direct_mixed(
+    scene: &Scene,
+    hit: &Hit,
+    wo: Vec3,
+    bsdf: &Bsdf,
+    mis: bool,
+    u: LightSampleU,
+    stats: &mut RayStats,
+    mixed: impl Fn(Vec3, f32) -> f32,
+) -> Vec3 {
     let ctx = LightContext::surface(hit.p, bsdf.frame.z);
     let Some((li, pmf, u)) = scene.choose_light(&ctx, u) else {
         return Vec3::ZERO;
@@ -238,7 +256,7 @@ pub fn sample_direct_with(
     // overlaps it with the traversal rather than waiting for both in turn.
     let (f, w) = if mis && scene.light_is_met(li) {
         let (f, pdf_bsdf) = bsdf.f_pdf(wo, ls.wi, TransportMode::Radiance);
-        (f, power_heuristic(pmf * ls.pdf, pdf_bsdf))
+        (f, power_heuristic(pmf * ls.pdf, mixed(ls.wi, pdf_bsdf)))
     } else {
         (bsdf.f(wo, ls.wi, TransportMode::Radiance), 1.0)
     };

@@ -715,6 +715,7 @@ mod tests {
                 max_depth,
                 light_sampling: LightSampling::Mis,
                 regularize: false,
+                guide: None,
             };
             let (a, b) = (render(&scene, &settings, &general), render(&scene, &settings, &lanes));
             let one = render(&scene, &settings, &lanes.one_at_a_time());

@@ -23,6 +23,17 @@
 //! surfaces are not sampled by shadow rays, so their Le counts wherever a
 //! path hits them.
 //!
+//! With `guide_photons`, caustic photons are traced first
+//! (`photon::guide`), and at a vertex whose BSDF is Lambertian alone the
+//! next direction is drawn from the photons' directions there or from the
+//! BSDF, one or the other with probability one half each. Either way the
+//! sample's density is the mixture's, in the throughput and in both MIS
+//! weights (the light sample's against it, and a light the bounce finds),
+//! so the estimate stays unbiased whatever the photons say: they only
+//! move samples towards lights seen in glossy and specular surfaces,
+//! whose light a cosine-distributed bounce almost never finds. (Not yet
+//! in scenes with media or subsurface scattering.)
+//!
 //! Scenes with participating media are path traced by `volpath`, the same
 //! estimator with the media's absorption and scattering along each segment.
 //!
@@ -39,11 +50,15 @@
 
 use super::bdpt::{trace_light_pass, Bdpt};
 use super::checkpoint::{self, Buffer};
-use super::direct::{emitted_radiance, escaped_radiance, light_sample_u, sample_bsdf, sample_direct_with};
+use super::direct::{
+    emitted_radiance, escaped_radiance, light_sample_u, sample_bsdf, sample_direct_mixed, sample_direct_with,
+};
 use super::{accumulate_tiles, merge_sums, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
+use crate::bsdf::{Bsdf, BsdfSample, BxdfFlags, TransportMode};
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::light::LightContext;
 use crate::math::{offset_origin, Ray, Vec3};
+use crate::photon::{GuideCell, PhotonGuide};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
@@ -62,6 +77,8 @@ const MIN_SAMPLES_PER_PASS: u32 = 4;
 pub(super) const ROULETTE_DEPTH: u32 = 5;
 /// Survival probability cap, so that paths in a white furnace end too.
 pub(super) const MAX_SURVIVAL: f32 = 0.95;
+/// Surface hits of a guide's photon paths at most.
+const GUIDE_HITS: u32 = 8;
 
 pub struct PathTracer {
     /// Most bounces: emission is counted up to this many bounces, next-event
@@ -71,6 +88,37 @@ pub struct PathTracer {
     /// Microfacet surfaces made glossy after the path's first non-specular
     /// bounce (pbrt-v4's `regularize`).
     pub regularize: bool,
+    /// Caustic photons' directions, mixed into diffuse bounces.
+    pub guide: Option<PhotonGuide>,
+}
+
+/// The share of a guided vertex's bounces drawn from the guide; the rest
+/// follow the BSDF, so that light the photons never brought is still found.
+const GUIDED_SHARE: f32 = 0.5;
+
+/// A diffuse vertex's next direction from the mixture of its BSDF and the
+/// photons' cell: the density of either choice is the mixture's. The
+/// number that chooses is the one a lone diffuse lobe leaves unread.
+fn sample_guided(bsdf: &Bsdf, wo: Vec3, cell: GuideCell, sampler: &mut Sampler) -> Option<BsdfSample> {
+    let uc = sampler.next_f32();
+    let u = sampler.next_2d();
+    let mixed = |wi: Vec3, pdf_bsdf: f32| GUIDED_SHARE * cell.pdf(wi) + (1.0 - GUIDED_SHARE) * pdf_bsdf;
+    if uc < GUIDED_SHARE {
+        let wi = cell.sample(uc / GUIDED_SHARE, u);
+        let (f, pdf_bsdf) = bsdf.f_pdf(wo, wi, TransportMode::Radiance);
+        let pdf = mixed(wi, pdf_bsdf);
+        (f != Vec3::ZERO && pdf > 0.0).then_some(BsdfSample {
+            f,
+            wi,
+            pdf,
+            flags: BxdfFlags::DIFFUSE_REFLECTION,
+            eta: 1.0,
+        })
+    } else {
+        let mut bs = bsdf.sample_f(wo, 0.5, u, TransportMode::Radiance)?;
+        bs.pdf = mixed(bs.wi, bs.pdf);
+        Some(bs)
+    }
 }
 
 impl RadianceEstimator for PathTracer {
@@ -141,10 +189,25 @@ impl RadianceEstimator for PathTracer {
             // depend on it, instead of holding up the next ray.
             let nee = flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf;
             let u_light = nee.then(|| light_sample_u(scene, sampler));
-            let bs = sample_bsdf(&bsdf, wo, sampler);
+            let cell = match &self.guide {
+                Some(g) if flags == BxdfFlags::DIFFUSE_REFLECTION => {
+                    g.cell(hit.p, if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng })
+                }
+                _ => None,
+            };
+            let bs = match cell {
+                Some(c) => sample_guided(&bsdf, wo, c, sampler),
+                None => sample_bsdf(&bsdf, wo, sampler),
+            };
             if let Some(u) = u_light {
                 let mis = self.light_sampling == LightSampling::Mis;
-                l += beta * sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats);
+                l += beta
+                    * match cell {
+                        Some(c) => sample_direct_mixed(scene, &hit, wo, &bsdf, mis, u, stats, |wi, pdf| {
+                            GUIDED_SHARE * c.pdf(wi) + (1.0 - GUIDED_SHARE) * pdf
+                        }),
+                        None => sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats),
+                    };
             }
             let Some(bs) = bs else {
                 break;
@@ -213,6 +276,13 @@ impl<'a> Progressive<'a> {
                 max_depth: settings.max_depth,
                 light_sampling: settings.light_sampling,
                 regularize: settings.regularize,
+                // Scenes with media are traced by `volpath`, which has no guide.
+                guide: (settings.guide_photons > 0 && !scene.has_media() && !scene.has_subsurface()).then(|| {
+                    // Photon paths as long as the camera's: a caustic seen
+                    // at the path's last bounce is one of depth - 1 hits.
+                    let hits = settings.max_depth.map_or(GUIDE_HITS, |d| d.clamp(2, GUIDE_HITS));
+                    crate::photon::build_guide(scene, settings.guide_photons, hits, settings.seed)
+                }),
             }),
         };
         let light_tracer = (settings.integrator == IntegratorKind::Bdpt && cam.is_pinhole()).then(bdpt);
@@ -282,6 +352,11 @@ impl checkpoint::Progressive for Progressive<'_> {
             r.y1,
             // Absent when unset, so older checkpoints still match.
             s.max_component.map_or(String::new(), |m| format!(" max_component={m}"))
+                + &if s.guide_photons > 0 {
+                    format!(" guide_photons={}", s.guide_photons)
+                } else {
+                    String::new()
+                }
         )
     }
 
@@ -608,6 +683,7 @@ mod tests {
                     max_depth: Some(1),
                     light_sampling: mode,
                     regularize: false,
+                    guide: None,
                 };
                 let (mut sum, mut sum2) = (0.0f64, 0.0f64);
                 let mut stats = RayStats::default();

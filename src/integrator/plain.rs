@@ -47,7 +47,9 @@ impl PlainPathTracer {
     /// The plain loop for path tracing `scene` with `settings`, when the
     /// scene is plain and the settings ask for what the general loop would
     /// do there by default (multiple importance sampling, no
-    /// regularization); `None` otherwise.
+    /// regularization); `None` otherwise. A photon guide (`guide_photons`)
+    /// changes nothing here: no photon reaches a Lambertian surface through
+    /// a glossy or specular one in a scene of Lambertian surfaces alone.
     pub fn for_scene(scene: &Scene, settings: &RenderSettings) -> Option<Self> {
         if settings.integrator != IntegratorKind::Path
             || settings.light_sampling != LightSampling::Mis
@@ -308,6 +310,7 @@ mod tests {
             max_depth: settings.max_depth,
             light_sampling: LightSampling::Mis,
             regularize: false,
+            guide: None,
         };
         let plain = PlainPathTracer::for_scene(scene, settings).expect("a plain scene");
         let silent = Progress::silent();

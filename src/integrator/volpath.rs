@@ -739,6 +739,7 @@ mod tests {
             max_depth: None,
             light_sampling: LightSampling::Mis,
             regularize: false,
+            guide: None,
         };
         for (flip, length) in [(false, 1.0), (true, 2.0)] {
             let scene = slab(flip);
@@ -832,6 +833,7 @@ mod tests {
                 max_depth: Some(1),
                 light_sampling: mode,
                 regularize: false,
+                guide: None,
             };
             let (mean, err) = estimate(&scene, &est, &ray, 2048, 16);
             assert!(
@@ -862,6 +864,7 @@ mod tests {
                 max_depth: Some(2),
                 light_sampling: mode,
                 regularize: false,
+                guide: None,
             };
             results.push((mode, estimate(&scene, &est, &ray, 4096, 16)));
         }

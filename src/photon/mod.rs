@@ -6,10 +6,12 @@
 
 pub mod estimate;
 pub mod file;
+pub mod guide;
 pub mod map;
 pub mod trace;
 
 pub use estimate::{Admit, Gather, GatherFilter};
+pub use guide::{GuideCell, PhotonGuide};
 pub use map::{Photon, PhotonMap};
 
 use crate::scene::Scene;
@@ -79,4 +81,17 @@ pub fn build_caustic_map(
     stats.bytes += map.bytes();
     stats.build_seconds += start.elapsed().as_secs_f64();
     Some(map)
+}
+
+/// Traces `photons` caustic photons (light -> glossy or specular surfaces ->
+/// a diffuse one, at most `max_bounces` hits) and bins them into a guide for
+/// the path tracer's diffuse bounces (`guide`).
+pub fn build_guide(scene: &Scene, photons: u64, max_bounces: u32, seed: u64) -> PhotonGuide {
+    let settings = PhotonSettings {
+        caustic_photons: photons,
+        max_bounces,
+        ..PhotonSettings::default()
+    };
+    let traced = trace::trace_caustics(scene, &settings, seed);
+    PhotonGuide::build(&traced.photons, scene.bounds())
 }

@@ -251,6 +251,9 @@ pub struct RenderSettings {
     /// Path tracers: microfacet surfaces made glossy after a path's first
     /// non-specular bounce (pbrt-v4's `regularize`).
     pub regularize: bool,
+    /// Path tracer: caustic photons traced to aim diffuse bounces
+    /// (`photon::guide`); 0: bounces follow the BSDF alone.
+    pub guide_photons: u64,
     /// Where camera samples' random numbers come from.
     pub sampler: SamplerKind,
     /// Largest RGB component a camera sample keeps (the sample is scaled
@@ -341,6 +344,10 @@ impl RenderSettings {
         // Absent when off, so older checkpoints still match.
         if self.regularize {
             v.push(("regularize", Value::Bool(true)));
+        }
+        // Absent when off, so older checkpoints still match.
+        if self.guide_photons > 0 {
+            v.push(("guide_photons", Value::Int(self.guide_photons)));
         }
         if let Some(k) = self.white_balance {
             v.push(("white_balance", Value::Real(k)));
@@ -718,6 +725,7 @@ fn from_values(get: &dyn Fn(&str) -> Option<Value>) -> RenderSettings {
         light_sampling: LightSampling::from_name(choice("light_sampling")).unwrap_or_default(),
         light_sampler: crate::light::LightSamplerKind::from_name(choice("light_sampler")).unwrap_or_default(),
         regularize: flag("regularize"),
+        guide_photons: int("guide_photons").unwrap_or_default(),
         sampler: SamplerKind::from_name(choice("sampler")).unwrap_or_default(),
         max_component: real("max_component"),
         white_balance: real("white_balance"),

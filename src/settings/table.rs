@@ -99,6 +99,17 @@ pub const SETTINGS: &[Spec] = &[
         only_for: &["path", "bdpt"],
     },
     Spec {
+        name: "guide_photons",
+        kind: Kind::Count { min: 0, max: 10 * MILLION },
+        default: DefaultValue::Int(0),
+        doc: "Path tracer: trace this many caustic photons (light -> glossy or specular surfaces -> diffuse) first \
+              and aim half of the diffuse bounces where they came from, the other half by the BSDF (Jensen 1995): \
+              unbiased, and it finds lights seen in polished surfaces that cosine-distributed bounces rarely \
+              find; 0 leaves bounces to the BSDF",
+        in_scene_file: true,
+        only_for: &["path"],
+    },
+    Spec {
         name: "sampler",
         kind: Kind::Choice(SAMPLERS),
         default: DefaultValue::Name("sobol"),
