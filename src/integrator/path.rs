@@ -96,13 +96,20 @@ pub struct PathTracer {
 /// follow the BSDF, so that light the photons never brought is still found.
 const GUIDED_SHARE: f32 = 0.5;
 
+/// The density of direction `wi` at a guided vertex: the mixture of the
+/// photons' cell and the BSDF (whose own density there is `pdf_bsdf`).
+#[inline]
+fn guided_pdf(cell: GuideCell, wi: Vec3, pdf_bsdf: f32) -> f32 {
+    GUIDED_SHARE * cell.pdf(wi) + (1.0 - GUIDED_SHARE) * pdf_bsdf
+}
+
 /// A diffuse vertex's next direction from the mixture of its BSDF and the
 /// photons' cell: the density of either choice is the mixture's. The
 /// number that chooses is the one a lone diffuse lobe leaves unread.
 fn sample_guided(bsdf: &Bsdf, wo: Vec3, cell: GuideCell, sampler: &mut Sampler) -> Option<BsdfSample> {
     let uc = sampler.next_f32();
     let u = sampler.next_2d();
-    let mixed = |wi: Vec3, pdf_bsdf: f32| GUIDED_SHARE * cell.pdf(wi) + (1.0 - GUIDED_SHARE) * pdf_bsdf;
+    let mixed = |wi: Vec3, pdf_bsdf: f32| guided_pdf(cell, wi, pdf_bsdf);
     if uc < GUIDED_SHARE {
         let wi = cell.sample(uc / GUIDED_SHARE, u);
         let (f, pdf_bsdf) = bsdf.f_pdf(wo, wi, TransportMode::Radiance);
@@ -203,9 +210,9 @@ impl RadianceEstimator for PathTracer {
                 let mis = self.light_sampling == LightSampling::Mis;
                 l += beta
                     * match cell {
-                        Some(c) => sample_direct_mixed(scene, &hit, wo, &bsdf, mis, u, stats, |wi, pdf| {
-                            GUIDED_SHARE * c.pdf(wi) + (1.0 - GUIDED_SHARE) * pdf
-                        }),
+                        Some(c) => {
+                            sample_direct_mixed(scene, &hit, wo, &bsdf, mis, u, stats, |wi, pdf| guided_pdf(c, wi, pdf))
+                        }
                         None => sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats),
                     };
             }

@@ -653,9 +653,9 @@ fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
 }
 
 /// The floor of `floor_under_mirror` with a sphere light of radius 0.05 in
-/// place of its point light, of the same intensity (pi r^2 L = 10): its
-/// pixels' luminances.
-fn floor_under_mirror_and_sphere(options: &[&str]) -> Vec<f64> {
+/// place of its point light, of the same intensity (pi r^2 L = 10), and the
+/// mirror's roughness `roughness`: its pixels' luminances.
+fn floor_under_mirror_and_sphere(roughness: f32, options: &[&str]) -> Vec<f64> {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("scene.pbrt");
     let l = 10.0 / (std::f64::consts::PI * 0.05 * 0.05);
@@ -671,7 +671,7 @@ fn floor_under_mirror_and_sphere(options: &[&str]) -> Vec<f64> {
              Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
              Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
              Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
-             Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" 0\n\
+             Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" {roughness}\n\
              Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
         ),
     )
@@ -704,9 +704,9 @@ fn photons_guide_the_path_tracer_to_a_light_seen_in_a_mirror_without_bias() {
     // Cosine-distributed bounces from the floor meet the light's image (0.8
     // msr) about once in 4,000: a few of each pixel's samples find it, with
     // weights in the thousands.
-    let (plain, plain_spread) = stats(&floor_under_mirror_and_sphere(&["--spp", "256"]));
+    let (plain, plain_spread) = stats(&floor_under_mirror_and_sphere(0.0, &["--spp", "256"]));
     // Aimed at where the mirror's photons came from, many do.
-    let guided_px = floor_under_mirror_and_sphere(&["--spp", "256", "--guide-photons", "100000"]);
+    let guided_px = floor_under_mirror_and_sphere(0.0, &["--spp", "256", "--guide-photons", "100000"]);
     let (guided, guided_spread) = stats(&guided_px);
     eprintln!("plain {plain} (spread {plain_spread}), guided {guided} (spread {guided_spread}), expected {expected}");
     assert!((guided / expected - 1.0).abs() < 0.04, "guided {guided} vs {expected}");
@@ -715,8 +715,23 @@ fn photons_guide_the_path_tracer_to_a_light_seen_in_a_mirror_without_bias() {
     assert!(plain_spread > 5.0 * guided_spread, "{plain_spread} vs {guided_spread}");
     // The guide is traced on every core in a fixed order: the same image
     // whatever the threads.
-    let one_thread = floor_under_mirror_and_sphere(&["--spp", "256", "--guide-photons", "100000", "--threads", "1"]);
+    let one_thread =
+        floor_under_mirror_and_sphere(0.0, &["--spp", "256", "--guide-photons", "100000", "--threads", "1"]);
     assert_eq!(one_thread, guided_px);
+    // A rough ceiling spreads the light's image over a wide cone, where the
+    // guide's density and the cosine's are alike: a bounce's density must
+    // be the mixture's whichever of the two drew it, or the guided floor
+    // differs from the plain one, which the ceiling's light samples make
+    // nearly noiseless here.
+    let (plain, _) = stats(&floor_under_mirror_and_sphere(0.3, &["--spp", "1024"]));
+    let (guided, _) = stats(&floor_under_mirror_and_sphere(
+        0.3,
+        &["--spp", "256", "--guide-photons", "100000"],
+    ));
+    assert!(
+        (guided / plain - 1.0).abs() < 0.02,
+        "rough ceiling: guided {guided} vs plain {plain}"
+    );
 }
 
 #[test]
