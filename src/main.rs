@@ -178,6 +178,20 @@ fn report_subsurface(scene: &Scene, integrator: integrator::IntegratorKind, quie
     }
 }
 
+/// A photon guide asked for where it cannot work; say why.
+fn report_guide(scene: &Scene, settings: &integrator::RenderSettings, quiet: bool) {
+    if quiet || settings.guide_photons == 0 || settings.integrator != integrator::IntegratorKind::Path {
+        return;
+    }
+    if scene.has_media() || scene.has_subsurface() {
+        eprintln!(
+            "warning: --guide-photons: scenes with media or subsurface scattering are path traced without a guide"
+        );
+    } else if !scene.materials.iter().any(|m| m.is_caustic_caster()) {
+        eprintln!("warning: --guide-photons: no glossy or specular surface brings caustics here; nothing to guide");
+    }
+}
+
 fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     // Ctrl-C or a scheduler's SIGTERM: finish the tiles in flight, save them, exit 130.
     // Installed first, so that a signal during loading is not a silent death.
@@ -192,6 +206,7 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
     let scene = Scene::build(loaded.desc)?;
     report_dropped(&scene, args.quiet);
     report_subsurface(&scene, settings.integrator, args.quiet);
+    report_guide(&scene, &settings, args.quiet);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rect = settings.crop.unwrap_or(raytracer::film::PixelRect::full(w, h));
     let bar = if !args.quiet && std::io::stderr().is_terminal() {

@@ -406,3 +406,26 @@ fn a_panic_on_a_worker_is_one_line_exit_101_and_leaves_no_file() {
     assert!(stderr.contains("bug") && !stderr.contains("panicked"), "{stderr}");
     assert!(files_in(dir.path()).is_empty(), "left {:?}", files_in(dir.path()));
 }
+
+#[test]
+fn a_guide_where_nothing_brings_caustics_is_said_and_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--integrator", "path", "--spp", "4", "--width", "24", "--height", "24"];
+    let mut guided = vec!["-o", "guided.pfm", "--guide-photons", "1000"];
+    guided.extend_from_slice(&args);
+    let o = raytracer(&guided, dir.path());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: --guide-photons: no glossy or specular surface"),
+        "{err}"
+    );
+    let plain = render_pfm(dir.path(), "plain.pfm", &args);
+    assert_eq!(read_image(&dir.path().join("guided.pfm")).unwrap().pixels, plain.pixels);
+    // Only the path tracer has a guide.
+    let o = raytracer(&["-o", "photon.png", "--guide-photons", "1000"], dir.path());
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--guide-photons 1000: only for integrator path"), "{err}");
+    assert!(!dir.path().join("photon.png").exists());
+}
