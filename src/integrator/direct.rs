@@ -213,28 +213,17 @@ pub fn sample_direct(
     stats: &mut RayStats,
 ) -> Vec3 {
     let u = light_sample_u(scene, sampler);
-    sample_direct_with(scene, hit, wo, bsdf, mis, u, stats)
+    sample_direct_with(scene, hit, wo, bsdf, mis, u, stats, |_, pdf| pdf)
 }
 
-/// [`sample_direct`] with its numbers `u` already drawn.
-pub fn sample_direct_with(
-    scene: &Scene,
-    hit: &Hit,
-    wo: Vec3,
-    bsdf: &Bsdf,
-    mis: bool,
-    u: LightSampleU,
-    stats: &mut RayStats,
-) -> Vec3 {
-    sample_direct_mixed(scene, hit, wo, bsdf, mis, u, stats, |_, pdf| pdf)
-}
-
-/// [`sample_direct_with`] where the vertex's next direction is sampled by a
-/// mixture of the BSDF and something else: `mixed(wi, pdf_bsdf)` is the
-/// mixture's density, which the light sample's MIS weight is taken against.
+/// [`sample_direct`] with its numbers `u` already drawn, for a vertex whose
+/// next direction may be sampled by a mixture of the BSDF and something
+/// else (a photon guide): `mixed(wi, pdf_bsdf)` is the density of the
+/// vertex's own sampling, which the light sample's MIS weight is taken
+/// against (`|_, pdf| pdf` for the BSDF alone).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn sample_direct_mixed(
+pub fn sample_direct_with(
     scene: &Scene,
     hit: &Hit,
     wo: Vec3,

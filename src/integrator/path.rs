@@ -50,9 +50,7 @@
 
 use super::bdpt::{trace_light_pass, Bdpt};
 use super::checkpoint::{self, Buffer};
-use super::direct::{
-    emitted_radiance, escaped_radiance, light_sample_u, sample_bsdf, sample_direct_mixed, sample_direct_with,
-};
+use super::direct::{emitted_radiance, escaped_radiance, light_sample_u, sample_bsdf, sample_direct_with};
 use super::{accumulate_tiles, merge_sums, IntegratorKind, LightSampling, RadianceEstimator, RayStats, RenderSettings};
 use crate::bsdf::{Bsdf, BsdfSample, BxdfFlags, TransportMode};
 use crate::film::{Film, PixelRect, PixelSum};
@@ -211,9 +209,9 @@ impl RadianceEstimator for PathTracer {
                 l += beta
                     * match cell {
                         Some(c) => {
-                            sample_direct_mixed(scene, &hit, wo, &bsdf, mis, u, stats, |wi, pdf| guided_pdf(c, wi, pdf))
+                            sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats, |wi, pdf| guided_pdf(c, wi, pdf))
                         }
-                        None => sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats),
+                        None => sample_direct_with(scene, &hit, wo, &bsdf, mis, u, stats, |_, pdf| pdf),
                     };
             }
             let Some(bs) = bs else {

@@ -580,30 +580,35 @@ fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
 /// through a mirror ceiling at height 2: a black square just below the
 /// light hides the patch from it. `integrator` holds the Integrator
 /// directive's parameters, `options` the command line's.
-fn floor_under_mirror(integrator: &str, options: &[&str]) -> f64 {
-    mean_luminance_of(
-        &format!(
-            "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
-             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
-             Integrator {integrator}\nWorldBegin\n\
-             LightSource \"point\" \"point3 from\" [ 0 1 0 ] \"rgb I\" [ 10 10 10 ]\n\
-             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
-             Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
-             Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" 0\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
-        ),
-        options,
+/// A diffuse floor under a mirror ceiling of roughness `roughness`, lit by
+/// `light` at height 1 under a black square that hides it from the patch
+/// of floor the camera sees, straight down from 1.8 above (1.5, 0, 0).
+fn mirror_room(integrator: &str, light: &str, roughness: f32) -> String {
+    format!(
+        "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
+         Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
+         Integrator {integrator}\nWorldBegin\n{light}\n\
+         Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+         Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+         Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
+         Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
+         Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" {roughness}\n\
+         Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
     )
 }
 
-#[test]
-fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
-    // The light's image in the mirror is at height 3: a point's irradiance
-    // is 10 cos / d^2 = 30 / d^3, its radiance 0.5 / pi of that (the mirror
-    // reflecting 0.9999); averaged over the patch (the camera looks
-    // straight down, so its pixels cover equal areas).
+fn floor_under_mirror(integrator: &str, options: &[&str]) -> f64 {
+    let light = "LightSource \"point\" \"point3 from\" [ 0 1 0 ] \"rgb I\" [ 10 10 10 ]";
+    mean_luminance_of(&mirror_room(integrator, light, 0.0), options)
+}
+
+/// The floor's radiance under the mirror, lit by a point light of
+/// intensity 10 (or anything that lights the floor as one does): the
+/// light's image in the mirror is at height 3, so a point's irradiance is
+/// 10 cos / d^2 = 30 / d^3, its radiance 0.5 / pi of that (the mirror
+/// reflecting 0.9999); averaged over the patch (the camera looks straight
+/// down, so its pixels cover equal areas).
+fn floor_under_mirror_closed_form() -> f64 {
     let half = 1.8 * 10f64.to_radians().tan();
     let n = 200;
     let mut sum = 0.0;
@@ -614,7 +619,12 @@ fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
             sum += 30.0 / (x * x + z * z + 9.0).powf(1.5);
         }
     }
-    let expected = 0.5 / std::f64::consts::PI * sum / (n * n) as f64 * 0.9999;
+    0.5 / std::f64::consts::PI * sum / (n * n) as f64 * 0.9999
+}
+
+#[test]
+fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
+    let expected = floor_under_mirror_closed_form();
     // Bidirectional paths find it as it is (light tracing through the mirror).
     let bdpt = floor_under_mirror("\"bdpt\" \"integer maxdepth\" [ 2 ]", &["--spp", "256"]);
     assert!((bdpt / expected - 1.0).abs() < 0.05, "bdpt {bdpt} vs {expected}");
@@ -659,21 +669,13 @@ fn floor_under_mirror_and_sphere(roughness: f32, options: &[&str]) -> Vec<f64> {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("scene.pbrt");
     let l = 10.0 / (std::f64::consts::PI * 0.05 * 0.05);
+    let light = format!(
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ {l} {l} {l} ]\n\
+         Translate 0 1 0\nShape \"sphere\" \"float radius\" 0.05\nAttributeEnd"
+    );
     std::fs::write(
         &p,
-        format!(
-            "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
-             Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
-             Integrator \"path\" \"integer maxdepth\" [ 2 ]\nWorldBegin\n\
-             AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ {l} {l} {l} ]\n\
-             Translate 0 1 0\nShape \"sphere\" \"float radius\" 0.05\nAttributeEnd\n\
-             Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
-             Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
-             Material \"conductor\" \"rgb reflectance\" [ 1 1 1 ] \"float roughness\" {roughness}\n\
-             Shape \"trianglemesh\" \"point3 P\" [ -9 2 -9  9 2 -9  9 2 9  -9 2 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
-        ),
+        mirror_room("\"path\" \"integer maxdepth\" [ 2 ]", &light, roughness),
     )
     .unwrap();
     let img = render_to_image(&p, options);
@@ -685,17 +687,7 @@ fn photons_guide_the_path_tracer_to_a_light_seen_in_a_mirror_without_bias() {
     // The closed form of the test above: the floor sees the light only in
     // the mirror (the black square hides it), and a sphere light of
     // intensity I lights a point as a point light of I does.
-    let half = 1.8 * 10f64.to_radians().tan();
-    let n = 200;
-    let mut sum = 0.0;
-    for i in 0..n {
-        for j in 0..n {
-            let x = 1.5 + half * (2.0 * (i as f64 + 0.5) / n as f64 - 1.0);
-            let z = half * (2.0 * (j as f64 + 0.5) / n as f64 - 1.0);
-            sum += 30.0 / (x * x + z * z + 9.0).powf(1.5);
-        }
-    }
-    let expected = 0.5 / std::f64::consts::PI * sum / (n * n) as f64 * 0.9999;
+    let expected = floor_under_mirror_closed_form();
     let stats = |px: &[f64]| {
         let mean = px.iter().sum::<f64>() / px.len() as f64;
         let spread = (px.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / px.len() as f64).sqrt();
