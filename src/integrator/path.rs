@@ -283,8 +283,8 @@ impl<'a> Progressive<'a> {
                 regularize: settings.regularize,
                 // Scenes with media are traced by `volpath`, which has no guide.
                 guide: (settings.guide_photons > 0 && !scene.has_media() && !scene.has_subsurface()).then(|| {
-                    // Photon paths as long as the camera's: a caustic seen
-                    // at the path's last bounce is one of depth - 1 hits.
+                    // Photon paths as long as the camera's may be (its
+                    // depth, within 2 to 8 surface hits).
                     let hits = settings.max_depth.map_or(GUIDE_HITS, |d| d.clamp(2, GUIDE_HITS));
                     crate::photon::build_guide(scene, settings.guide_photons, hits, settings.seed)
                 }),
