@@ -260,6 +260,12 @@ fn render(args: &cli::RenderArgs) -> Result<ExitCode> {
         if let Some(p) = &out.photons {
             report_photons(p, &settings.files);
         }
+        if let Some(g) = &out.guide {
+            eprintln!(
+                "guide: {} caustic photons of {} emitted, {} cells, traced and binned in {:.2} s",
+                g.stored, g.emitted, g.cells, g.seconds
+            );
+        }
         println!(
             "{} {}x{}{}, {} spp{}, {:?}: {:.2} s, {:.2} Mrays/s -> {}",
             scene.name,

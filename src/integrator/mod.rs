@@ -159,6 +159,8 @@ pub struct RenderOutput {
     pub seconds: f64,
     /// The photon pass, when there was one.
     pub photons: Option<PhotonStats>,
+    /// The path tracer's photon guide, when it had one.
+    pub guide: Option<crate::photon::GuideStats>,
     /// Passes done and passes in all, for a progressive render; fewer done
     /// means interrupted (the film averages the passes done).
     pub passes: Option<(u32, u32)>,
@@ -268,6 +270,7 @@ pub fn render_observed(
         Some(_) => on_pass(k, &develop(film.clone())),
         None => on_pass(k, film),
     };
+    let mut guide = None;
     let (film, stats, tiles_done, photons, passes) = with_threads(settings.threads, || -> Result<_> {
         Ok(match settings.integrator {
             IntegratorKind::Direct => {
@@ -279,6 +282,7 @@ pub fn render_observed(
             }
             IntegratorKind::Path | IntegratorKind::Bdpt => {
                 let mut state = path::Progressive::new(scene, settings);
+                guide = state.guide_stats();
                 let passes = checkpoint::run(scene, settings, &mut state, on_tile)?;
                 let (film, stats) = state.finish(passes.0);
                 (film, stats, tiles_total, None, Some(passes))
@@ -301,6 +305,7 @@ pub fn render_observed(
         stats,
         seconds: start.elapsed().as_secs_f64(),
         photons,
+        guide,
         passes,
     })
 }

@@ -56,7 +56,7 @@ use crate::bsdf::{Bsdf, BsdfSample, BxdfFlags, TransportMode};
 use crate::film::{Film, PixelRect, PixelSum};
 use crate::light::LightContext;
 use crate::math::{offset_origin, Ray, Vec3};
-use crate::photon::{GuideCell, PhotonGuide};
+use crate::photon::{GuideCell, GuideStats, PhotonGuide};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use std::sync::atomic::AtomicBool;
@@ -262,6 +262,7 @@ pub struct Progressive<'a> {
     light: Vec<PixelSum>,
     light_pass: Vec<PixelSum>,
     stats: RayStats,
+    guide_stats: Option<GuideStats>,
 }
 
 impl<'a> Progressive<'a> {
@@ -274,6 +275,7 @@ impl<'a> Progressive<'a> {
             regularize: settings.regularize,
         };
         let plain = super::plain::PlainPathTracer::for_scene(scene, settings);
+        let mut guide_stats = None;
         let est: Box<dyn RadianceEstimator> = match (settings.integrator, plain) {
             (IntegratorKind::Bdpt, _) => Box::new(bdpt()),
             (_, Some(plain)) => Box::new(plain),
@@ -286,7 +288,9 @@ impl<'a> Progressive<'a> {
                     // Photon paths as long as the camera's may be (its
                     // depth, within 2 to 8 surface hits).
                     let hits = settings.max_depth.map_or(GUIDE_HITS, |d| d.clamp(2, GUIDE_HITS));
-                    crate::photon::build_guide(scene, settings.guide_photons, hits, settings.seed)
+                    let (guide, stats) = crate::photon::build_guide(scene, settings.guide_photons, hits, settings.seed);
+                    guide_stats = Some(stats);
+                    guide
                 }),
             }),
         };
@@ -303,7 +307,13 @@ impl<'a> Progressive<'a> {
             light: vec![PixelSum::default(); light_pixels],
             light_pass: vec![PixelSum::default(); light_pixels],
             stats: RayStats::default(),
+            guide_stats,
         }
+    }
+
+    /// What building the photon guide did, when there is one.
+    pub fn guide_stats(&self) -> Option<GuideStats> {
+        self.guide_stats
     }
 
     /// Samples per pass for a render of `spp` samples per pixel.

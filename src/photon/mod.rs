@@ -83,15 +83,35 @@ pub fn build_caustic_map(
     Some(map)
 }
 
+/// What building a photon guide did, for the summary line.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GuideStats {
+    /// Photons emitted, and those that reached a diffuse surface through
+    /// glossy or specular ones.
+    pub emitted: u64,
+    pub stored: usize,
+    /// Cells that guide.
+    pub cells: usize,
+    pub seconds: f64,
+}
+
 /// Traces `photons` caustic photons (light -> glossy or specular surfaces ->
 /// a diffuse one, at most `max_bounces` hits) and bins them into a guide for
 /// the path tracer's diffuse bounces (`guide`).
-pub fn build_guide(scene: &Scene, photons: u64, max_bounces: u32, seed: u64) -> PhotonGuide {
+pub fn build_guide(scene: &Scene, photons: u64, max_bounces: u32, seed: u64) -> (PhotonGuide, GuideStats) {
+    let start = std::time::Instant::now();
     let settings = PhotonSettings {
         caustic_photons: photons,
         max_bounces,
         ..PhotonSettings::default()
     };
     let traced = trace::trace_caustics(scene, &settings, seed);
-    PhotonGuide::build(&traced.photons, scene.bounds())
+    let guide = PhotonGuide::build(&traced.photons, scene.bounds());
+    let stats = GuideStats {
+        emitted: traced.emitted,
+        stored: traced.photons.len(),
+        cells: guide.cells(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    (guide, stats)
 }

@@ -428,4 +428,29 @@ fn a_guide_where_nothing_brings_caustics_is_said_and_changes_nothing() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--guide-photons 1000: only for integrator path"), "{err}");
     assert!(!dir.path().join("photon.png").exists());
+    // Where a glass ball brings caustics, the summary says what the guide took.
+    let o = raytracer(
+        &[
+            "-o",
+            "ball.pfm",
+            "--scene",
+            "cornell-specular",
+            "--integrator",
+            "path",
+            "--spp",
+            "1",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--guide-photons",
+            "2000",
+        ],
+        dir.path(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let line = err.lines().find(|l| l.starts_with("guide: ")).unwrap_or_default();
+    let stored: usize = line.split_whitespace().nth(1).and_then(|n| n.parse().ok()).unwrap_or(0);
+    assert!(stored >= 2000 && line.contains("caustic photons of"), "{err}");
 }
