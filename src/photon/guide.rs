@@ -50,7 +50,7 @@ pub struct PhotonGuide {
     keys: Vec<u64>,
     /// Open addressing over `keys` (index + 1, 0 empty), a power of two
     /// long: a point looks up to four cells up, most of them absent, and a
-    /// binary search over every cell took a tenth of a guided render.
+    /// binary search over every cell took 4% of a guided render.
     table: Vec<u32>,
     cells: Vec<(u32, u32)>,
     /// Occupied direction bins of each cell, ascending.
