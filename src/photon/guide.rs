@@ -89,8 +89,9 @@ impl PhotonGuide {
                 }
             }
         }
-        // Sorted by cell and bin, ties in the photons' order: the guide is
-        // the same for any order the photons' chunks were traced in.
+        // Sorted by cell and bin, stably: ties keep the photons' order,
+        // which the trace fixes whatever the threads, so the sums and the
+        // guide are the same bit for bit.
         records.sort_by_key(|r| (r.0, r.1));
         let mut guide = PhotonGuide {
             origin,
