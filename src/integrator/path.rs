@@ -24,9 +24,11 @@
 //! path hits them.
 //!
 //! With `guide_photons`, caustic photons are traced first
-//! (`photon::guide`), and at a vertex whose BSDF is Lambertian alone the
-//! next direction is drawn from the photons' directions there or from the
-//! BSDF, one or the other with probability one half each. Either way the
+//! (`photon::guide`), and at a vertex whose BSDF reflects diffusely (a
+//! Lambertian surface, or a coated one) the next direction is drawn from
+//! the photons' directions there or from the BSDF, one or the other with
+//! probability one half each (a coat's specular reflection keeps the
+//! BSDF's half of its probability). Either way the
 //! sample's density is the mixture's, in the throughput and in both MIS
 //! weights (the light sample's against it, and a light the bounce finds),
 //! so the estimate stays unbiased whatever the photons say: they only
@@ -103,7 +105,8 @@ fn guided_pdf(cell: GuideCell, wi: Vec3, pdf_bsdf: f32) -> f32 {
 
 /// A diffuse vertex's next direction from the mixture of its BSDF and the
 /// photons' cell: the density of either choice is the mixture's. The
-/// number that chooses is the one a lone diffuse lobe leaves unread.
+/// number that chooses is the lobe choice's (which a lone diffuse lobe
+/// leaves unread), stretched back to [0, 1) for the BSDF's own choice.
 fn sample_guided(bsdf: &Bsdf, wo: Vec3, cell: GuideCell, sampler: &mut Sampler) -> Option<BsdfSample> {
     let uc = sampler.next_f32();
     let u = sampler.next_2d();
@@ -120,8 +123,15 @@ fn sample_guided(bsdf: &Bsdf, wo: Vec3, cell: GuideCell, sampler: &mut Sampler) 
             eta: 1.0,
         })
     } else {
-        let mut bs = bsdf.sample_f(wo, 0.5, u, TransportMode::Radiance)?;
-        bs.pdf = mixed(bs.wi, bs.pdf);
+        let uc = (uc - GUIDED_SHARE) / (1.0 - GUIDED_SHARE);
+        let mut bs = bsdf.sample_f(wo, uc, u, TransportMode::Radiance)?;
+        // A smooth coat's reflection is a delta no guided direction meets:
+        // its probability is the BSDF's share of it.
+        bs.pdf = if bs.is_specular() {
+            (1.0 - GUIDED_SHARE) * bs.pdf
+        } else {
+            mixed(bs.wi, bs.pdf)
+        };
         Some(bs)
     }
 }
@@ -195,7 +205,9 @@ impl RadianceEstimator for PathTracer {
             let nee = flags.is_non_specular() && self.light_sampling != LightSampling::Bsdf;
             let u_light = nee.then(|| light_sample_u(scene, sampler));
             let cell = match &self.guide {
-                Some(g) if flags == BxdfFlags::DIFFUSE_REFLECTION => {
+                // Surfaces that reflect diffusely, coated or not: their
+                // densities are exact, so the mixture's is.
+                Some(g) if flags.is_diffuse() && !flags.is_transmissive() => {
                     g.cell(hit.p, if hit.ng.dot(wo) < 0.0 { -hit.ng } else { hit.ng })
                 }
                 _ => None,

@@ -584,11 +584,21 @@ fn an_invisible_area_light_lights_the_floor_through_light_samples_alone() {
 /// `light` at height 1 under a black square that hides it from the patch
 /// of floor the camera sees, straight down from 1.8 above (1.5, 0, 0).
 fn mirror_room(integrator: &str, light: &str, roughness: f32) -> String {
+    mirror_room_with_floor(
+        integrator,
+        light,
+        roughness,
+        "\"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]",
+    )
+}
+
+/// `mirror_room` with the floor's material `floor`.
+fn mirror_room_with_floor(integrator: &str, light: &str, roughness: f32, floor: &str) -> String {
     format!(
         "LookAt 1.5 1.8 0  1.5 0 0  0 0 1\nCamera \"perspective\" \"float fov\" [ 20 ]\n\
          Film \"rgb\" \"integer xresolution\" [ 16 ] \"integer yresolution\" [ 16 ]\n\
          Integrator {integrator}\nWorldBegin\n{light}\n\
-         Material \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n\
+         Material {floor}\n\
          Shape \"trianglemesh\" \"point3 P\" [ -9 0 -9  9 0 -9  9 0 9  -9 0 9 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
          Material \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
          Shape \"trianglemesh\" \"point3 P\" [ -0.3 0.9 -0.3  0.3 0.9 -0.3  0.3 0.9 0.3  -0.3 0.9 0.3 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n\
@@ -666,6 +676,11 @@ fn regularizing_finds_a_light_seen_through_a_mirror_from_a_diffuse_floor() {
 /// place of its point light, of the same intensity (pi r^2 L = 10), and the
 /// mirror's roughness `roughness`: its pixels' luminances.
 fn floor_under_mirror_and_sphere(roughness: f32, options: &[&str]) -> Vec<f64> {
+    floor_of_material_under_mirror_and_sphere(roughness, "\"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]", options)
+}
+
+/// The same with the floor's material `floor`.
+fn floor_of_material_under_mirror_and_sphere(roughness: f32, floor: &str, options: &[&str]) -> Vec<f64> {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("scene.pbrt");
     let l = 10.0 / (std::f64::consts::PI * 0.05 * 0.05);
@@ -673,11 +688,8 @@ fn floor_under_mirror_and_sphere(roughness: f32, options: &[&str]) -> Vec<f64> {
         "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ {l} {l} {l} ]\n\
          Translate 0 1 0\nShape \"sphere\" \"float radius\" 0.05\nAttributeEnd"
     );
-    std::fs::write(
-        &p,
-        mirror_room("\"path\" \"integer maxdepth\" [ 2 ]", &light, roughness),
-    )
-    .unwrap();
+    let integrator = "\"path\" \"integer maxdepth\" [ 2 ]";
+    std::fs::write(&p, mirror_room_with_floor(integrator, &light, roughness, floor)).unwrap();
     let img = render_to_image(&p, options);
     img.pixels.iter().map(|&c| luminance(c) as f64).collect()
 }
@@ -723,6 +735,24 @@ fn photons_guide_the_path_tracer_to_a_light_seen_in_a_mirror_without_bias() {
     assert!(
         (guided / plain - 1.0).abs() < 0.02,
         "rough ceiling: guided {guided} vs plain {plain}"
+    );
+    // A coated floor is guided too: its smooth coat's reflection is a
+    // delta, which must keep the BSDF's share of its probability.
+    let coated = "\"coateddiffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ] \"float roughness\" 0";
+    let (plain, _) = stats(&floor_of_material_under_mirror_and_sphere(
+        0.3,
+        coated,
+        &["--spp", "1024"],
+    ));
+    let (guided, _) = stats(&floor_of_material_under_mirror_and_sphere(
+        0.3,
+        coated,
+        &["--spp", "256", "--guide-photons", "100000"],
+    ));
+    eprintln!("coated floor: guided {guided} vs plain {plain}");
+    assert!(
+        (guided / plain - 1.0).abs() < 0.02,
+        "coated floor: guided {guided} vs plain {plain}"
     );
 }
 
